@@ -1,0 +1,178 @@
+"""Loading a registry file and selecting tasks from it.
+
+A registry (`registry/<name>.yaml`) is the single source of truth for a catalog: ids, suites,
+dimensions, splits, sources, goals and instructions. Everything else (BDDL files, init states,
+reports) is derived from it.
+"""
+
+from __future__ import annotations
+
+import difflib
+import fnmatch
+import functools
+from collections.abc import Iterable
+from importlib import resources
+from pathlib import Path
+
+import yaml
+
+from langgap.bddl import Predicate
+from langgap.catalog.naming import SUITE_SHORT
+from langgap.catalog.task import DIMENSIONS, KINDS, SPLITS, Task
+from langgap.errors import BddlError, CatalogError, UnknownTaskError
+
+DEFAULT_CATALOG = "langgap99"
+_KEYWORDS_HELP = "an id, a glob (spatial/*), paper:N, all, a suite, kind, dimension or split; '&' intersects"
+
+
+class Catalog:
+    """An ordered, immutable set of tasks with lookup and selection."""
+
+    def __init__(self, name: str, tasks: Iterable[Task], description: str = ""):
+        self.name = name
+        self.description = description
+        self.tasks: tuple[Task, ...] = tuple(tasks)
+        self._by_id: dict[str, Task] = {}
+        for task in self.tasks:
+            if task.id in self._by_id:
+                raise CatalogError(f"catalog {name}: duplicate task id {task.id}")
+            self._by_id[task.id] = task
+        for task in self.tasks:
+            source = self._by_id.get(task.source)
+            if source is None or source.kind != "original":
+                raise CatalogError(f"catalog {name}: task {task.id} has source {task.source!r}, not an original task")
+            if (source.suite, source.scene_index, source.scene_task) != (task.suite, task.scene_index, task.scene_task):
+                raise CatalogError(f"catalog {name}: task {task.id} does not share the scene of its source")
+
+    def __len__(self) -> int:
+        return len(self.tasks)
+
+    def __iter__(self):
+        return iter(self.tasks)
+
+    def get(self, task_id: str) -> Task:
+        """The task with id `task_id`; UnknownTaskError (with suggestions) otherwise."""
+        try:
+            return self._by_id[task_id]
+        except KeyError:
+            close = difflib.get_close_matches(task_id, self._by_id, n=3, cutoff=0.6)
+            hint = f"; did you mean {', '.join(close)}?" if close else "; see `langgap tasks list`"
+            raise UnknownTaskError(f"unknown task {task_id!r} in catalog {self.name}{hint}") from None
+
+    def siblings(self, task: Task) -> tuple[Task, ...]:
+        """All tasks on the same scene and init states as `task` (itself and its source included)."""
+        return tuple(t for t in self.tasks if t.scene_task == task.scene_task and t.suite == task.suite)
+
+    def select(self, expression: str | None) -> list[Task]:
+        """Tasks matching a selection expression, in catalog order.
+
+        The expression is a comma-separated union of terms; a term is an id, a glob over ids,
+        `paper:N`, `all`, a suite (`libero_spatial` or `spatial`), a kind, a dimension or a split.
+        Terms joined with `&` intersect (`spatial&heldout`). A term matching nothing is an error.
+        """
+        if expression is None or not expression.strip():
+            expression = "all"
+        chosen: set[str] = set()
+        for union_term in expression.split(","):
+            union_term = union_term.strip()
+            if not union_term:
+                continue
+            matched: set[str] | None = None
+            for term in union_term.split("&"):
+                ids = self._match_term(term.strip())
+                matched = ids if matched is None else matched & ids
+            if not matched:
+                raise UnknownTaskError(f"selection {union_term!r} matches no task in catalog {self.name}")
+            chosen |= matched
+        return [t for t in self.tasks if t.id in chosen]
+
+    def _match_term(self, term: str) -> set[str]:
+        if term in self._by_id:
+            return {term}
+        if term == "all":
+            return set(self._by_id)
+        if term.startswith("paper:"):
+            try:
+                number = int(term.split(":", 1)[1])
+            except ValueError:
+                raise UnknownTaskError(f"paper id must be a number: {term!r}") from None
+            return {t.id for t in self.tasks if t.paper_id == number} or self._no_match(term)
+        suites = {**{s: s for s in SUITE_SHORT}, **{short: s for s, short in SUITE_SHORT.items()}}
+        if term in suites:
+            return {t.id for t in self.tasks if t.suite == suites[term]}
+        for attribute, values in (("kind", KINDS), ("dimension", DIMENSIONS), ("split", SPLITS)):
+            if term in values:
+                return {t.id for t in self.tasks if getattr(t, attribute) == term}
+        if any(ch in term for ch in "*?["):
+            return {t.id for t in self.tasks if fnmatch.fnmatchcase(t.id, term)} or self._no_match(term)
+        self.get(term)  # raises with suggestions
+        return set()
+
+    def _no_match(self, term: str) -> set[str]:
+        raise UnknownTaskError(f"selection term {term!r} matches no task in catalog {self.name} ({_KEYWORDS_HELP})")
+
+
+def _task_from_entry(catalog: str, entry: dict, defaults: dict, originals: dict[str, dict]) -> Task:
+    try:
+        kind = entry["kind"]
+        source_id = entry["id"] if kind == "original" else entry["source"]
+        scene = entry if kind == "original" else originals[source_id]
+        suite = entry["suite"]
+        return Task(
+            id=entry["id"],
+            catalog=catalog,
+            suite=suite,
+            kind=kind,
+            dimension=entry.get("dimension", "original"),
+            split=entry.get("split", "original"),
+            source=source_id,
+            scene_task=scene["libero_task"],
+            scene_index=int(scene["libero_index"]),
+            goal=tuple(Predicate.parse(g) for g in entry["goal"]),
+            obj_of_interest=tuple(entry["obj_of_interest"]),
+            instructions=dict(entry["instructions"]),
+            max_steps=int(entry.get("max_steps", defaults["max_steps"][suite])),
+            paper_id=entry.get("paper_id"),
+            notes=tuple(entry.get("notes", ())),
+        )
+    except KeyError as exc:
+        raise CatalogError(f"catalog {catalog}: task {entry.get('id', '?')} lacks field {exc}") from None
+    except BddlError as exc:
+        raise CatalogError(f"catalog {catalog}: task {entry.get('id', '?')}: {exc}") from None
+
+
+def load_catalog_file(path: str | Path) -> Catalog:
+    """Load a registry YAML file."""
+    path = Path(path)
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError) as exc:
+        raise CatalogError(f"cannot read catalog {path}: {exc}") from None
+    return catalog_from_data(data, source=str(path))
+
+
+def catalog_from_data(data: dict, *, source: str = "<data>") -> Catalog:
+    if not isinstance(data, dict) or "tasks" not in data or "catalog" not in data:
+        raise CatalogError(f"{source}: not a LangGap registry (needs 'catalog' and 'tasks')")
+    name = data["catalog"]
+    entries = data["tasks"]
+    originals = {e["id"]: e for e in entries if e.get("kind") == "original"}
+    tasks = [_task_from_entry(name, e, data, originals) for e in entries]
+    return Catalog(name, tasks, description=data.get("description", ""))
+
+
+def available_catalogs() -> list[str]:
+    """Names of the registries shipped with the package."""
+    folder = resources.files("langgap.catalog") / "registry"
+    return sorted(p.name.removesuffix(".yaml") for p in folder.iterdir() if p.name.endswith(".yaml"))
+
+
+@functools.cache
+def load_catalog(name: str = DEFAULT_CATALOG) -> Catalog:
+    """A shipped catalog by name (`langgap99`), or a registry file by path."""
+    if name.endswith(".yaml") or "/" in name:
+        return load_catalog_file(name)
+    if name not in available_catalogs():
+        raise CatalogError(f"unknown catalog {name!r} (available: {', '.join(available_catalogs())})")
+    with resources.as_file(resources.files("langgap.catalog") / "registry" / f"{name}.yaml") as path:
+        return load_catalog_file(path)

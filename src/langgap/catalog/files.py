@@ -1,0 +1,88 @@
+"""The files behind a task: its scene's BDDL, its generated BDDL and its init states.
+
+Original tasks run LIBERO's shipped BDDL unchanged. An extended task's BDDL is generated from its
+source's shipped BDDL by replacing `(:language)`, `(:obj_of_interest)` and `(:goal)` only, and is
+written once to the cache directory (`$LANGGAP_CACHE`, default `~/.cache/langgap`).
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from langgap import stack
+from langgap.bddl import BddlProblem, parse_bddl, rewrite_task_sections
+from langgap.catalog.task import Task
+from langgap.errors import BddlError
+
+
+def cache_dir() -> Path:
+    """Where generated files go (`$LANGGAP_CACHE`, else `$XDG_CACHE_HOME/langgap`, else `~/.cache/langgap`)."""
+    if os.environ.get("LANGGAP_CACHE"):
+        return Path(os.environ["LANGGAP_CACHE"])
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "langgap"
+
+
+def scene_bddl_path(task: Task) -> Path:
+    """LIBERO's shipped BDDL of the task whose scene `task` uses."""
+    return stack.bddl_path(task.suite, task.scene_task)
+
+
+@functools.lru_cache(maxsize=256)
+def _read_text(path: Path) -> str:
+    try:
+        return path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise BddlError(f"cannot read BDDL file {path}: {exc.strerror}") from None
+
+
+def scene_problem(task: Task) -> BddlProblem:
+    """The parsed scene (objects, fixtures, regions, init) of `task`."""
+    path = scene_bddl_path(task)
+    return parse_bddl(_read_text(path), source=str(path))
+
+
+def task_bddl_text(task: Task) -> str:
+    """The BDDL text of `task`: LIBERO's own for originals, generated for extended tasks."""
+    source_text = _read_text(scene_bddl_path(task))
+    if task.kind == "original":
+        shipped = parse_bddl(source_text, source=str(scene_bddl_path(task)))
+        if shipped.goal != task.goal:
+            raise BddlError(f"task {task.id}: registry goal {task.goal_strings} differs from LIBERO's BDDL")
+        return source_text
+    try:
+        return rewrite_task_sections(
+            source_text, language=task.instruction("paper"), obj_of_interest=task.obj_of_interest, goal=task.goal
+        )
+    except BddlError as exc:
+        raise BddlError(f"task {task.id}: {exc}") from None
+
+
+def task_bddl_path(task: Task) -> Path:
+    """A BDDL file for `task` that LIBERO can load; generated files are written atomically once."""
+    if task.kind == "original":
+        task_bddl_text(task)  # checks the registry against the shipped file
+        return scene_bddl_path(task)
+    text = task_bddl_text(task)
+    path = cache_dir() / "bddl" / task.catalog / f"{task.id}.bddl"
+    if not path.is_file() or path.read_text(encoding="utf-8") != text:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        # Write-then-rename: concurrent workers never see a half-written file.
+        with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp", encoding="utf-8") as tmp:
+            tmp.write(text)
+        os.replace(tmp.name, path)
+    return path
+
+
+def init_states_path(task: Task) -> Path:
+    return stack.init_states_path(task.suite, task.scene_task)
+
+
+def init_states(task: Task) -> np.ndarray:
+    """The fixed init states `task` starts from (its scene task's 50 states)."""
+    return stack.load_init_states(task.suite, task.scene_task)

@@ -1,0 +1,87 @@
+"""The task record: one entry of a catalog registry file."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from langgap.bddl import Predicate
+from langgap.errors import CatalogError
+
+KINDS = ("original", "extended")
+DIMENSIONS = ("original", "change_object", "change_target", "spatial_description", "drawer_action")
+SPLITS = ("original", "train", "heldout")
+INSTRUCTION_STYLES = ("libero", "paper")
+DEFAULT_STYLE = "libero"
+
+
+@dataclass(frozen=True)
+class Task:
+    """A LangGap task: a goal and an instruction on the scene and init states of a LIBERO task.
+
+    `scene_task` is the LIBERO task (suite + name + index) whose BDDL scene and 50 fixed init
+    states the task uses; for an original task that is the task itself, for an extended task its
+    `source`.
+    """
+
+    id: str
+    catalog: str
+    suite: str
+    kind: str
+    dimension: str
+    split: str
+    source: str
+    scene_task: str
+    scene_index: int
+    goal: tuple[Predicate, ...]
+    obj_of_interest: tuple[str, ...]
+    instructions: dict[str, str] = field(hash=False, compare=False)
+    max_steps: int = 0
+    paper_id: int | None = None
+    notes: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        checks = {"kind": (self.kind, KINDS), "dimension": (self.dimension, DIMENSIONS), "split": (self.split, SPLITS)}
+        for name, (value, allowed) in checks.items():
+            if value not in allowed:
+                raise CatalogError(f"task {self.id}: {name} {value!r} is not one of {', '.join(allowed)}")
+        missing = [s for s in INSTRUCTION_STYLES if not self.instructions.get(s)]
+        if missing:
+            raise CatalogError(f"task {self.id}: missing instruction style(s) {', '.join(missing)}")
+        if (self.kind == "original") != (self.dimension == "original") or (self.kind == "original") != (
+            self.split == "original"
+        ):
+            raise CatalogError(f"task {self.id}: kind, dimension and split disagree about being original")
+        if self.max_steps <= 0:
+            raise CatalogError(f"task {self.id}: max_steps must be positive")
+
+    def instruction(self, style: str = DEFAULT_STYLE) -> str:
+        """The exact string a policy receives under instruction `style`."""
+        if style not in self.instructions:
+            raise CatalogError(f"unknown instruction style {style!r} (known: {', '.join(INSTRUCTION_STYLES)})")
+        return self.instructions[style]
+
+    @property
+    def goal_strings(self) -> list[str]:
+        return [str(p) for p in self.goal]
+
+    def to_dict(self, style: str = DEFAULT_STYLE) -> dict:
+        """The JSON form printed by `langgap tasks list --json`."""
+        return {
+            "id": self.id,
+            "catalog": self.catalog,
+            "suite": self.suite,
+            "kind": self.kind,
+            "dimension": self.dimension,
+            "split": self.split,
+            "source": self.source,
+            "instruction": self.instruction(style),
+            "instruction_style": style,
+            "instructions": dict(self.instructions),
+            "goal": self.goal_strings,
+            "obj_of_interest": list(self.obj_of_interest),
+            "max_steps": self.max_steps,
+            "paper_id": self.paper_id,
+            "scene_task": self.scene_task,
+            "scene_index": self.scene_index,
+            "notes": list(self.notes),
+        }

@@ -1,0 +1,100 @@
+"""`langgap tasks list` and `langgap tasks show`."""
+
+from __future__ import annotations
+
+import json
+from collections import Counter
+
+from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
+from langgap.catalog.task import DEFAULT_STYLE, DIMENSIONS, INSTRUCTION_STYLES, KINDS, SPLITS, Task
+from langgap.stack import SUITES
+
+
+def add_catalog_options(parser) -> None:
+    """`--catalog` and `--style`, shared by every verb that works on tasks."""
+    parser.add_argument("--catalog", default=DEFAULT_CATALOG, help="catalog name or registry file (default: %(default)s)")
+    parser.add_argument("--style", default=DEFAULT_STYLE, choices=INSTRUCTION_STYLES,
+                        help="instruction style sent to policies (default: %(default)s)")
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser("tasks", help="list and inspect tasks")
+    verbs = parser.add_subparsers(dest="tasks_verb", required=True, metavar="list|show")
+
+    listing = verbs.add_parser("list", help="list tasks, optionally filtered")
+    add_catalog_options(listing)
+    listing.add_argument("--suite", choices=SUITES)
+    listing.add_argument("--kind", choices=KINDS)
+    listing.add_argument("--dimension", choices=DIMENSIONS)
+    listing.add_argument("--split", choices=[s for s in SPLITS if s != "original"] + ["original"])
+    listing.add_argument("--tasks", metavar="SELECTION", help="selection expression (ids, globs, keywords)")
+    listing.add_argument("--json", action="store_true", help="print a JSON array of task objects")
+    listing.set_defaults(run=run_list)
+
+    show = verbs.add_parser("show", help="show one task with its BDDL file and init-state source")
+    add_catalog_options(show)
+    show.add_argument("id", help="task id (see `langgap tasks list`)")
+    show.add_argument("--json", action="store_true")
+    show.set_defaults(run=run_show)
+
+
+def _filtered(args) -> list[Task]:
+    tasks = load_catalog(args.catalog).select(args.tasks)
+    for field in ("suite", "kind", "dimension", "split"):
+        wanted = getattr(args, field)
+        if wanted:
+            tasks = [t for t in tasks if getattr(t, field) == wanted]
+    return tasks
+
+
+def run_list(args) -> int:
+    tasks = _filtered(args)
+    if args.json:
+        print(json.dumps([t.to_dict(args.style) for t in tasks], indent=1))
+        return 0
+    width = max((len(t.id) for t in tasks), default=2)
+    print(f"{'id':<{width}}  {'paper':>5}  {'dimension':<19}  {'split':<8}  instruction ({args.style})")
+    for t in tasks:
+        paper = "-" if t.paper_id is None else str(t.paper_id)
+        print(f"{t.id:<{width}}  {paper:>5}  {t.dimension:<19}  {t.split:<8}  {t.instruction(args.style)}")
+    by_kind = Counter(t.kind for t in tasks)
+    by_dim = Counter(t.dimension for t in tasks if t.kind == "extended")
+    print(f"\n{len(tasks)} tasks: {by_kind['original']} original, {by_kind['extended']} extended"
+          + (" (" + ", ".join(f"{d} {n}" for d, n in sorted(by_dim.items())) + ")" if by_dim else ""))
+    return 0
+
+
+def run_show(args) -> int:
+    from langgap.catalog import files
+
+    catalog = load_catalog(args.catalog)
+    task = catalog.get(args.id)
+    info = task.to_dict(args.style)
+    info["bddl"] = str(files.task_bddl_path(task))
+    info["scene_bddl"] = str(files.scene_bddl_path(task))
+    info["init_states"] = {
+        "file": str(files.init_states_path(task)),
+        "count": int(files.init_states(task).shape[0]),
+        "from": f"LIBERO {task.suite} task {task.scene_index} ({task.scene_task})",
+    }
+    info["siblings"] = [t.id for t in catalog.siblings(task) if t.id != task.id]
+    if args.json:
+        print(json.dumps(info, indent=1))
+        return 0
+    for key in ("id", "catalog", "suite", "kind", "dimension", "split", "source", "paper_id", "max_steps"):
+        print(f"{key:<12} {info[key]}")
+    print(f"{'instruction':<12} {info['instruction']!r}  ({args.style} style)")
+    for style, text in task.instructions.items():
+        print(f"{'':<12} {style}: {text!r}")
+    print(f"{'goal':<12} {' '.join(info['goal'])}")
+    print(f"{'bddl':<12} {info['bddl']}")
+    if task.kind == "extended":
+        print(f"{'generated':<12} from {info['scene_bddl']} (only language, obj_of_interest and goal differ)")
+    print(f"{'init states':<12} {info['init_states']['count']} from {info['init_states']['from']}")
+    print(f"{'':<12} {info['init_states']['file']}")
+    print(f"{'siblings':<12} {len(info['siblings'])} other task(s) on the same scene")
+    for sibling in info["siblings"]:
+        print(f"{'':<12} {sibling}")
+    for note in task.notes:
+        print(f"{'note':<12} {note}")
+    return 0

@@ -1,0 +1,29 @@
+"""Exception types. Every user-facing failure is a `LangGapError` whose message is one line."""
+
+
+class LangGapError(Exception):
+    """Base class: the CLI prints `error: <message>` and exits non-zero."""
+
+
+class CatalogError(LangGapError):
+    """The task registry or a task selection is invalid."""
+
+
+class UnknownTaskError(CatalogError):
+    """A task id (or selection term) matches no task."""
+
+
+class BddlError(LangGapError):
+    """A BDDL file is malformed or names things that are not in its scene."""
+
+
+class SimulationError(LangGapError):
+    """The simulator could not build, reset or step an environment."""
+
+
+class InitStateError(SimulationError):
+    """An init-state index is out of range, or an init state did not apply."""
+
+
+class DependencyNotInstalled(LangGapError):
+    """An optional dependency is missing; the message says how to install it."""

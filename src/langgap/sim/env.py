@@ -1,0 +1,257 @@
+"""One LIBERO environment for one LangGap task, with explicit options and fixed init states.
+
+Conventions (the ones public LIBERO checkpoints were trained with; see the README):
+
+* `reset(init_index, seed)` seeds NumPy's global generator (LIBERO samples fixture placements from
+  it), resets, and *then* applies init state `init_index`; it returns the t0 observation and sets
+  `t0_hash`. Same init index and seed give the same t0 in every sibling task of a scene.
+* Images are upright: LIBERO renders upside down, we return `raw[::-1, ::-1]` (rotated 180 degrees),
+  which is the orientation of the `lerobot/libero` and openpi LIBERO training data.
+* `state` is 8-D float32: end-effector position (3), end-effector orientation as axis-angle (3),
+  and the two gripper finger joints (2).
+* Nothing is rendered unless a camera is requested, and then only when `observe()` asks.
+* Episode length is capped here (`max_steps` policy steps after `settle()`), never by robosuite's
+  horizon, which raises on the step after it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from langgap.bddl import Predicate
+from langgap.catalog import files
+from langgap.catalog.task import Task
+from langgap.errors import InitStateError, SimulationError
+
+CAMERAS = ("agentview", "robot0_eye_in_hand")
+SETTLE_STEPS = 10
+SETTLE_ACTION = np.array([0, 0, 0, 0, 0, 0, -1], dtype=np.float64)
+ACTION_DIM = 7
+# Far above any episode: robosuite's own horizon must never be what ends an episode.
+_ROBOSUITE_HORIZON = 1_000_000
+
+
+def configure_rendering() -> None:
+    """Select headless EGL rendering unless the user chose a backend; must run before MuJoCo loads."""
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    if os.environ["MUJOCO_GL"] in ("egl", "osmesa"):
+        os.environ.setdefault("PYOPENGL_PLATFORM", os.environ["MUJOCO_GL"])
+
+
+@dataclass(frozen=True)
+class EnvOptions:
+    """How an environment is built. The defaults render nothing and reset softly."""
+
+    cameras: tuple[str, ...] = ()
+    image_size: int = 256
+    reflection: bool = True
+    hard_reset: bool = False
+    privileged: bool = False
+
+    def __post_init__(self) -> None:
+        unknown = [c for c in self.cameras if c not in CAMERAS]
+        if unknown:
+            raise SimulationError(f"unknown camera(s) {unknown}; LIBERO has {', '.join(CAMERAS)}")
+        if len(set(self.cameras)) != len(self.cameras):
+            raise SimulationError(f"camera listed twice: {list(self.cameras)}")
+        if not 16 <= self.image_size <= 1024:
+            raise SimulationError(f"image size must be in 16..1024, got {self.image_size}")
+
+    @property
+    def renders(self) -> bool:
+        return bool(self.cameras)
+
+
+@dataclass
+class Observation:
+    """What the environment shows a policy at one step."""
+
+    state: np.ndarray
+    images: dict[str, np.ndarray] = field(default_factory=dict)
+    privileged: dict | None = None
+
+
+def quat_to_axis_angle(quat_xyzw: np.ndarray) -> np.ndarray:
+    """robosuite's `quat2axisangle` (what LIBERO training data used), without mutating its input."""
+    w = min(max(float(quat_xyzw[3]), -1.0), 1.0)
+    den = math.sqrt(1.0 - w * w)
+    if math.isclose(den, 0.0):
+        return np.zeros(3)
+    return np.asarray(quat_xyzw[:3], dtype=np.float64) * 2.0 * math.acos(w) / den
+
+
+def state_from_robosuite(obs: dict) -> np.ndarray:
+    """The 8-D state from robosuite's observation dict."""
+    return np.concatenate(
+        [obs["robot0_eef_pos"], quat_to_axis_angle(obs["robot0_eef_quat"]), obs["robot0_gripper_qpos"]]
+    ).astype(np.float32)
+
+
+class TaskEnv:
+    """A LIBERO environment for `task`. Close it (or use it as a context manager) before exit."""
+
+    def __init__(self, task: Task, options: EnvOptions | None = None):
+        self.task = task
+        self.options = options or EnvOptions()
+        self.init_states = files.init_states(task)
+        self.t0_hash: str | None = None
+        self.steps = 0
+        self._raw_obs: dict | None = None
+        self._goal = tuple(p.as_libero() for p in task.goal)
+        bddl = files.task_bddl_path(task)
+        configure_rendering()
+        # Imported here: robosuite and MuJoCo load only when an environment is built.
+        from libero.libero.envs.env_wrapper import ControlEnv
+
+        kwargs = dict(
+            bddl_file_name=str(bddl),
+            has_renderer=False,
+            has_offscreen_renderer=self.options.renders,
+            use_camera_obs=False,  # we render on demand in observe(), never per physics step
+            ignore_done=True,
+            horizon=_ROBOSUITE_HORIZON,
+            hard_reset=self.options.hard_reset,
+        )
+        if self.options.renders:
+            kwargs.update(camera_names=list(self.options.cameras))
+        try:
+            self._env = ControlEnv(**kwargs)
+        except Exception as exc:  # LIBERO raises bare asserts and XML errors alike
+            raise SimulationError(f"cannot build env for {task.id}: {type(exc).__name__}: {exc}") from exc
+        self._inner = self._env.env
+
+    # -- lifecycle ---------------------------------------------------------------------------
+
+    def __enter__(self) -> TaskEnv:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Release the simulator and its GL context (avoids EGL errors at interpreter exit)."""
+        env = getattr(self, "_env", None)
+        if env is not None:
+            env.close()
+            self._env = None
+
+    @property
+    def sim(self):
+        """The underlying robosuite MjSim (privileged access, for oracles and diagnostics)."""
+        return self._inner.sim
+
+    @property
+    def robosuite_env(self):
+        """The underlying LIBERO/robosuite environment (privileged access)."""
+        return self._inner
+
+    # -- episode -----------------------------------------------------------------------------
+
+    def reset(self, init_index: int, seed: int = 0) -> Observation:
+        """Reset, then apply init state `init_index`; returns the t0 observation."""
+        if not 0 <= init_index < len(self.init_states):
+            raise InitStateError(
+                f"init index {init_index} out of range: {self.task.id} has {len(self.init_states)} init states"
+            )
+        state = self.init_states[init_index]
+        # LIBERO samples fixture placements (not part of the init state) from NumPy's global RNG.
+        np.random.seed(seed)
+        self._env.reset()
+        self._raw_obs = self._env.set_init_state(state)
+        applied = self._env.get_sim_state()
+        if applied.shape != state.shape or not np.array_equal(applied, state):
+            raise InitStateError(f"{self.task.id}: init state {init_index} did not apply (state size "
+                                 f"{applied.shape[0]} vs {state.shape[0]})")
+        self.t0_hash = self.state_hash()
+        self.steps = 0
+        self._reapply_render_flags()
+        return self.observe()
+
+    def settle(self, steps: int = SETTLE_STEPS) -> None:
+        """The no-op steps (gripper open) that let objects come to rest; not counted, not shown to policies."""
+        for _ in range(steps):
+            self._raw_obs, _, _, _ = self._env.step(SETTLE_ACTION)
+
+    def step(self, action: np.ndarray) -> bool:
+        """Apply one 7-D action (OSC_POSE delta + gripper); returns whether the task goal holds now."""
+        if self.steps >= self.task.max_steps:
+            raise SimulationError(f"{self.task.id}: episode is over ({self.task.max_steps} steps)")
+        action = np.asarray(action, dtype=np.float64)
+        if action.shape != (ACTION_DIM,) or not np.all(np.isfinite(action)):
+            raise SimulationError(f"action must be 7 finite numbers, got shape {action.shape}")
+        self._raw_obs, _, _, _ = self._env.step(action)
+        self.steps += 1
+        return self.success()
+
+    @property
+    def truncated(self) -> bool:
+        """True once the task's step limit is reached."""
+        return self.steps >= self.task.max_steps
+
+    def success(self) -> bool:
+        """Whether this task's goal holds in the current state."""
+        return self.goal_holds(self._goal)
+
+    def goal_holds(self, goal: tuple[tuple[str, ...], ...]) -> bool:
+        """Evaluate a conjunction of LIBERO-form predicates (`('on', a, b)`) on the current state."""
+        return all(self._inner._eval_predicate(p) for p in goal)
+
+    def predicate_holds(self, predicate: Predicate) -> bool:
+        return bool(self._inner._eval_predicate(predicate.as_libero()))
+
+    # -- observations ------------------------------------------------------------------------
+
+    def observe(self, cameras: tuple[str, ...] | None = None) -> Observation:
+        """The current observation; renders the requested cameras (default: the env's) once each."""
+        if self._raw_obs is None:
+            raise SimulationError("observe() before reset()")
+        wanted = self.options.cameras if cameras is None else cameras
+        missing = [c for c in wanted if c not in self.options.cameras]
+        if missing:
+            raise SimulationError(f"camera(s) {missing} were not enabled for this env")
+        images = {c: self.render(c) for c in wanted}
+        privileged = None
+        if self.options.privileged:
+            from langgap.sim.privileged import privileged_state
+
+            privileged = privileged_state(self)
+        return Observation(state=state_from_robosuite(self._raw_obs), images=images, privileged=privileged)
+
+    def render(self, camera: str) -> np.ndarray:
+        """One upright uint8 image (H, W, 3) from `camera`."""
+        size = self.options.image_size
+        raw = self.sim.render(camera_name=camera, width=size, height=size)
+        return np.ascontiguousarray(raw[::-1, ::-1])
+
+    def _reapply_render_flags(self) -> None:
+        # A hard reset creates a new render context, so the flag is set after every reset.
+        if self.options.renders and not self.options.reflection:
+            import mujoco
+
+            context = self.sim._render_context_offscreen
+            if context is not None:
+                context.scn.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
+
+    # -- state ---------------------------------------------------------------------------------
+
+    def sim_state(self) -> np.ndarray:
+        """The flattened MuJoCo state (time, qpos, qvel), the layout of LIBERO's init states."""
+        return self._env.get_sim_state()
+
+    def set_sim_state(self, state: np.ndarray) -> None:
+        """Restore a flattened state recorded from this scene (e.g. to replay a demonstration)."""
+        self._raw_obs = self._env.set_init_state(np.asarray(state, dtype=np.float64))
+
+    def state_hash(self) -> str:
+        """SHA-256 over the flattened state and the fixture placements (model body poses)."""
+        digest = hashlib.sha256()
+        digest.update(np.ascontiguousarray(self.sim_state(), dtype=np.float64).tobytes())
+        model = self.sim.model
+        digest.update(np.ascontiguousarray(model.body_pos, dtype=np.float64).tobytes())
+        digest.update(np.ascontiguousarray(model.body_quat, dtype=np.float64).tobytes())
+        return digest.hexdigest()

