@@ -1,0 +1,73 @@
+"""One episode: reset to a fixed init state, settle, then the policy acts until success or the step limit."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from langgap.policies.base import Policy, TaskContext, as_action_chunk
+from langgap.sim.env import SETTLE_STEPS, EnvOptions, TaskEnv
+
+# Called after every policy step with (env, step_index, action); used for videos and demonstrations.
+StepHook = Callable[[TaskEnv, int, np.ndarray], None]
+
+
+@dataclass
+class RolloutResult:
+    success: bool
+    steps: int
+    t0_hash: str
+    policy_calls: int
+    reached: dict[str, int] = field(default_factory=dict)  # watched goal -> first step it held
+
+
+def env_options_for(policy: Policy, **overrides) -> EnvOptions:
+    """The cheapest environment that shows `policy` everything it declared, and nothing else."""
+    spec = policy.spec
+    options = {"cameras": tuple(spec.cameras), "image_size": spec.image_size, "privileged": spec.privileged}
+    options.update(overrides)
+    return EnvOptions(**options)
+
+
+def run_episode(
+    env: TaskEnv,
+    policy: Policy,
+    context: TaskContext,
+    *,
+    watch: Mapping[str, tuple[tuple[str, ...], ...]] | None = None,
+    on_step: StepHook | None = None,
+    settle_steps: int = SETTLE_STEPS,
+) -> RolloutResult:
+    """Run one episode of `policy` on `env` and return its outcome.
+
+    `watch` maps names to goals (LIBERO-form predicate tuples) evaluated after every step; the
+    first step at which each holds is returned in `reached`. The episode stops at the first step
+    the task's own goal holds (LIBERO's success criterion) or at the task's step limit.
+    Exceptions from the policy propagate; a malformed action raises `PolicyOutputError`.
+    """
+    spec = policy.spec
+    env.reset(context.init_index, seed=context.seed)
+    policy.reset(context)
+    env.settle(settle_steps)
+    watch = dict(watch or {})
+    reached: dict[str, int] = {}
+    queue: list[np.ndarray] = []
+    calls = 0
+    success = False
+    while not env.truncated:
+        if not queue:
+            chunk = as_action_chunk(policy.act(env.observe(spec.cameras)), spec)
+            calls += 1
+            queue = list(chunk[: spec.replan])
+        action = queue.pop(0)
+        success = env.step(action)
+        for name, goal in watch.items():
+            if name not in reached and env.goal_holds(goal):
+                reached[name] = env.steps
+        if on_step is not None:
+            on_step(env, env.steps, action)
+        if success:
+            break
+    return RolloutResult(success=success, steps=env.steps, t0_hash=env.t0_hash or "", policy_calls=calls, reached=reached)

@@ -1,0 +1,68 @@
+"""Policies by name. Adding one: write a module with a class that follows `Policy`, add one line here.
+
+A name may also be `package.module:Class` for a policy outside LangGap.
+"""
+
+from __future__ import annotations
+
+import difflib
+import importlib
+import inspect
+
+from langgap.errors import LangGapError
+from langgap.policies.base import Policy
+
+REGISTRY: dict[str, str] = {
+    "noop": "langgap.policies.simple:NoopPolicy",
+    "random": "langgap.policies.simple:RandomPolicy",
+}
+
+
+class UnknownPolicyError(LangGapError):
+    pass
+
+
+def policy_class(name: str) -> type:
+    """Resolve a registered name or a `module:Class` path to a policy class (imported lazily)."""
+    target = REGISTRY.get(name, name if ":" in name else None)
+    if target is None:
+        close = difflib.get_close_matches(name, REGISTRY, n=3)
+        hint = f"; did you mean {', '.join(close)}?" if close else f" (known: {', '.join(sorted(REGISTRY))})"
+        raise UnknownPolicyError(f"unknown policy {name!r}{hint}")
+    module_name, _, attr = target.partition(":")
+    try:
+        return getattr(importlib.import_module(module_name), attr)
+    except (ImportError, AttributeError) as exc:
+        raise UnknownPolicyError(f"cannot load policy {name!r} from {target}: {exc}") from None
+
+
+def _coerce(value: str, like) -> object:
+    """Convert a command-line string to the type of a parameter's annotation or default."""
+    kind = like if isinstance(like, type) else type(like)
+    if kind is bool:
+        if value.lower() in ("1", "true", "yes", "on"):
+            return True
+        if value.lower() in ("0", "false", "no", "off"):
+            return False
+        raise ValueError(f"not a boolean: {value!r}")
+    if kind in (int, float):
+        return kind(value)
+    return value
+
+
+def make_policy(name: str, args: dict[str, str] | None = None) -> Policy:
+    """Build policy `name` with keyword arguments given as strings (`--policy-arg k=v`)."""
+    cls = policy_class(name)
+    params = inspect.signature(cls).parameters
+    kwargs = {}
+    for key, value in (args or {}).items():
+        if key not in params:
+            known = ", ".join(p for p in params if p not in ("self", "args", "kwargs")) or "none"
+            raise UnknownPolicyError(f"policy {name!r} has no argument {key!r} (arguments: {known})")
+        param = params[key]
+        like = param.annotation if isinstance(param.annotation, type) else param.default
+        try:
+            kwargs[key] = value if like is inspect.Parameter.empty or not isinstance(value, str) else _coerce(value, like)
+        except ValueError as exc:
+            raise UnknownPolicyError(f"policy {name!r} argument {key}: {exc}") from None
+    return cls(**kwargs)
