@@ -239,8 +239,13 @@ def read_bddl(path: str | Path) -> BddlProblem:
 
 # --- rewriting ---------------------------------------------------------------------------------
 
+
 def rewrite_task_sections(
-    text: str, *, language: str, obj_of_interest: tuple[str, ...] | list[str], goal: tuple[Predicate, ...] | list[Predicate]
+    text: str,
+    *,
+    language: str,
+    obj_of_interest: tuple[str, ...] | list[str],
+    goal: tuple[Predicate, ...] | list[Predicate],
 ) -> str:
     """Return `text` with only `(:language)`, `(:obj_of_interest)` and `(:goal)` replaced.
 

@@ -33,8 +33,12 @@ def _versions() -> Check:
     found = stack.physics_stack()
     wrong = [f"{k} {found.get(k) or 'missing'} (need {v})" for k, v in stack.PINNED.items() if found.get(k) != v]
     detail = ", ".join(f"{k} {v}" for k, v in found.items())
-    return Check("versions", not wrong, detail if not wrong else "; ".join(wrong),
-                 "re-run ./setup.sh, which installs the pinned physics stack")
+    return Check(
+        "versions",
+        not wrong,
+        detail if not wrong else "; ".join(wrong),
+        "re-run ./setup.sh, which installs the pinned physics stack",
+    )
 
 
 def _renderer() -> Check:
@@ -57,7 +61,9 @@ def _renderer() -> Check:
 
 def _assets() -> Check:
     root = stack.assets_root()
-    missing = [p for p in ("scenes", "stable_scanned_objects", "articulated_objects", "textures") if not (root / p).is_dir()]
+    missing = [
+        p for p in ("scenes", "stable_scanned_objects", "articulated_objects", "textures") if not (root / p).is_dir()
+    ]
     counts = {}
     for suite in stack.SUITES:
         counts[suite] = len(list((stack.libero_root() / "bddl_files" / suite).glob("*.bddl")))
@@ -75,7 +81,9 @@ def _catalog() -> Check:
     catalog = load_catalog()
     for task in catalog:
         task_bddl_path(task)
-    return Check("catalog", len(catalog) == 99, f"{catalog.name}: {len(catalog)} tasks, every BDDL generated and parsed")
+    return Check(
+        "catalog", len(catalog) == 99, f"{catalog.name}: {len(catalog)} tasks, every BDDL generated and parsed"
+    )
 
 
 def _env_checks() -> Iterator[Check]:
@@ -84,18 +92,28 @@ def _env_checks() -> Iterator[Check]:
     task = load_catalog().get(PROBE_TASK)
     start = time.perf_counter()
     with TaskEnv(task, EnvOptions(cameras=("agentview",), image_size=128)) as env:
-        yield Check("env build", True, f"{task.id} from {task_bddl_path(task).name} in {time.perf_counter() - start:.1f}s")
+        yield Check(
+            "env build", True, f"{task.id} from {task_bddl_path(task).name} in {time.perf_counter() - start:.1f}s"
+        )
         obs = env.reset(0, seed=0)
         state = env.sim_state()
         same = np.array_equal(state, env.init_states[0])
-        yield Check("init state", same, f"init state 0 applied and read back ({state.shape[0]} values, t0 {env.t0_hash[:12]})",
-                    "the LIBERO package's init states do not match its scenes; reinstall it")
+        yield Check(
+            "init state",
+            same,
+            f"init state 0 applied and read back ({state.shape[0]} values, t0 {env.t0_hash[:12]})",
+            "the LIBERO package's init states do not match its scenes; reinstall it",
+        )
         image = obs.images["agentview"]
         lit = float(image.mean())
         spread = float(image.std())
         ok = spread > 10.0 and 20.0 < lit < 235.0
-        yield Check("render", ok, f"agentview 128x128 mean {lit:.0f}, std {spread:.0f}",
-                    "frames are blank: check EGL (MUJOCO_GL=egl) or install Mesa (apt-get install libegl1 libgl1-mesa-dri)")
+        yield Check(
+            "render",
+            ok,
+            f"agentview 128x128 mean {lit:.0f}, std {spread:.0f}",
+            "frames are blank: check EGL (MUJOCO_GL=egl) or install Mesa (apt-get install libegl1 libgl1-mesa-dri)",
+        )
 
 
 def _settle_canary() -> Check:
@@ -112,13 +130,21 @@ def _settle_canary() -> Check:
         for _ in range(100):
             env.step(zero)
         moved = float(np.linalg.norm(env.sim.data.body_xpos[body] - before))
-    return Check("physics canary", moved < CANARY_TOLERANCE_M,
-                 f"{CANARY_TASK}: settled bowl moved {moved * 1000:.2f} mm in 100 idle steps",
-                 "objects slide after settling: install the pinned mujoco (pip install mujoco==3.2.3)")
+    return Check(
+        "physics canary",
+        moved < CANARY_TOLERANCE_M,
+        f"{CANARY_TASK}: settled bowl moved {moved * 1000:.2f} mm in 100 idle steps",
+        "objects slide after settling: install the pinned mujoco (pip install mujoco==3.2.3)",
+    )
 
 
 CHECKS: tuple[Callable[[], Check | Iterator[Check]], ...] = (
-    _versions, _renderer, _assets, _catalog, _env_checks, _settle_canary,
+    _versions,
+    _renderer,
+    _assets,
+    _catalog,
+    _env_checks,
+    _settle_canary,
 )
 
 
@@ -130,4 +156,6 @@ def run_checks() -> Iterator[Check]:
             result = check()
             yield from ([result] if isinstance(result, Check) else result)
         except Exception as exc:  # a doctor reports, it does not crash
-            yield Check(name, False, f"{type(exc).__name__}: {exc}", "see the message; ./setup.sh repairs most installs")
+            yield Check(
+                name, False, f"{type(exc).__name__}: {exc}", "see the message; ./setup.sh repairs most installs"
+            )

@@ -41,8 +41,14 @@ _REGION_SLUG = {
     "right_contain_region": "right",
 }
 _DRAWER_SLUG = {"top_region": "top-drawer", "middle_region": "middle-drawer", "bottom_region": "bottom-drawer"}
-_VERB_SLUG = {"On": "{0}-on-{1}", "In": "{0}-in-{1}", "Open": "open-{0}", "Close": "close-{0}",
-              "Turnon": "turn-on-{0}", "Turnoff": "turn-off-{0}"}
+_VERB_SLUG = {
+    "On": "{0}-on-{1}",
+    "In": "{0}-in-{1}",
+    "Open": "open-{0}",
+    "Close": "close-{0}",
+    "Turnon": "turn-on-{0}",
+    "Turnoff": "turn-off-{0}",
+}
 
 
 def _category_slug(category: str) -> str:

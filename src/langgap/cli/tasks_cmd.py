@@ -12,9 +12,15 @@ from langgap.stack import SUITES
 
 def add_catalog_options(parser) -> None:
     """`--catalog` and `--style`, shared by every verb that works on tasks."""
-    parser.add_argument("--catalog", default=DEFAULT_CATALOG, help="catalog name or registry file (default: %(default)s)")
-    parser.add_argument("--style", default=DEFAULT_STYLE, choices=INSTRUCTION_STYLES,
-                        help="instruction style sent to policies (default: %(default)s)")
+    parser.add_argument(
+        "--catalog", default=DEFAULT_CATALOG, help="catalog name or registry file (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--style",
+        default=DEFAULT_STYLE,
+        choices=INSTRUCTION_STYLES,
+        help="instruction style sent to policies (default: %(default)s)",
+    )
 
 
 def add_parser(subparsers) -> None:
@@ -59,8 +65,10 @@ def run_list(args) -> int:
         print(f"{t.id:<{width}}  {paper:>5}  {t.dimension:<19}  {t.split:<8}  {t.instruction(args.style)}")
     by_kind = Counter(t.kind for t in tasks)
     by_dim = Counter(t.dimension for t in tasks if t.kind == "extended")
-    print(f"\n{len(tasks)} tasks: {by_kind['original']} original, {by_kind['extended']} extended"
-          + (" (" + ", ".join(f"{d} {n}" for d, n in sorted(by_dim.items())) + ")" if by_dim else ""))
+    print(
+        f"\n{len(tasks)} tasks: {by_kind['original']} original, {by_kind['extended']} extended"
+        + (" (" + ", ".join(f"{d} {n}" for d, n in sorted(by_dim.items())) + ")" if by_dim else "")
+    )
     return 0
 
 

@@ -70,4 +70,6 @@ def run_episode(
             on_step(env, env.steps, action)
         if success:
             break
-    return RolloutResult(success=success, steps=env.steps, t0_hash=env.t0_hash or "", policy_calls=calls, reached=reached)
+    return RolloutResult(
+        success=success, steps=env.steps, t0_hash=env.t0_hash or "", policy_calls=calls, reached=reached
+    )

@@ -62,7 +62,9 @@ def make_policy(name: str, args: dict[str, str] | None = None) -> Policy:
         param = params[key]
         like = param.annotation if isinstance(param.annotation, type) else param.default
         try:
-            kwargs[key] = value if like is inspect.Parameter.empty or not isinstance(value, str) else _coerce(value, like)
+            kwargs[key] = (
+                value if like is inspect.Parameter.empty or not isinstance(value, str) else _coerce(value, like)
+            )
         except ValueError as exc:
             raise UnknownPolicyError(f"policy {name!r} argument {key}: {exc}") from None
     return cls(**kwargs)

@@ -82,7 +82,9 @@ def as_action_chunk(output, spec: PolicySpec) -> np.ndarray:
     if actions.ndim == 1:
         actions = actions[None, :]
     if actions.ndim != 2 or actions.shape[1] != ACTION_DIM or actions.shape[0] < 1:
-        raise PolicyOutputError(f"policy returned shape {tuple(np.shape(output))}; expected ({ACTION_DIM},) or (k, {ACTION_DIM})")
+        raise PolicyOutputError(
+            f"policy returned shape {tuple(np.shape(output))}; expected ({ACTION_DIM},) or (k, {ACTION_DIM})"
+        )
     if not np.all(np.isfinite(actions)):
         raise PolicyOutputError("policy returned a non-finite action (NaN or inf)")
     return actions

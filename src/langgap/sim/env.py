@@ -165,8 +165,10 @@ class TaskEnv:
         self._raw_obs = self._env.set_init_state(state)
         applied = self._env.get_sim_state()
         if applied.shape != state.shape or not np.array_equal(applied, state):
-            raise InitStateError(f"{self.task.id}: init state {init_index} did not apply (state size "
-                                 f"{applied.shape[0]} vs {state.shape[0]})")
+            raise InitStateError(
+                f"{self.task.id}: init state {init_index} did not apply (state size "
+                f"{applied.shape[0]} vs {state.shape[0]})"
+            )
         self.t0_hash = self.state_hash()
         self.steps = 0
         self._reapply_render_flags()
