@@ -116,7 +116,9 @@ def _task_from_entry(catalog: str, entry: dict, defaults: dict, originals: dict[
     try:
         kind = entry["kind"]
         source_id = entry["id"] if kind == "original" else entry["source"]
-        scene = entry if kind == "original" else originals[source_id]
+        if source_id not in originals:
+            raise CatalogError(f"catalog {catalog}: task {entry['id']} has source {source_id!r}, not an original task")
+        scene = originals[source_id]
         suite = entry["suite"]
         return Task(
             id=entry["id"],

@@ -162,6 +162,10 @@ class TaskEnv:
         # LIBERO samples fixture placements (not part of the init state) from NumPy's global RNG.
         np.random.seed(seed)
         self._env.reset()
+        # robosuite keeps the gripper's commanded opening across soft resets (only a new model zeroes it);
+        # without this, an episode would start with the previous episode's gripper command.
+        for robot in self._inner.robots:
+            robot.gripper.current_action = np.zeros(robot.gripper.dof)
         self._raw_obs = self._env.set_init_state(state)
         applied = self._env.get_sim_state()
         if applied.shape != state.shape or not np.array_equal(applied, state):

@@ -1,0 +1,149 @@
+"""The simulation layer on the real LIBERO simulator."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from langgap.errors import InitStateError, SimulationError
+from langgap.sim.env import EnvOptions, TaskEnv, quat_to_axis_angle
+
+
+def test_every_task_builds_resets_to_its_init_state_with_goal_false(catalog):
+    """All 99 tasks: the env builds from the (generated) BDDL, t0 is the stored init state, the goal is false."""
+    t0_by_scene: dict[str, str] = {}
+    for task in catalog:
+        with TaskEnv(task) as env:
+            env.reset(0, seed=0)
+            assert np.array_equal(env.sim_state(), env.init_states[0]), task.id
+            assert not env.success(), f"{task.id}: goal already true at t0"
+            env.settle()
+            assert not env.success(), f"{task.id}: goal true after settling"
+            # Same scene, same init index, same seed -> the identical initial scene in every sibling.
+            assert t0_by_scene.setdefault(task.scene_task, env.t0_hash) == env.t0_hash, task.id
+
+
+@pytest.fixture(scope="module")
+def env(catalog):
+    with TaskEnv(
+        catalog.get("spatial/s0/black-bowl-1-on-plate"),
+        EnvOptions(cameras=("agentview", "robot0_eye_in_hand"), image_size=64),
+    ) as e:
+        yield e
+
+
+def test_observation_conventions(env):
+    obs = env.reset(3, seed=1)
+    assert obs.state.shape == (8,) and obs.state.dtype == np.float32
+    raw = env.robosuite_env._get_observations(force_update=True)
+    np.testing.assert_allclose(obs.state[:3], raw["robot0_eef_pos"], rtol=1e-6)
+    np.testing.assert_allclose(obs.state[6:], raw["robot0_gripper_qpos"], rtol=1e-6)
+    assert set(obs.images) == {"agentview", "robot0_eye_in_hand"}
+    image = obs.images["agentview"]
+    assert image.shape == (64, 64, 3) and image.dtype == np.uint8
+    direct = env.sim.render(camera_name="agentview", width=64, height=64)
+    np.testing.assert_array_equal(image, direct[::-1, ::-1])  # upright = raw rotated 180 degrees
+
+
+def test_axis_angle_matches_robosuite():
+    import robosuite.utils.transform_utils as T
+
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        quat = rng.normal(size=4)
+        quat /= np.linalg.norm(quat)
+        np.testing.assert_allclose(quat_to_axis_angle(quat), T.quat2axisangle(quat.copy()), atol=1e-12)
+
+
+def test_init_index_out_of_range(env):
+    with pytest.raises(InitStateError, match="out of range"):
+        env.reset(50)
+    with pytest.raises(InitStateError):
+        env.reset(-1)
+
+
+def test_same_actions_same_outcome_and_seed_moves_fixtures(env):
+    rng = np.random.default_rng(7)
+    actions = rng.uniform(-1, 1, size=(15, 7))
+
+    def rollout(seed: int) -> tuple[str, str]:
+        env.reset(2, seed=seed)
+        t0 = env.t0_hash
+        for a in actions:
+            env.step(a)
+        return t0, env.state_hash()
+
+    first, again, other_seed = rollout(0), rollout(0), rollout(1)
+    assert first == again
+    assert other_seed[0] != first[0]  # fixture placement comes from the seed, not the init state
+    env.reset(2, seed=1)
+    assert np.array_equal(env.sim_state(), env.init_states[2])
+
+
+def test_soft_reset_leaves_nothing_of_the_previous_episode(catalog):
+    """An episode after another one (soft reset) equals the same episode in a fresh env."""
+    task = catalog.get("spatial/s2/black-bowl-1-on-plate")
+    close = np.array([0.3, 0.0, -0.5, 0.0, 0.0, 0.1, 1.0])
+    probe = np.array([0.0, 0.2, 0.0, 0.0, 0.0, 0.0, -1.0])
+
+    def episode(env: TaskEnv) -> str:
+        env.reset(1, seed=3)
+        env.settle()
+        for _ in range(20):
+            env.step(probe)
+        return env.state_hash()
+
+    with TaskEnv(task) as fresh:
+        expected = episode(fresh)
+    with TaskEnv(task) as used:
+        used.reset(0, seed=0)
+        for _ in range(30):
+            used.step(close)  # leaves the gripper commanded shut
+        assert episode(used) == expected
+
+
+def test_episode_is_capped_by_the_layer(catalog):
+    task = catalog.get("goal/s7/turn-on-stove")
+    with TaskEnv(task) as env:
+        env.reset(0)
+        for _ in range(task.max_steps):
+            env.step(np.zeros(7))
+        assert env.truncated
+        with pytest.raises(SimulationError, match="episode is over"):
+            env.step(np.zeros(7))
+
+
+def test_bad_actions_and_options(env):
+    env.reset(0)
+    with pytest.raises(SimulationError, match="7 finite"):
+        env.step(np.zeros(6))
+    with pytest.raises(SimulationError, match="7 finite"):
+        env.step(np.full(7, np.nan))
+    with pytest.raises(SimulationError, match="unknown camera"):
+        EnvOptions(cameras=("frontview_hd",))
+
+
+def test_no_renderer_unless_a_camera_is_asked_for(catalog):
+    with TaskEnv(catalog.get("object/s0/alphabet-soup-in-basket")) as env:
+        obs = env.reset(0)
+        assert obs.images == {}
+        assert env.sim._render_context_offscreen is None
+        with pytest.raises(SimulationError, match="not enabled"):
+            env.observe(("agentview",))
+
+
+def test_reflection_pass_off_changes_the_image_slightly(catalog):
+    task = catalog.get("spatial/s0/black-bowl-1-on-plate")
+    images = []
+    for reflection in (True, False):
+        with TaskEnv(task, EnvOptions(cameras=("agentview",), image_size=128, reflection=reflection)) as env:
+            images.append(env.reset(0).images["agentview"].astype(float))
+    difference = np.abs(images[0] - images[1]).mean()
+    assert 0 < difference < 5
+
+
+def test_hard_reset_applies_init_state_after_reset(catalog):
+    with TaskEnv(catalog.get("spatial/s1/black-bowl-1-on-plate"), EnvOptions(hard_reset=True)) as env:
+        for index in (0, 4):
+            env.reset(index, seed=0)
+            assert np.array_equal(env.sim_state(), env.init_states[index])
