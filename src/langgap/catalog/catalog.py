@@ -63,6 +63,13 @@ class Catalog:
         """All tasks on the same scene and init states as `task` (itself and its source included)."""
         return tuple(t for t in self.tasks if t.scene_task == task.scene_task and t.suite == task.suite)
 
+    def scene_mates(self, task: Task) -> tuple[Task, ...]:
+        """All tasks set in the same scene layout as `task` (may use other init states, as in libero_goal)."""
+        from langgap.catalog.files import scene_key
+
+        key = scene_key(task)
+        return tuple(t for t in self.tasks if t.suite == task.suite and scene_key(t) == key)
+
     def select(self, expression: str | None) -> list[Task]:
         """Tasks matching a selection expression, in catalog order.
 

@@ -8,6 +8,7 @@ written once to the cache directory (`$LANGGAP_CACHE`, default `~/.cache/langgap
 from __future__ import annotations
 
 import functools
+import hashlib
 import os
 import tempfile
 from pathlib import Path
@@ -15,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from langgap import stack
-from langgap.bddl import BddlProblem, parse_bddl, rewrite_task_sections
+from langgap.bddl import BddlProblem, parse_bddl, rewrite_task_sections, strip_task_sections
 from langgap.catalog.task import Task
 from langgap.errors import BddlError
 
@@ -45,6 +46,19 @@ def scene_problem(task: Task) -> BddlProblem:
     """The parsed scene (objects, fixtures, regions, init) of `task`."""
     path = scene_bddl_path(task)
     return parse_bddl(_read_text(path), source=str(path))
+
+
+def scene_key(task: Task) -> str:
+    """A hash of the scene `task` is set in (its BDDL without the task sections).
+
+    Tasks with equal keys have the same objects, fixtures and placements; all libero_goal tasks share one.
+    """
+    return _scene_key(scene_bddl_path(task))
+
+
+@functools.lru_cache(maxsize=256)
+def _scene_key(path: Path) -> str:
+    return hashlib.sha256(strip_task_sections(_read_text(path)).encode("utf-8")).hexdigest()[:16]
 
 
 def task_bddl_text(task: Task) -> str:

@@ -6,7 +6,7 @@ from __future__ import annotations
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser("bddl", help="check BDDL files (syntax, predicates, goal names in the scene)")
     parser.add_argument("files", nargs="+", metavar="FILE")
-    parser.set_defaults(run=run)
+    parser.set_defaults(handler=run)
 
 
 def run(args) -> int:

@@ -5,10 +5,10 @@ from __future__ import annotations
 import argparse
 import sys
 
-from langgap.cli import bddl_cmd, doctor_cmd, tasks_cmd
+from langgap.cli import bddl_cmd, doctor_cmd, eval_cmd, report_cmd, tasks_cmd
 from langgap.errors import LangGapError
 
-VERBS = (tasks_cmd, doctor_cmd, bddl_cmd)
+VERBS = (tasks_cmd, eval_cmd, report_cmd, doctor_cmd, bddl_cmd)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -25,7 +25,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args.run(args) or 0)
+        return int(args.handler(args) or 0)
     except LangGapError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -35,13 +35,13 @@ def add_parser(subparsers) -> None:
     listing.add_argument("--split", choices=[s for s in SPLITS if s != "original"] + ["original"])
     listing.add_argument("--tasks", metavar="SELECTION", help="selection expression (ids, globs, keywords)")
     listing.add_argument("--json", action="store_true", help="print a JSON array of task objects")
-    listing.set_defaults(run=run_list)
+    listing.set_defaults(handler=run_list)
 
     show = verbs.add_parser("show", help="show one task with its BDDL file and init-state source")
     add_catalog_options(show)
     show.add_argument("id", help="task id (see `langgap tasks list`)")
     show.add_argument("--json", action="store_true")
-    show.set_defaults(run=run_show)
+    show.set_defaults(handler=run_show)
 
 
 def _filtered(args) -> list[Task]:

@@ -20,7 +20,9 @@ class RolloutResult:
     steps: int
     t0_hash: str
     policy_calls: int
-    reached: dict[str, int] = field(default_factory=dict)  # watched goal -> first step it held
+    reached: dict[str, int] = field(default_factory=dict)  # watched goal -> first step it became true
+    at_start: list[str] = field(default_factory=list)  # watched goals already true after settling
+    at_end: list[str] = field(default_factory=list)  # watched goals true when the episode ended
 
 
 def env_options_for(policy: Policy, **overrides) -> EnvOptions:
@@ -43,7 +45,8 @@ def run_episode(
     """Run one episode of `policy` on `env` and return its outcome.
 
     `watch` maps names to goals (LIBERO-form predicate tuples) evaluated after every step; the
-    first step at which each holds is returned in `reached`. The episode stops at the first step
+    first step at which each becomes true is returned in `reached` (a goal already true after
+    settling is reported in `at_start` instead, never as reached). The episode stops at the first step
     the task's own goal holds (LIBERO's success criterion) or at the task's step limit.
     Exceptions from the policy propagate; a malformed action raises `PolicyOutputError`.
     """
@@ -52,6 +55,8 @@ def run_episode(
     policy.reset(context)
     env.settle(settle_steps)
     watch = dict(watch or {})
+    at_start = [name for name, goal in watch.items() if env.goal_holds(goal)]
+    pending = {name: goal for name, goal in watch.items() if name not in at_start}
     reached: dict[str, int] = {}
     queue: list[np.ndarray] = []
     calls = 0
@@ -63,13 +68,20 @@ def run_episode(
             queue = list(chunk[: spec.replan])
         action = queue.pop(0)
         success = env.step(action)
-        for name, goal in watch.items():
+        for name, goal in pending.items():
             if name not in reached and env.goal_holds(goal):
                 reached[name] = env.steps
         if on_step is not None:
             on_step(env, env.steps, action)
         if success:
             break
+    at_end = [name for name, goal in watch.items() if env.goal_holds(goal)]
     return RolloutResult(
-        success=success, steps=env.steps, t0_hash=env.t0_hash or "", policy_calls=calls, reached=reached
+        success=success,
+        steps=env.steps,
+        t0_hash=env.t0_hash or "",
+        policy_calls=calls,
+        reached=reached,
+        at_start=at_start,
+        at_end=at_end,
     )

@@ -50,8 +50,8 @@ def _coerce(value: str, like) -> object:
     return value
 
 
-def make_policy(name: str, args: dict[str, str] | None = None) -> Policy:
-    """Build policy `name` with keyword arguments given as strings (`--policy-arg k=v`)."""
+def policy_kwargs(name: str, args: dict[str, str] | None = None) -> dict:
+    """Check `--policy-arg` strings against policy `name`'s constructor and convert them to its types."""
     cls = policy_class(name)
     params = inspect.signature(cls).parameters
     kwargs = {}
@@ -67,4 +67,9 @@ def make_policy(name: str, args: dict[str, str] | None = None) -> Policy:
             )
         except ValueError as exc:
             raise UnknownPolicyError(f"policy {name!r} argument {key}: {exc}") from None
-    return cls(**kwargs)
+    return kwargs
+
+
+def make_policy(name: str, args: dict[str, str] | None = None) -> Policy:
+    """Build policy `name` with keyword arguments given as strings (`--policy-arg k=v`)."""
+    return policy_class(name)(**policy_kwargs(name, args))

@@ -1,0 +1,90 @@
+"""`langgap eval`: evaluate a policy on a task selection into a durable, resumable run."""
+
+from __future__ import annotations
+
+from langgap.cli.tasks_cmd import add_catalog_options
+from langgap.engine.evaluate import PAPER_EPISODES
+from langgap.engine.local import DEFAULT_MAX_ATTEMPTS, DEFAULT_TIMEOUT_S
+from langgap.engine.plan import CONDITION_HELP, CONDITIONS
+from langgap.errors import LangGapError
+
+
+def parse_key_values(pairs: list[str] | None, option: str) -> dict[str, str]:
+    """`k=v` strings to a dict; a malformed pair is a one-line error."""
+    out: dict[str, str] = {}
+    for pair in pairs or []:
+        key, sep, value = pair.partition("=")
+        if not sep or not key:
+            raise LangGapError(f"{option} expects key=value, got {pair!r}")
+        out[key] = value
+    return out
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser("eval", help="evaluate a policy: N episodes per task on fixed init states")
+    parser.add_argument(
+        "--policy", required=True, help="policy name (oracle, blind, noop, random, openpi, …) or module:Class"
+    )
+    parser.add_argument("--policy-arg", action="append", metavar="K=V", help="policy argument (repeatable)")
+    add_catalog_options(parser)
+    parser.add_argument("--tasks", metavar="SELECTION", help="task selection (default: all tasks of the catalog)")
+    parser.add_argument(
+        "--episodes",
+        type=int,
+        default=PAPER_EPISODES,
+        help="episodes per task = init states 0..N-1 (default: %(default)s, as in the paper)",
+    )
+    parser.add_argument("--run", required=True, metavar="DIR", help="run directory (SQLite store, videos)")
+    parser.add_argument("--workers", type=int, default=1, help="local worker processes; 0 runs in this process")
+    parser.add_argument("--resume", action="store_true", help="continue a run: skip stored episodes, redo gaps")
+    parser.add_argument(
+        "--condition", action="append", choices=CONDITIONS, help=f"instruction condition(s) ({CONDITION_HELP})"
+    )
+    parser.add_argument(
+        "--video",
+        type=int,
+        nargs="?",
+        const=10,
+        default=0,
+        metavar="N",
+        help="save mp4s (agentview | wrist) of the first N planned episodes (default N: 10)",
+    )
+    parser.add_argument("--seed", type=int, default=0, help="run seed; episode k uses env seed SEED+k")
+    parser.add_argument(
+        "--timeout", type=float, default=DEFAULT_TIMEOUT_S, help="seconds per episode before it is an infra error"
+    )
+    parser.add_argument(
+        "--max-attempts", type=int, default=DEFAULT_MAX_ATTEMPTS, help="attempts before an episode becomes a gap"
+    )
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--quiet", action="store_true", help="print no diagnosis table at the end")
+    parser.set_defaults(handler=run)
+
+
+def run(args) -> int:
+    from langgap.engine.evaluate import EvalConfig, evaluate
+
+    config = EvalConfig(
+        policy=args.policy,
+        policy_args=parse_key_values(args.policy_arg, "--policy-arg"),
+        catalog=args.catalog,
+        tasks=args.tasks,
+        episodes=args.episodes,
+        seed=args.seed,
+        conditions=tuple(args.condition or ("given",)),
+        style=args.style,
+        workers=args.workers,
+        videos=args.video,
+        timeout_s=args.timeout,
+        max_attempts=args.max_attempts,
+    )
+    summary = evaluate(config, args.run, resume=args.resume, progress=not args.no_progress)
+    print(
+        f"run {summary.run}: {summary.planned} planned, {summary.skipped} already stored, {summary.ran} run "
+        f"({summary.successes} successes, {summary.gaps} gaps)"
+    )
+    if not args.quiet:
+        from langgap.report.render import diagnosis_text
+
+        print(diagnosis_text([summary.run]))
+    return 0

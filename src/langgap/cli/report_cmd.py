@@ -1,0 +1,32 @@
+"""`langgap report`: the paper's tables and LangGap's diagnoses from stored runs."""
+
+from __future__ import annotations
+
+from langgap.report.render import FORMATS
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser("report", help="tables, diagnoses and plots from one or more runs")
+    parser.add_argument("run", metavar="RUN", help="run directory")
+    parser.add_argument("--compare", nargs="+", default=[], metavar="RUN2", help="more runs, side by side")
+    parser.add_argument("--format", choices=FORMATS, default="md")
+    parser.add_argument("--plots", metavar="DIR", help="write PNG figures to DIR")
+    parser.add_argument("--episodes", metavar="FILE", help="write the per-episode table (.csv or .parquet)")
+    parser.set_defaults(handler=run)
+
+
+def run(args) -> int:
+    from langgap.report.render import load_runs, render
+
+    paths = [args.run, *args.compare]
+    print(render(paths, args.format), end="")
+    if args.plots:
+        from langgap.report.plots import write_plots
+
+        for path in write_plots(load_runs(paths), args.plots):
+            print(f"wrote {path}")
+    if args.episodes:
+        from langgap.report.export import write_episode_table
+
+        print(f"wrote {write_episode_table(paths, args.episodes)}")
+    return 0

@@ -1,0 +1,109 @@
+"""What executes episodes wherever they run (in-process, a worker process, a Ray actor).
+
+An `EpisodeRunner` owns one policy and at most one environment; the environment is built lazily
+for the task of the next episode and kept (soft resets) while consecutive episodes share the task.
+After an infrastructure failure everything is rebuilt, since a crash may leave either broken.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from langgap.catalog.catalog import load_catalog
+from langgap.engine.episode import execute_episode, video_hook
+from langgap.engine.plan import EpisodeKey, PlannedEpisode
+from langgap.engine.rollout import env_options_for
+from langgap.policies import make_policy
+from langgap.policies.base import config_hash, policy_config
+from langgap.sim.env import CAMERAS, TaskEnv
+from langgap.store import EpisodeRecord
+
+
+@dataclass(frozen=True)
+class RunnerSetup:
+    """Everything a runner needs, picklable so it can cross into a worker process."""
+
+    catalog: str
+    policy: str
+    policy_args: dict[str, str]
+    style: str
+    video_dir: str | None = None
+    video_keys: frozenset[EpisodeKey] = field(default_factory=frozenset)
+
+
+class EpisodeFailure(Exception):
+    """An episode could not be run (infrastructure): the message and traceback travel to the scheduler."""
+
+
+class EpisodeRunner:
+    def __init__(self, setup: RunnerSetup, worker: int = 0):
+        self.setup = setup
+        self.worker = worker
+        self.catalog = load_catalog(setup.catalog)
+        self._policy = None
+        self._policy_hash = ""
+        self._env: TaskEnv | None = None
+
+    def run(self, planned: PlannedEpisode, attempts: int = 1) -> EpisodeRecord:
+        """Run one episode; raises EpisodeFailure on any infrastructure error (after discarding env and policy)."""
+        try:
+            return self._run(planned, attempts)
+        except Exception as exc:
+            self.close()
+            detail = "".join(traceback.format_exception_only(type(exc), exc)).strip().splitlines()[-1]
+            raise EpisodeFailure(detail) from exc
+
+    def _run(self, planned: PlannedEpisode, attempts: int) -> EpisodeRecord:
+        task = self.catalog.get(planned.key.task_id)
+        if self._policy is None:
+            self._policy = make_policy(self.setup.policy, self.setup.policy_args)
+            self._policy_hash = config_hash(policy_config(self._policy))
+        if self._env is None or self._env.task.id != task.id:
+            self._close_env()
+            self._env = TaskEnv(task, self._env_options())
+        frames: list = []
+        hook = None
+        if planned.key in self.setup.video_keys:
+            hook = video_hook(self._env, frames, CAMERAS)
+        record = execute_episode(
+            planned,
+            task,
+            self.catalog,
+            self._env,
+            self._policy,
+            policy_name=self.setup.policy,
+            policy_hash=self._policy_hash,
+            style=self.setup.style,
+            worker=self.worker,
+            attempts=attempts,
+            on_step=hook,
+        )
+        if frames:
+            from langgap.video import write_video
+
+            path = Path(self.setup.video_dir or ".") / f"{planned.key.label().replace('/', '__')}.mp4"
+            record.video = str(write_video(path, frames))
+        return record
+
+    def _env_options(self):
+        if self.setup.video_keys:
+            # Videos show both cameras; enabling them costs nothing until a frame is rendered.
+            size = self._policy.spec.image_size if self._policy.spec.cameras else 256
+            return env_options_for(self._policy, cameras=CAMERAS, image_size=size)
+        return env_options_for(self._policy)
+
+    def _close_env(self) -> None:
+        if self._env is not None:
+            self._env.close()
+            self._env = None
+
+    def close(self) -> None:
+        """Release the environment and the policy."""
+        self._close_env()
+        if self._policy is not None and hasattr(self._policy, "close"):
+            with contextlib.suppress(Exception):  # closing a broken policy must not hide the original failure
+                self._policy.close()
+        self._policy = None

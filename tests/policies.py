@@ -1,0 +1,70 @@
+"""Misbehaving policies for the harness's reliability tests (loaded by workers as `tests.policies:Name`)."""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from langgap.policies.base import PolicySpec
+from langgap.policies.simple import NoopPolicy
+
+
+class RaisingPolicy(NoopPolicy):
+    def act(self, observation):
+        raise RuntimeError("model exploded")
+
+
+class NanPolicy(NoopPolicy):
+    def act(self, observation):
+        return np.full(7, np.nan)
+
+
+class WrongShapePolicy(NoopPolicy):
+    def act(self, observation):
+        return np.zeros(6)
+
+
+class HangingPolicy(NoopPolicy):
+    def act(self, observation):
+        time.sleep(3600)
+
+
+class FlakyPolicy(NoopPolicy):
+    """Fails the first time each episode is attempted (state kept in files, so it spans worker processes)."""
+
+    def __init__(self, marker_dir: str = ""):
+        self.marker_dir = Path(marker_dir)
+        self.key = ""
+
+    def reset(self, context):
+        self.key = f"{context.task_id.replace('/', '_')}-{context.init_index}"
+
+    def act(self, observation):
+        marker = self.marker_dir / self.key
+        if not marker.exists():
+            marker.write_text(str(os.getpid()))
+            raise ConnectionError("server went away")
+        return super().act(observation)
+
+
+class CrashingPolicy(NoopPolicy):
+    """Kills its own worker process in the middle of an episode, every time."""
+
+    def act(self, observation):
+        os._exit(17)
+
+
+class ChunkPolicy:
+    """Returns a 4-action chunk each call; executes 2 (replan) — to check chunking bookkeeping."""
+
+    spec = PolicySpec(chunk=4, replan=2)
+
+    def reset(self, context):
+        self.calls = 0
+
+    def act(self, observation):
+        self.calls += 1
+        return np.tile([0, 0, 0, 0, 0, 0, -1.0], (4, 1))

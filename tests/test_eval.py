@@ -1,0 +1,281 @@
+"""The evaluation harness: plan, store, workers, retries, gaps, resume after kill -9, bad input."""
+
+from __future__ import annotations
+
+import json
+import os
+import random
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from langgap.engine.evaluate import EvalConfig, evaluate
+from langgap.engine.plan import build_plan, condition_instruction, episode_seed
+from langgap.store import RunStore, StoreError
+from tests.conftest import REPO, run_cli
+
+SHORT_STEPS = 15
+
+
+@pytest.fixture(scope="module")
+def short_catalog(tmp_path_factory, catalog):
+    """Three spatial/s0 tasks with a 15-step limit, so harness tests run in seconds."""
+    import yaml
+
+    source = yaml.safe_load((REPO / "src/langgap/catalog/registry/langgap99.yaml").read_text())
+    keep = {
+        "spatial/s0/black-bowl-1-on-plate",
+        "spatial/s0/black-bowl-2-on-plate",
+        "spatial/s0/open-cabinet-top-drawer",
+    }
+    data = {
+        "catalog": "short",
+        "max_steps": {"libero_spatial": SHORT_STEPS},
+        "tasks": [t for t in source["tasks"] if t["id"] in keep],
+    }
+    path = tmp_path_factory.mktemp("catalog") / "short.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return str(path)
+
+
+def _rows(run: Path) -> list[dict]:
+    db = sqlite3.connect(run / "episodes.sqlite")
+    db.row_factory = sqlite3.Row
+    rows = [dict(r) for r in db.execute("SELECT * FROM episodes ORDER BY task_id, init_index, condition")]
+    db.close()
+    return rows
+
+
+def _eval(short_catalog, run, policy="noop", episodes=2, workers=0, **kw):
+    config = EvalConfig(policy=policy, catalog=short_catalog, episodes=episodes, workers=workers, **kw)
+    return evaluate(config, run, progress=False)
+
+
+def test_episode_rows_carry_full_provenance(short_catalog, tmp_path):
+    summary = _eval(short_catalog, tmp_path / "run", policy="tests.policies:ChunkPolicy")
+    assert (summary.planned, summary.ran, summary.gaps) == (6, 6, 0)
+    rows = _rows(tmp_path / "run")
+    assert len(rows) == 6
+    row = rows[0]
+    assert row["status"] == "done" and row["failure_kind"] == "policy" and row["outcome"] == "no_goal_reached"
+    assert row["steps"] == SHORT_STEPS and row["policy_calls"] == SHORT_STEPS // 2 + SHORT_STEPS % 2
+    assert row["instruction"] == "pick up the black bowl between the plate and the ramekin and place it on the plate"
+    assert len(row["instruction_sha256"]) == 64 and len(row["t0_hash"]) == 64
+    assert json.loads(row["physics"])["mujoco"] == "3.2.3"
+    assert row["seed"] == episode_seed(0, row["init_index"])
+    assert row["policy"] == "tests.policies:ChunkPolicy" and len(row["policy_config_hash"]) == 16
+    assert row["code_version"].startswith("0.1.0")
+    # Siblings start from the identical scene: same init index -> same t0 hash in every task.
+    by_init = {}
+    for r in rows:
+        assert by_init.setdefault(r["init_index"], r["t0_hash"]) == r["t0_hash"]
+    with RunStore.open(tmp_path / "run") as store:
+        assert store.config["policy"] == "tests.policies:ChunkPolicy"
+
+
+def test_resume_skips_done_and_extends(short_catalog, tmp_path):
+    run = tmp_path / "run"
+    _eval(short_catalog, run, episodes=1)
+    config = EvalConfig(policy="noop", catalog=short_catalog, episodes=2, workers=0)
+    summary = evaluate(config, run, resume=True, progress=False)
+    assert (summary.skipped, summary.ran) == (3, 3)
+    assert len(_rows(run)) == 6
+
+
+def test_policy_output_errors_are_policy_failures(short_catalog, tmp_path):
+    for name, message in (("NanPolicy", "non-finite"), ("WrongShapePolicy", "shape")):
+        run = tmp_path / name
+        _eval(short_catalog, run, policy=f"tests.policies:{name}", episodes=1)
+        rows = _rows(run)
+        assert all(r["status"] == "done" and r["outcome"] == "policy_error" for r in rows)
+        assert all(r["failure_kind"] == "policy" and message in r["error"] for r in rows)
+
+
+def test_exceptions_are_retried_then_recorded_as_gaps(short_catalog, tmp_path):
+    run = tmp_path / "raise"
+    summary = _eval(short_catalog, run, policy="tests.policies:RaisingPolicy", episodes=1, max_attempts=2)
+    rows = _rows(run)
+    assert summary.gaps == 3
+    assert all(r["status"] == "gap" and r["failure_kind"] == "infra" and r["attempts"] == 2 for r in rows)
+    assert all("model exploded" in r["error"] for r in rows)
+
+
+def test_a_flaky_policy_succeeds_on_retry_in_worker_processes(short_catalog, tmp_path):
+    markers = tmp_path / "markers"
+    markers.mkdir()
+    config = EvalConfig(
+        policy="tests.policies:FlakyPolicy",
+        policy_args={"marker_dir": str(markers)},
+        catalog=short_catalog,
+        episodes=1,
+        workers=2,
+    )
+    summary = evaluate(config, tmp_path / "run", progress=False)
+    rows = _rows(tmp_path / "run")
+    assert summary.gaps == 0 and len(rows) == 3
+    assert all(r["status"] == "done" and r["attempts"] == 2 for r in rows)
+
+
+def test_hanging_and_crashing_workers_become_gaps_and_the_run_completes(short_catalog, tmp_path):
+    hang = evaluate(
+        EvalConfig(
+            policy="tests.policies:HangingPolicy",
+            catalog=short_catalog,
+            tasks="spatial/s0/open*",
+            episodes=1,
+            workers=1,
+            timeout_s=8,
+            max_attempts=2,
+        ),
+        tmp_path / "hang",
+        progress=False,
+    )
+    rows = _rows(tmp_path / "hang")
+    assert hang.gaps == 1 and rows[0]["status"] == "gap" and "timed out" in rows[0]["error"]
+    crash = evaluate(
+        EvalConfig(
+            policy="tests.policies:CrashingPolicy", catalog=short_catalog, episodes=1, workers=2, max_attempts=2
+        ),
+        tmp_path / "crash",
+        progress=False,
+    )
+    rows = _rows(tmp_path / "crash")
+    assert crash.gaps == 3 and all("worker process died (exit code 17)" in r["error"] for r in rows)
+
+
+def test_worker_backend_equals_in_process(short_catalog, tmp_path):
+    _eval(short_catalog, tmp_path / "inproc", policy="random", episodes=2, workers=0)
+    _eval(short_catalog, tmp_path / "workers", policy="random", episodes=2, workers=2)
+    keep = ("task_id", "init_index", "seed", "success", "steps", "t0_hash", "reached", "outcome")
+    assert [{k: r[k] for k in keep} for r in _rows(tmp_path / "inproc")] == [
+        {k: r[k] for k in keep} for r in _rows(tmp_path / "workers")
+    ]
+
+
+def test_kill_minus_nine_and_resume_loses_and_duplicates_nothing(short_catalog, tmp_path):
+    args = [
+        "eval",
+        "--policy",
+        "random",
+        "--catalog",
+        short_catalog,
+        "--episodes",
+        "4",
+        "--workers",
+        "2",
+        "--no-progress",
+        "--quiet",
+    ]
+    reference = tmp_path / "reference"
+    assert run_cli(*args, "--run", str(reference)).returncode == 0
+    run = tmp_path / "killed"
+    rng = random.Random(1)
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    for _ in range(3):
+        process = subprocess.Popen(
+            [sys.executable, "-m", "langgap.cli.main", *args, "--run", str(run), "--resume"],
+            env=env,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+        time.sleep(rng.uniform(6, 14))
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+    assert run_cli(*args, "--run", str(run), "--resume").returncode == 0
+    keep = ("task_id", "init_index", "seed", "success", "steps", "t0_hash", "reached", "goals_at_end")
+    killed = [{k: r[k] for k in keep} for r in _rows(run)]
+    assert len(killed) == 12 and killed == [{k: r[k] for k in keep} for r in _rows(reference)]
+    time.sleep(1.5)
+    orphans = subprocess.run(["pgrep", "-f", f"langgap-worker|{run}"], capture_output=True, text=True).stdout.split()
+    assert not [p for p in orphans if int(p) != os.getpid()]
+
+
+def test_conditions_send_the_planned_strings(catalog):
+    task = catalog.get("spatial/s0/black-bowl-2-on-plate")
+    assert condition_instruction(task, catalog, "empty", "libero", 0) == ""
+    assert condition_instruction(task, catalog, "source", "libero", 0) == catalog.get(task.source).instruction()
+    mates = {t.instruction() for t in catalog.scene_mates(task)} - {task.instruction()}
+    shuffled = {condition_instruction(task, catalog, "shuffled", "libero", k) for k in range(20)}
+    assert shuffled <= mates and len(shuffled) > 1
+    assert shuffled == {condition_instruction(task, catalog, "shuffled", "libero", k) for k in range(20)}
+    plan = build_plan([task], catalog, episodes=2, conditions=("given", "empty"))
+    assert [(p.key.condition, p.instruction) for p in plan][-1] == ("empty", "")
+
+
+def test_videos_are_written(short_catalog, tmp_path):
+    _eval(short_catalog, tmp_path / "run", tasks="spatial/s0/black-bowl-1-on-plate", episodes=1, videos=1)
+    (row,) = _rows(tmp_path / "run")
+    import cv2
+
+    video = cv2.VideoCapture(row["video"])
+    assert video.get(cv2.CAP_PROP_FRAME_COUNT) == SHORT_STEPS
+    assert video.get(cv2.CAP_PROP_FRAME_WIDTH) == 2 * video.get(cv2.CAP_PROP_FRAME_HEIGHT)
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--policy", "gpt-robot"], "unknown policy"),
+        (["--policy", "random", "--policy-arg", "temperature=3"], "no argument 'temperature'"),
+        (["--policy", "noop", "--tasks", "spatial/s0/levitate"], "unknown task"),
+        (["--policy", "noop", "--episodes", "51"], "out of range"),
+        (["--policy", "noop", "--policy-arg", "oops"], "key=value"),
+    ],
+)
+def test_bad_input_is_one_line_and_creates_nothing(tmp_path, extra, message):
+    run = tmp_path / "run"
+    result = run_cli("eval", "--run", str(run), *extra)
+    assert result.returncode == 2, result.stderr
+    assert result.stderr.startswith("error: ") and result.stderr.count("\n") == 1 and message in result.stderr
+    assert not run.exists()
+
+
+def test_existing_foreign_or_corrupt_stores_are_never_overwritten(short_catalog, tmp_path):
+    run = tmp_path / "run"
+    _eval(short_catalog, run, episodes=1)
+    db = run / "episodes.sqlite"
+    before = db.read_bytes()
+    base = ["eval", "--catalog", short_catalog, "--episodes", "1", "--run", str(run), "--no-progress"]
+    for extra, message in (
+        (["--policy", "noop"], "already exists"),
+        (["--policy", "random", "--resume"], "another configuration"),
+        (["--policy", "noop", "--seed", "5", "--resume"], "another configuration"),
+    ):
+        result = run_cli(*base, *extra)
+        assert result.returncode == 2 and message in result.stderr and result.stderr.count("\n") == 1
+    assert db.read_bytes() == before
+    corrupt = tmp_path / "corrupt"
+    corrupt.mkdir()
+    (corrupt / "episodes.sqlite").write_bytes(b"this is not a database" * 100)
+    result = run_cli("eval", "--policy", "noop", "--run", str(corrupt), "--resume", "--catalog", short_catalog)
+    assert result.returncode == 2 and "not a LangGap run store" in result.stderr
+    assert (corrupt / "episodes.sqlite").read_bytes() == b"this is not a database" * 100
+    with pytest.raises(StoreError):
+        RunStore.open(corrupt)
+
+
+def test_report_formats(short_catalog, tmp_path):
+    run = tmp_path / "run"
+    _eval(short_catalog, run, episodes=2, conditions=("given", "empty"))
+    other = tmp_path / "other"
+    _eval(short_catalog, other, policy="random", episodes=2)
+    result = run_cli("report", str(run), "--compare", str(other), "--format", "json")
+    report = json.loads(result.stdout)
+    for section in ("per_task", "per_dimension", "per_suite", "per_split"):
+        for row in report[section]:
+            assert {"id", "episodes", "successes", "rate", "ci_low", "ci_high", "gaps"} <= set(row)
+    assert report["conditions"][0]["name"] == "given vs empty" and report["comparisons"][0]["pairs"] == 6
+    markdown = run_cli("report", str(run), "--plots", str(tmp_path / "plots"), "--episodes", str(tmp_path / "ep.csv"))
+    assert markdown.returncode == 0 and "Table VII" in markdown.stdout and "Table VI" in markdown.stdout
+    assert (tmp_path / "plots" / "success_by_dimension.png").stat().st_size > 1000
+    import csv
+
+    rows = list(csv.DictReader((tmp_path / "ep.csv").open()))
+    assert len(rows) == 12 and {r["condition"] for r in rows} == {"given", "empty"}
+    assert r"\toprule" in run_cli("report", str(run), "--format", "latex").stdout
+    assert run_cli("report", str(run), "--format", "csv").stdout.startswith("run,table,group")
