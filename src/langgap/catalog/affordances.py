@@ -70,7 +70,7 @@ DRAWER_LEVEL = {"top_region": "top", "middle_region": "middle", "bottom_region":
 
 RECEIVES: dict[str, Rule] = {
     # Objects that receive. A bowl also takes cream cheese (LIBERO-Goal's "put the cream cheese in
-    # the bowl"); a 16 cm bottle standing in a bowl or on a ramekin topples, so bottles never do.
+    # the bowl"). Bottles go on no dish but the plate: a 16 cm bottle in a bowl or on a ramekin topples.
     "plate": Rule("On", _ON_A_PLATE),
     _BOWL: Rule("On", _SMALL_DISHES | {"cream_cheese"}),
     _RAMEKIN: Rule("On", _SMALL_DISHES),

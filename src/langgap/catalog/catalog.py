@@ -170,7 +170,8 @@ def load_catalog_file(path: str | Path) -> Catalog:
     """Load a registry YAML file."""
     path = Path(path)
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        # libyaml's loader, where installed, reads the ~850-task `full` registry 5x faster.
+        data = yaml.load(path.read_text(encoding="utf-8"), Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
     except (OSError, yaml.YAMLError) as exc:
         raise CatalogError(f"cannot read catalog {path}: {exc}") from None
     return catalog_from_data(data, source=str(path))

@@ -22,11 +22,13 @@ from langgap.catalog import files, phrasing
 from langgap.catalog.candidates import candidate_goals, dimension, obj_of_interest
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
 from langgap.catalog.naming import SUITE_SHORT, task_id
+from langgap.catalog.registry_writer import registry_text
 from langgap.catalog.task import DIMENSIONS, INSTRUCTION_STYLES, GateResult, Task
 from langgap.errors import CatalogError
 from langgap.stack import SUITES
 
 FULL_CATALOG = "full"
+FULL_DESCRIPTION = "Every candidate same-scene task of LIBERO's scenes, generated from their BDDL (langgap generate)."
 Gate = Callable[[list[Task]], dict[str, GateResult]]
 
 
@@ -116,3 +118,14 @@ def _as_published(task: Task, paper_task: Task) -> Task:
         notes=notes,
         in_langgap99=True,
     )
+
+
+def write_registry(tasks: list[Task], path: str | Path) -> Path:
+    """Write `tasks` as the `full` registry YAML at `path` (parent folders are created)."""
+    path = Path(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(registry_text(FULL_CATALOG, FULL_DESCRIPTION, tasks), encoding="utf-8")
+    except OSError as exc:
+        raise CatalogError(f"cannot write registry {path}: {exc.strerror}") from None
+    return path

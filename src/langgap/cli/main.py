@@ -5,10 +5,10 @@ from __future__ import annotations
 import argparse
 import sys
 
-from langgap.cli import doctor_cmd, tasks_cmd
+from langgap.cli import doctor_cmd, generate_cmd, tasks_cmd
 from langgap.errors import LangGapError
 
-VERBS = (tasks_cmd, doctor_cmd)
+VERBS = (tasks_cmd, generate_cmd, doctor_cmd)
 
 
 def build_parser() -> argparse.ArgumentParser:
