@@ -62,7 +62,7 @@ def test_phrasing_reproduces_every_single_goal_original_sentence(paper):
     originals = [t for t in paper if t.kind == "original" and t.suite != "libero_10"]
     assert len(originals) == 30
     for task in originals:
-        assert phrasing.libero_instruction(task.suite, task.goal, files.scene_problem(task)) == task.instruction()
+        assert phrasing.instruction("libero", task.suite, task.goal, files.scene_problem(task)) == task.instruction()
 
 
 def test_paper_template_reproduces_the_authors_strings_except_their_hand_written_bowl_descriptions(paper):

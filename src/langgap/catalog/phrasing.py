@@ -212,8 +212,3 @@ def instruction(style: str, suite: str, goal: tuple[Predicate, ...] | list[Predi
     if affordances.is_articulation(predicate):
         return _articulation(predicate, scene)
     return _placement(suite, style, predicate, scene)
-
-
-def libero_instruction(suite: str, goal: tuple[Predicate, ...] | list[Predicate], scene: BddlProblem) -> str:
-    """The `libero`-style sentence for a one-predicate goal on `scene` of `suite`."""
-    return instruction("libero", suite, goal, scene)

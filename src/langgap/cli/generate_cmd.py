@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections import Counter
 
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
-from langgap.catalog.generate import default_registry_path, generate_tasks, resolve_suites, write_registry
+from langgap.catalog.generate import default_registry_path, generate_tasks, write_registry
 from langgap.catalog.task import DIMENSIONS, Task
 from langgap.stack import SUITES
 
@@ -66,7 +66,7 @@ def summary_lines(tasks: list[Task]) -> list[str]:
 
 
 def run(args) -> int:
-    tasks = generate_tasks(resolve_suites(args.suites))
+    tasks = generate_tasks(args.suites)
     path = write_registry(tasks, args.out or default_registry_path())
     print("\n".join(summary_lines(tasks)))
     print(f"wrote {path}")
