@@ -10,7 +10,7 @@ import pytest
 
 from langgap.catalog import files
 from langgap.catalog.catalog import catalog_from_data, load_catalog
-from langgap.catalog.phrasing import libero_instruction
+from langgap.catalog.phrasing import instruction
 from langgap.errors import CatalogError, UnknownTaskError
 from langgap.stack import libero_root
 from tests.conftest import run_cli
@@ -74,12 +74,12 @@ def test_libero_style_rederives_every_original(catalog):
     """The phrasing tables reproduce LIBERO's own sentence for all 30 single-goal originals."""
     for task in catalog.select("original"):
         if task.suite != "libero_10":
-            assert libero_instruction(task.suite, task.goal, files.scene_problem(task)) == task.instruction("libero")
+            assert instruction("libero", task.suite, task.goal, files.scene_problem(task)) == task.instruction("libero")
 
 
 def test_extended_libero_sentences_follow_the_originals(catalog):
     for task in catalog.select("extended"):
-        assert libero_instruction(task.suite, task.goal, files.scene_problem(task)) == task.instruction("libero")
+        assert instruction("libero", task.suite, task.goal, files.scene_problem(task)) == task.instruction("libero")
 
 
 def test_change_target_sentences_differ_from_source_only_in_the_target(catalog):

@@ -27,6 +27,8 @@ _CATEGORY_SLUG = {
     "white_cabinet": "cabinet",
     "wine_rack": "rack",
     "desk_caddy": "caddy",
+    "chefmate_8_frypan": "frying-pan",
+    "red_coffee_mug": "red-mug",
 }
 # Region name -> slug suffix ("" means the region stands for its fixture, e.g. the stove's cook region).
 _REGION_SLUG = {
@@ -39,6 +41,8 @@ _REGION_SLUG = {
     "front_contain_region": "front",
     "left_contain_region": "left",
     "right_contain_region": "right",
+    "porcelain_mug_front_region": "white-mug-front",
+    "desk_caddy_right_region": "caddy-right",
 }
 _DRAWER_SLUG = {"top_region": "top-drawer", "middle_region": "middle-drawer", "bottom_region": "bottom-drawer"}
 _VERB_SLUG = {

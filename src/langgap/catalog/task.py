@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 from langgap.bddl import Predicate
 from langgap.errors import CatalogError
@@ -12,6 +12,25 @@ DIMENSIONS = ("original", "change_object", "change_target", "spatial_description
 SPLITS = ("original", "train", "heldout")
 INSTRUCTION_STYLES = ("libero", "paper")
 DEFAULT_STYLE = "libero"
+
+
+@dataclass(frozen=True)
+class GateResult:
+    """A feasibility gate's verdict on one task: how a scripted oracle did, and whether the task is kept."""
+
+    episodes: int
+    successes: int
+    feasible: bool
+    reason: str = ""
+
+    def __post_init__(self) -> None:
+        if not 0 <= self.successes <= self.episodes:
+            raise CatalogError(f"gate result: {self.successes} successes in {self.episodes} episodes")
+
+    @property
+    def rate(self) -> float:
+        """Oracle success rate (0 when no episode ran)."""
+        return self.successes / self.episodes if self.episodes else 0.0
 
 
 @dataclass(frozen=True)
@@ -38,6 +57,8 @@ class Task:
     max_steps: int = 0
     paper_id: int | None = None
     notes: tuple[str, ...] = ()
+    in_langgap99: bool = False
+    gate: GateResult | None = None  # None: not validated by a feasibility gate
 
     def __post_init__(self) -> None:
         checks = {"kind": (self.kind, KINDS), "dimension": (self.dimension, DIMENSIONS), "split": (self.split, SPLITS)}
@@ -59,6 +80,11 @@ class Task:
         if style not in self.instructions:
             raise CatalogError(f"unknown instruction style {style!r} (known: {', '.join(INSTRUCTION_STYLES)})")
         return self.instructions[style]
+
+    @property
+    def feasible(self) -> bool:
+        """False only when a feasibility gate rejected the task."""
+        return self.gate is None or self.gate.feasible
 
     @property
     def goal_strings(self) -> list[str]:
@@ -84,4 +110,8 @@ class Task:
             "scene_task": self.scene_task,
             "scene_index": self.scene_index,
             "notes": list(self.notes),
+            "in_langgap99": self.in_langgap99,
+            "validated": self.gate is not None,
+            "feasible": self.feasible,
+            "gate": None if self.gate is None else {**asdict(self.gate), "rate": self.gate.rate},
         }

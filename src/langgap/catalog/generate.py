@@ -1,0 +1,131 @@
+"""The `full` catalog: every candidate same-scene task of LIBERO's suites, generated from their BDDL.
+
+For each original task (the sources: LangGap-99's 40 originals), every one-predicate goal its scene
+affords (`candidates`) becomes a task on the source's scene and init states, with an id from
+`naming`, both instruction styles from `phrasing`, and a dimension relative to the source. A
+candidate that is one of the paper's tasks keeps the paper's id, strings, dimension and split.
+
+Physical feasibility is not decided here: a gate (a callable that runs, e.g., a scripted oracle on
+the tasks) may be passed in, and its verdicts are recorded per task; rejected tasks stay in the
+catalog, flagged, so that a default selection leaves them out.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Iterable
+from importlib import resources
+from pathlib import Path
+
+from langgap.bddl import BddlProblem, Predicate
+from langgap.catalog import files, phrasing
+from langgap.catalog.candidates import candidate_goals, dimension, obj_of_interest
+from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
+from langgap.catalog.naming import SUITE_SHORT, task_id
+from langgap.catalog.registry_writer import registry_text
+from langgap.catalog.task import DIMENSIONS, INSTRUCTION_STYLES, GateResult, Task
+from langgap.errors import CatalogError
+from langgap.stack import SUITES
+
+FULL_CATALOG = "full"
+FULL_DESCRIPTION = "Every candidate same-scene task of LIBERO's scenes, generated from their BDDL (langgap generate)."
+Gate = Callable[[list[Task]], dict[str, GateResult]]
+
+
+def default_registry_path() -> Path:
+    """Where the shipped `full` registry lives inside the package."""
+    return Path(str(resources.files("langgap.catalog") / "registry" / f"{FULL_CATALOG}.yaml"))
+
+
+def resolve_suites(names: Iterable[str]) -> list[str]:
+    """Suite names (`libero_goal` or `goal`) in the canonical order; CatalogError on an unknown one."""
+    short = {s: suite for suite, s in SUITE_SHORT.items()}
+    wanted = set()
+    for name in names:
+        suite = short.get(name, name)
+        if suite not in SUITES:
+            raise CatalogError(f"unknown suite {name!r} (known: {', '.join(SUITES)})")
+        wanted.add(suite)
+    return [s for s in SUITES if s in wanted]
+
+
+def generate_tasks(suites: Iterable[str] = SUITES, *, gate: Gate | None = None) -> list[Task]:
+    """Every candidate task of `suites`, originals first within each scene; deterministic.
+
+    With a `gate`, it is called once with all tasks and must return a verdict per task id it
+    judged; each verdict is attached to its task (`Task.gate`).
+    """
+    suites = resolve_suites(suites)
+    paper = load_catalog(DEFAULT_CATALOG)
+    published = {(t.suite, t.scene_task, t.goal): t for t in paper if t.kind == "extended"}
+    sources = sorted(
+        (t for t in paper if t.kind == "original" and t.suite in suites),
+        key=lambda t: (suites.index(t.suite), t.scene_index),
+    )
+    tasks = [task for source in sources for task in _scene_tasks(source, published)]
+    if gate is None:
+        return tasks
+    verdicts = gate(list(tasks))
+    unknown = sorted(set(verdicts) - {t.id for t in tasks})
+    if unknown:
+        raise CatalogError(f"the gate returned verdicts for unknown task(s): {', '.join(unknown[:5])}")
+    return [dataclasses.replace(t, gate=verdicts.get(t.id)) for t in tasks]
+
+
+def _scene_tasks(source: Task, published: dict[tuple, Task]) -> list[Task]:
+    """The source itself, then its scene's extended candidates by dimension and id."""
+    scene = files.scene_problem(source)
+    extended = []
+    for goal in candidate_goals(scene, source.goal):
+        if (goal,) == source.goal:
+            continue
+        task = _extended_task(source, (goal,), scene)
+        paper_task = published.get((task.suite, task.scene_task, task.goal))
+        extended.append(_as_published(task, paper_task) if paper_task else task)
+    extended.sort(key=lambda t: (DIMENSIONS.index(t.dimension), t.id))
+    return [dataclasses.replace(source, catalog=FULL_CATALOG, in_langgap99=True), *extended]
+
+
+def _extended_task(source: Task, goal: tuple[Predicate, ...], scene: BddlProblem) -> Task:
+    return Task(
+        id=task_id(source.suite, source.scene_index, goal, scene),
+        catalog=FULL_CATALOG,
+        suite=source.suite,
+        kind="extended",
+        dimension=dimension(goal[0], source.goal, scene),
+        split="heldout",
+        source=source.id,
+        scene_task=source.scene_task,
+        scene_index=source.scene_index,
+        goal=goal,
+        obj_of_interest=obj_of_interest(goal, scene),
+        instructions={style: phrasing.instruction(style, source.suite, goal, scene) for style in INSTRUCTION_STYLES},
+        max_steps=source.max_steps,
+    )
+
+
+def _as_published(task: Task, paper_task: Task) -> Task:
+    """`task` as the paper published it: its strings, dimension, split, id number and notes."""
+    notes = paper_task.notes
+    if paper_task.dimension != task.dimension:
+        notes += (f"the dimension rule gives {task.dimension}; the paper's label {paper_task.dimension} is kept",)
+    return dataclasses.replace(
+        task,
+        instructions={"libero": task.instruction("libero"), "paper": paper_task.instruction("paper")},
+        dimension=paper_task.dimension,
+        split=paper_task.split,
+        paper_id=paper_task.paper_id,
+        notes=notes,
+        in_langgap99=True,
+    )
+
+
+def write_registry(tasks: list[Task], path: str | Path) -> Path:
+    """Write `tasks` as the `full` registry YAML at `path` (parent folders are created)."""
+    path = Path(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(registry_text(FULL_CATALOG, FULL_DESCRIPTION, tasks), encoding="utf-8")
+    except OSError as exc:
+        raise CatalogError(f"cannot write registry {path}: {exc.strerror}") from None
+    return path

@@ -1,0 +1,73 @@
+"""`langgap generate`: enumerate every same-scene task into the `full` registry and print its counts."""
+
+from __future__ import annotations
+
+from collections import Counter
+
+from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
+from langgap.catalog.generate import default_registry_path, generate_tasks, write_registry
+from langgap.catalog.task import DIMENSIONS, Task
+from langgap.stack import SUITES
+
+_EXTENDED_DIMENSIONS = [d for d in DIMENSIONS if d != "original"]
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "generate", help="enumerate every candidate same-scene task of LIBERO's scenes into a registry"
+    )
+    parser.add_argument(
+        "--out", metavar="FILE", help="registry file to write (default: the package's catalog/registry/full.yaml)"
+    )
+    parser.add_argument(
+        "--suites",
+        nargs="+",
+        metavar="SUITE",
+        default=list(SUITES),
+        help="suites to enumerate, e.g. libero_goal or goal (default: all four)",
+    )
+    parser.set_defaults(handler=run)
+
+
+def summary_lines(tasks: list[Task]) -> list[str]:
+    """Counts per scene and per dimension, the paper's tasks found, and the gate's verdicts if it ran."""
+    scenes: dict[str, Counter] = {}
+    for task in tasks:
+        scenes.setdefault(task.source, Counter())[task.dimension] += 1
+    width = max(len(s) for s in scenes)
+    columns = ["original", *_EXTENDED_DIMENSIONS]
+    lines = [f"{'scene (source task)':<{width}}  " + "  ".join(columns)]
+    for scene, counts in scenes.items():
+        lines.append(f"{scene:<{width}}  " + "  ".join(f"{counts[c]:>{len(c)}}" for c in columns))
+    total = Counter(t.dimension for t in tasks)
+    lines.append(f"{'total':<{width}}  " + "  ".join(f"{total[c]:>{len(c)}}" for c in columns))
+    extended = len(tasks) - total["original"]
+    lines.append(f"{len(tasks)} tasks: {total['original']} original, {extended} extended")
+
+    suites = {t.suite for t in tasks}
+    paper = [t for t in load_catalog(DEFAULT_CATALOG) if t.suite in suites]
+    found = {t.id for t in tasks if t.in_langgap99}
+    missing = [t.id for t in paper if t.id not in found]
+    lines.append(
+        f"langgap99: {len(paper) - len(missing)}/{len(paper)} of the paper's tasks in these suites found"
+        + (f"; missing: {', '.join(missing)}" if missing else "")
+    )
+
+    judged = [t for t in tasks if t.gate is not None]
+    if judged:
+        rejected = [t for t in judged if not t.feasible]
+        accepted = len(judged) - len(rejected)
+        lines.append(f"gate: {accepted} accepted, {len(rejected)} rejected, {len(tasks) - len(judged)} not judged")
+        for reason, count in Counter(t.gate.reason or "(no reason given)" for t in rejected).most_common():
+            lines.append(f"  rejected {count:>4}: {reason}")
+    else:
+        lines.append("gate: none ran; every task is written with validated: false")
+    return lines
+
+
+def run(args) -> int:
+    tasks = generate_tasks(args.suites)
+    path = write_registry(tasks, args.out or default_registry_path())
+    print("\n".join(summary_lines(tasks)))
+    print(f"wrote {path}")
+    return 0
