@@ -19,6 +19,7 @@ import yaml
 from langgap.bddl import Predicate
 from langgap.catalog.naming import SUITE_SHORT
 from langgap.catalog.task import DIMENSIONS, KINDS, SPLITS, GateResult, Task
+from langgap.catalog.verdicts import read_verdicts
 from langgap.errors import BddlError, CatalogError, UnknownTaskError
 
 DEFAULT_CATALOG = "langgap99"
@@ -128,7 +129,9 @@ class Catalog:
         raise UnknownTaskError(f"selection term {term!r} matches no task in catalog {self.name} ({_KEYWORDS_HELP})")
 
 
-def _task_from_entry(catalog: str, entry: dict, defaults: dict, originals: dict[str, dict]) -> Task:
+def _task_from_entry(
+    catalog: str, entry: dict, defaults: dict, originals: dict[str, dict], verdicts: dict[str, GateResult]
+) -> Task:
     try:
         kind = entry["kind"]
         source_id = entry["id"] if kind == "original" else entry["source"]
@@ -154,25 +157,12 @@ def _task_from_entry(catalog: str, entry: dict, defaults: dict, originals: dict[
             notes=tuple(entry.get("notes", ())),
             # Every task of the paper's own catalog is in it by definition.
             in_langgap99=bool(entry.get("in_langgap99", catalog == DEFAULT_CATALOG)),
-            gate=_gate_from_entry(entry),
+            gate=verdicts.get(entry["id"]),
         )
     except KeyError as exc:
         raise CatalogError(f"catalog {catalog}: task {entry.get('id', '?')} lacks field {exc}") from None
     except BddlError as exc:
         raise CatalogError(f"catalog {catalog}: task {entry.get('id', '?')}: {exc}") from None
-
-
-def _gate_from_entry(entry: dict) -> GateResult | None:
-    """The recorded feasibility verdict (`validated: true`, `feasible`, `gate: {...}`), if any."""
-    if not entry.get("validated", False):
-        return None
-    gate = entry["gate"]
-    return GateResult(
-        episodes=int(gate["episodes"]),
-        successes=int(gate["successes"]),
-        feasible=bool(entry["feasible"]),
-        reason=str(gate.get("reason", "")),
-    )
 
 
 def load_catalog_file(path: str | Path) -> Catalog:
@@ -183,16 +173,27 @@ def load_catalog_file(path: str | Path) -> Catalog:
         data = yaml.load(path.read_text(encoding="utf-8"), Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
     except (OSError, yaml.YAMLError) as exc:
         raise CatalogError(f"cannot read catalog {path}: {exc}") from None
-    return catalog_from_data(data, source=str(path))
+    return catalog_from_data(data, source=str(path), verdicts=read_verdicts(path))
 
 
-def catalog_from_data(data: dict, *, source: str = "<data>") -> Catalog:
+def registry_path(name: str) -> Path:
+    """The registry file behind catalog `name` (a shipped name or a path)."""
+    if name.endswith(".yaml") or "/" in name:
+        return Path(name)
+    if name not in available_catalogs():
+        raise CatalogError(f"unknown catalog {name!r} (available: {', '.join(available_catalogs())})")
+    return Path(str(resources.files("langgap.catalog") / "registry" / f"{name}.yaml"))
+
+
+def catalog_from_data(data: dict, *, source: str = "<data>", verdicts: dict[str, GateResult] | None = None) -> Catalog:
+    """A catalog from registry data, with feasibility verdicts attached to their tasks."""
+    verdicts = verdicts or {}
     if not isinstance(data, dict) or "tasks" not in data or "catalog" not in data:
         raise CatalogError(f"{source}: not a LangGap registry (needs 'catalog' and 'tasks')")
     name = data["catalog"]
     entries = data["tasks"]
     originals = {e["id"]: e for e in entries if e.get("kind") == "original"}
-    tasks = [_task_from_entry(name, e, data, originals) for e in entries]
+    tasks = [_task_from_entry(name, e, data, originals, verdicts) for e in entries]
     return Catalog(name, tasks, description=data.get("description", ""))
 
 
@@ -205,9 +206,4 @@ def available_catalogs() -> list[str]:
 @functools.cache
 def load_catalog(name: str = DEFAULT_CATALOG) -> Catalog:
     """A shipped catalog by name (`langgap99`), or a registry file by path."""
-    if name.endswith(".yaml") or "/" in name:
-        return load_catalog_file(name)
-    if name not in available_catalogs():
-        raise CatalogError(f"unknown catalog {name!r} (available: {', '.join(available_catalogs())})")
-    with resources.as_file(resources.files("langgap.catalog") / "registry" / f"{name}.yaml") as path:
-        return load_catalog_file(path)
+    return load_catalog_file(registry_path(name))

@@ -5,15 +5,14 @@ affords (`candidates`) becomes a task on the source's scene and init states, wit
 `naming`, both instruction styles from `phrasing`, and a dimension relative to the source. A
 candidate that is one of the paper's tasks keeps the paper's id, strings, dimension and split.
 
-Physical feasibility is not decided here: a gate (a callable that runs, e.g., a scripted oracle on
-the tasks) may be passed in, and its verdicts are recorded per task; rejected tasks stay in the
-catalog, flagged, so that a default selection leaves them out.
+Physical feasibility is not decided here: the feasibility gate (`langgap.validate`) runs the scripted
+oracle on the written catalog and records its verdicts beside the registry (`catalog/verdicts.py`).
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from importlib import resources
 from pathlib import Path
 
@@ -23,13 +22,12 @@ from langgap.catalog.candidates import candidate_goals, dimension, obj_of_intere
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
 from langgap.catalog.naming import SUITE_SHORT, task_id
 from langgap.catalog.registry_writer import registry_text
-from langgap.catalog.task import DIMENSIONS, INSTRUCTION_STYLES, GateResult, Task
+from langgap.catalog.task import DIMENSIONS, INSTRUCTION_STYLES, Task
 from langgap.errors import CatalogError
 from langgap.stack import SUITES
 
 FULL_CATALOG = "full"
 FULL_DESCRIPTION = "Every candidate same-scene task of LIBERO's scenes, generated from their BDDL (langgap generate)."
-Gate = Callable[[list[Task]], dict[str, GateResult]]
 
 
 def default_registry_path() -> Path:
@@ -49,12 +47,8 @@ def resolve_suites(names: Iterable[str]) -> list[str]:
     return [s for s in SUITES if s in wanted]
 
 
-def generate_tasks(suites: Iterable[str] = SUITES, *, gate: Gate | None = None) -> list[Task]:
-    """Every candidate task of `suites`, originals first within each scene; deterministic.
-
-    With a `gate`, it is called once with all tasks and must return a verdict per task id it
-    judged; each verdict is attached to its task (`Task.gate`).
-    """
+def generate_tasks(suites: Iterable[str] = SUITES) -> list[Task]:
+    """Every candidate task of `suites`, originals first within each scene; deterministic."""
     suites = resolve_suites(suites)
     paper = load_catalog(DEFAULT_CATALOG)
     published = {(t.suite, t.scene_task, t.goal): t for t in paper if t.kind == "extended"}
@@ -62,14 +56,7 @@ def generate_tasks(suites: Iterable[str] = SUITES, *, gate: Gate | None = None) 
         (t for t in paper if t.kind == "original" and t.suite in suites),
         key=lambda t: (suites.index(t.suite), t.scene_index),
     )
-    tasks = [task for source in sources for task in _scene_tasks(source, published)]
-    if gate is None:
-        return tasks
-    verdicts = gate(list(tasks))
-    unknown = sorted(set(verdicts) - {t.id for t in tasks})
-    if unknown:
-        raise CatalogError(f"the gate returned verdicts for unknown task(s): {', '.join(unknown[:5])}")
-    return [dataclasses.replace(t, gate=verdicts.get(t.id)) for t in tasks]
+    return [task for source in sources for task in _scene_tasks(source, published)]
 
 
 def _scene_tasks(source: Task, published: dict[tuple, Task]) -> list[Task]:

@@ -20,9 +20,9 @@ _HEADER = """\
 #
 # Fields are those of langgap99.yaml, plus:
 #   in_langgap99  true for the paper's 99 tasks (their ids, strings, dimensions and splits are kept).
-#   validated     whether a feasibility gate ran on the task; if it did:
-#   feasible      the gate's verdict (rejected tasks stay listed; the default selection leaves them out),
-#   gate          oracle episodes, successes, success rate and the reason for the verdict.
+# Feasibility verdicts (`langgap generate --gate-inits K`, `langgap validate --record`) are kept
+# beside this file in full.gate.json; tasks the gate rejected stay listed here, and the default
+# selection leaves them out.
 """
 # Strings YAML would read as something else, or that need quoting, are written as JSON strings.
 _PLAIN = re.compile(r"[a-z][a-z0-9_./+-]*")
@@ -63,16 +63,6 @@ def _entry(task: Task, default_steps: int) -> dict:
         entry["max_steps"] = task.max_steps
     if task.notes:
         entry["notes"] = list(task.notes)
-    entry["validated"] = task.gate is not None
-    if task.gate is not None:
-        entry["feasible"] = task.gate.feasible
-        gate = task.gate
-        entry["gate"] = {
-            "episodes": gate.episodes,
-            "successes": gate.successes,
-            "rate": round(gate.rate, 4),
-            "reason": gate.reason,
-        }
     return entry
 
 

@@ -7,6 +7,7 @@ from collections import Counter
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
 from langgap.catalog.generate import default_registry_path, generate_tasks, write_registry
 from langgap.catalog.task import DIMENSIONS, Task
+from langgap.cli.validate_cmd import add_gate_options
 from langgap.stack import SUITES
 
 _EXTENDED_DIMENSIONS = [d for d in DIMENSIONS if d != "original"]
@@ -26,6 +27,14 @@ def add_parser(subparsers) -> None:
         default=list(SUITES),
         help="suites to enumerate, e.g. libero_goal or goal (default: all four)",
     )
+    parser.add_argument(
+        "--gate-inits",
+        type=int,
+        default=0,
+        metavar="K",
+        help="run the feasibility gate (oracle on the first K init states) on every task and record it",
+    )
+    add_gate_options(parser)
     parser.set_defaults(handler=run)
 
 
@@ -53,15 +62,6 @@ def summary_lines(tasks: list[Task]) -> list[str]:
         + (f"; missing: {', '.join(missing)}" if missing else "")
     )
 
-    judged = [t for t in tasks if t.gate is not None]
-    if judged:
-        rejected = [t for t in judged if not t.feasible]
-        accepted = len(judged) - len(rejected)
-        lines.append(f"gate: {accepted} accepted, {len(rejected)} rejected, {len(tasks) - len(judged)} not judged")
-        for reason, count in Counter(t.gate.reason or "(no reason given)" for t in rejected).most_common():
-            lines.append(f"  rejected {count:>4}: {reason}")
-    else:
-        lines.append("gate: none ran; every task is written with validated: false")
     return lines
 
 
@@ -70,4 +70,18 @@ def run(args) -> int:
     path = write_registry(tasks, args.out or default_registry_path())
     print("\n".join(summary_lines(tasks)))
     print(f"wrote {path}")
+    if args.gate_inits:
+        from langgap.validate import gate_summary, record, validate
+
+        rows = validate(
+            str(path),
+            "all",
+            inits=args.gate_inits,
+            workers=args.workers,
+            run=args.run,
+            resume=args.resume,
+            progress=not args.no_progress,
+        )
+        print(gate_summary(rows))
+        print(f"recorded verdicts in {record(str(path), rows, inits=args.gate_inits)}")
     return 0

@@ -1,0 +1,48 @@
+"""Feasibility verdicts of a catalog, kept beside its registry file as `<registry>.gate.json`.
+
+A registry defines tasks; whether a scripted oracle could do them is a measurement that `langgap
+validate --record` (or `langgap generate --gate-inits K`) makes and re-makes. Keeping the two apart
+means regenerating or editing a registry never loses verdicts, and re-validating never rewrites task
+definitions. A verdict names the task id it belongs to; one for an id the registry lacks is ignored.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import asdict
+from pathlib import Path
+
+from langgap.catalog.task import GateResult
+from langgap.errors import CatalogError
+
+
+def verdicts_path(registry: str | Path) -> Path:
+    registry = Path(registry)
+    return registry.with_name(registry.name.removesuffix(".yaml") + ".gate.json")
+
+
+def read_verdicts(registry: str | Path) -> dict[str, GateResult]:
+    """The recorded verdicts for the registry at `registry` (empty if none were recorded)."""
+    path = verdicts_path(registry)
+    if not path.is_file():
+        return {}
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        return {task_id: GateResult(**fields) for task_id, fields in data["tasks"].items()}
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise CatalogError(f"cannot read feasibility verdicts {path}: {exc}") from None
+
+
+def record_verdicts(registry: str | Path, verdicts: dict[str, GateResult], about: dict) -> Path:
+    """Merge `verdicts` into the registry's verdict file (atomically); `about` describes how they were made."""
+    path = verdicts_path(registry)
+    merged = read_verdicts(registry) | verdicts
+    data = {"about": about, "tasks": {k: asdict(merged[k]) for k in sorted(merged)}}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp", encoding="utf-8") as tmp:
+        json.dump(data, tmp, indent=1, sort_keys=True)
+        tmp.write("\n")
+    os.replace(tmp.name, path)
+    return path

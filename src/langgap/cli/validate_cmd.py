@@ -1,0 +1,61 @@
+"""`langgap validate`: the feasibility gate (scripted oracle on fixed init states, plus checks)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from langgap.catalog.catalog import DEFAULT_CATALOG
+from langgap.validate import FEASIBLE_RATE, FULL_INITS
+
+
+def add_gate_options(parser) -> None:
+    """Options shared by `validate` and `generate --gate-inits`."""
+    parser.add_argument("--workers", type=int, default=1, help="local worker processes (default: %(default)s)")
+    parser.add_argument("--run", metavar="DIR", help="keep the oracle's episodes in this run directory (resumable)")
+    parser.add_argument("--resume", action="store_true", help="continue an interrupted validation in --run")
+    parser.add_argument("--no-progress", action="store_true")
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "validate", help=f"prove tasks doable: the scripted oracle must reach {FEASIBLE_RATE:.0%} on their init states"
+    )
+    parser.add_argument("tasks", nargs="?", default="all", metavar="SELECTION", help="task selection (default: all)")
+    parser.add_argument("--catalog", default=DEFAULT_CATALOG, help="catalog name or registry file")
+    parser.add_argument("--inits", type=int, default=FULL_INITS, help="first K init states per task (default: all 50)")
+    parser.add_argument(
+        "--policy", default="oracle", help="the scripted policy that proves tasks (default: %(default)s)"
+    )
+    parser.add_argument("--out", metavar="FILE", help="write the report as JSON (one row per task)")
+    parser.add_argument(
+        "--record",
+        action="store_true",
+        help="record the verdicts beside the catalog's registry (infeasible tasks leave the default selection)",
+    )
+    add_gate_options(parser)
+    parser.set_defaults(handler=run)
+
+
+def run(args) -> int:
+    from langgap.validate import record, table_text, validate
+
+    rows = validate(
+        args.catalog,
+        args.tasks,
+        inits=args.inits,
+        workers=args.workers,
+        run=args.run,
+        resume=args.resume,
+        policy=args.policy,
+        progress=not args.no_progress,
+    )
+    print(table_text(rows))
+    if args.out:
+        from langgap.validate import report_rows
+
+        Path(args.out).write_text(json.dumps(report_rows(rows), indent=1) + "\n", encoding="utf-8")
+        print(f"wrote {args.out}")
+    if args.record:
+        print(f"recorded verdicts in {record(args.catalog, rows, inits=args.inits, policy=args.policy)}")
+    return 0 if all(r.feasible for r in rows) else 1

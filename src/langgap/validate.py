@@ -1,0 +1,211 @@
+"""The feasibility gate: the scripted oracle must prove a task physically doable before it ships.
+
+`validate` runs the oracle (rendering off) on the first K fixed init states of each task through the
+ordinary evaluation harness, then checks per task:
+
+* success rate — below `FEASIBLE_RATE` the task is flagged infeasible;
+* the goal is false at t0 (after settling) in every episode;
+* for an extended task whose goal excludes its source's goal (the same object placed elsewhere), the
+  source goal is false at the end of every successful episode;
+* the environment builds and its scene settles (no infrastructure gap; objects at rest after the
+  settle steps, on the first init states of each scene).
+"""
+
+from __future__ import annotations
+
+import tempfile
+from collections import Counter
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from langgap.bddl import Predicate
+from langgap.catalog.catalog import Catalog, load_catalog, registry_path
+from langgap.catalog.task import GateResult, Task
+from langgap.catalog.verdicts import record_verdicts
+from langgap.engine.evaluate import EvalConfig, evaluate
+from langgap.stack import physics_stack
+from langgap.store import EpisodeRecord, RunStore
+from langgap.version import code_version
+
+FEASIBLE_RATE = 0.90
+TARGET_RATE = 0.95
+FULL_INITS = 50
+SETTLE_INITS = 2
+SETTLE_IDLE_STEPS = 20
+SETTLE_TOLERANCE_M = 0.002
+
+
+@dataclass
+class TaskValidation:
+    """One row of the validation report."""
+
+    id: str
+    suite: str
+    dimension: str
+    episodes: int
+    successes: int
+    rate: float
+    mean_steps: float
+    max_steps: int
+    gaps: int
+    goal_true_at_t0: int
+    source_true_at_end: int
+    settle_drift_mm: float
+    feasible: bool
+    reason: str = ""
+    checks: dict[str, bool] = field(default_factory=dict)
+
+    def verdict(self) -> GateResult:
+        return GateResult(episodes=self.episodes, successes=self.successes, feasible=self.feasible, reason=self.reason)
+
+
+def goals_exclude(a: tuple[Predicate, ...], b: tuple[Predicate, ...]) -> bool:
+    """True when both goals place the same object at different targets (so they cannot hold together)."""
+    if len(a) != 1 or len(b) != 1:
+        return False
+    (p,), (q,) = a, b
+    placements = ("On", "In")
+    return p.name in placements and q.name in placements and p.args[0] == q.args[0] and p.args[1] != q.args[1]
+
+
+def settle_drift(task: Task, inits: int = SETTLE_INITS) -> float:
+    """Largest displacement (m) of any object over idle steps after the settle steps, on the first init states."""
+    from langgap.sim.env import TaskEnv
+
+    worst = 0.0
+    with TaskEnv(task) as env:
+        bodies = [env.sim.model.body_name2id(o.root_body) for o in env.robosuite_env.objects_dict.values()]
+        for index in range(min(inits, len(env.init_states))):
+            env.reset(index)
+            env.settle()
+            before = env.sim.data.body_xpos[bodies].copy()
+            env.settle(SETTLE_IDLE_STEPS)
+            after = env.sim.data.body_xpos[bodies]
+            worst = max(worst, float(np.linalg.norm(after - before, axis=1).max()))
+    return worst
+
+
+def _row(task: Task, catalog: Catalog, records: list[EpisodeRecord], drift: float) -> TaskValidation:
+    done = [r for r in records if r.status == "done"]
+    wins = [r for r in done if r.success]
+    source = catalog.get(task.source)
+    exclusive = task.kind == "extended" and goals_exclude(task.goal, source.goal)
+    t0 = sum(task.id in r.goals_at_start for r in done)
+    source_at_end = sum(source.id in r.goals_at_end for r in wins) if exclusive else 0
+    rate = len(wins) / len(done) if done else 0.0
+    checks = {
+        f"success >= {FEASIBLE_RATE:.0%}": rate >= FEASIBLE_RATE,
+        "goal false at t0": t0 == 0,
+        "source goal false at end": source_at_end == 0,
+        "env builds": len(done) > 0 and len(done) == len(records),
+        "scene settles": drift <= SETTLE_TOLERANCE_M,
+    }
+    failed = [name for name, ok in checks.items() if not ok]
+    reason = "; ".join(failed)
+    if failed and checks[f"success >= {FEASIBLE_RATE:.0%}"] is False:
+        reason = reason.replace(f"success >= {FEASIBLE_RATE:.0%}", f"oracle {len(wins)}/{len(done)}")
+    steps = [r.steps for r in wins]
+    return TaskValidation(
+        id=task.id,
+        suite=task.suite,
+        dimension=task.dimension,
+        episodes=len(done),
+        successes=len(wins),
+        rate=rate,
+        mean_steps=float(np.mean(steps)) if steps else 0.0,
+        max_steps=max(steps, default=0),
+        gaps=len(records) - len(done),
+        goal_true_at_t0=t0,
+        source_true_at_end=source_at_end,
+        settle_drift_mm=drift * 1000,
+        feasible=not failed,
+        reason=reason,
+        checks=checks,
+    )
+
+
+def validate(
+    catalog_name: str,
+    selection: str | None = "all",
+    *,
+    inits: int = FULL_INITS,
+    workers: int = 1,
+    run: str | Path | None = None,
+    resume: bool = False,
+    policy: str = "oracle",
+    progress: bool = True,
+) -> list[TaskValidation]:
+    """Run the gate on the selected tasks; returns one row per task (catalog order)."""
+    catalog = load_catalog(catalog_name)
+    tasks = catalog.select(selection)
+    config = EvalConfig(
+        policy=policy, catalog=catalog_name, tasks=",".join(t.id for t in tasks), episodes=inits, workers=workers
+    )
+    with tempfile.TemporaryDirectory(prefix="langgap-validate-") as scratch:
+        directory = Path(run) if run is not None else Path(scratch) / "run"
+        evaluate(config, directory, resume=resume, progress=progress)
+        with RunStore.open(directory) as store:
+            records = store.records()
+    by_task: dict[str, list[EpisodeRecord]] = {}
+    for record in records:
+        by_task.setdefault(record.task_id, []).append(record)
+    drift_by_scene: dict[tuple[str, str], float] = {}
+    rows = []
+    for task in tasks:
+        scene = (task.suite, task.scene_task)
+        if scene not in drift_by_scene:
+            drift_by_scene[scene] = settle_drift(task)
+        rows.append(_row(task, catalog, by_task.get(task.id, []), drift_by_scene[scene]))
+    return rows
+
+
+def record(catalog_name: str, rows: list[TaskValidation], *, inits: int, policy: str = "oracle") -> Path:
+    """Record the rows' verdicts beside the catalog's registry file."""
+    about = {
+        "policy": policy,
+        "inits": inits,
+        "feasible_rate": FEASIBLE_RATE,
+        "physics": physics_stack(),
+        "code_version": code_version(),
+    }
+    return record_verdicts(registry_path(catalog_name), {r.id: r.verdict() for r in rows}, about)
+
+
+def report_rows(rows: list[TaskValidation]) -> list[dict]:
+    return [asdict(r) for r in rows]
+
+
+def table_text(rows: list[TaskValidation]) -> str:
+    """A printed table: one line per task, then the totals."""
+    width = max((len(r.id) for r in rows), default=4)
+    lines = [f"{'task':<{width}}  {'oracle':>9}  {'rate':>6}  {'steps':>11}  verdict"]
+    for r in rows:
+        verdict = "ok" if r.feasible else f"INFEASIBLE ({r.reason})"
+        if r.feasible and r.rate < TARGET_RATE:
+            verdict = f"ok, below the {TARGET_RATE:.0%} target"
+        lines.append(
+            f"{r.id:<{width}}  {r.successes:>4}/{r.episodes:<4}  {100 * r.rate:>5.1f}%  "
+            f"{r.mean_steps:>5.0f}/{r.max_steps:<5}  {verdict}"
+        )
+    episodes = sum(r.episodes for r in rows)
+    successes = sum(r.successes for r in rows)
+    below = [r.id for r in rows if r.rate < TARGET_RATE]
+    lines.append(
+        f"{len(rows)} tasks, {successes}/{episodes} oracle successes "
+        f"({100 * successes / max(1, episodes):.1f}%); {sum(not r.feasible for r in rows)} infeasible; "
+        f"{len(below)} below {TARGET_RATE:.0%}"
+    )
+    return "\n".join(lines)
+
+
+def gate_summary(rows: list[TaskValidation]) -> str:
+    """Accepted / rejected counts, rejections grouped by the checks they failed."""
+    rejected = [r for r in rows if not r.feasible]
+    lines = [f"gate: {len(rows) - len(rejected)} accepted, {len(rejected)} rejected"]
+    for reason, count in Counter(
+        r.reason.split(";")[0].split(" ")[0] if r.reason.startswith("oracle") else r.reason for r in rejected
+    ).most_common():
+        lines.append(f"  rejected {count:>4}: {reason}")
+    return "\n".join(lines)

@@ -1,0 +1,83 @@
+"""The feasibility gate: rows, checks, recorded verdicts, the CLI."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+import yaml
+
+from langgap.bddl import Predicate
+from langgap.catalog.catalog import load_catalog_file
+from langgap.validate import goals_exclude, validate
+from tests.conftest import REPO, run_cli
+
+
+@pytest.fixture(scope="module")
+def probe_registry(tmp_path_factory):
+    """spatial/s0 with its original, one extended task, and a task whose goal holds at t0 (the plate on its own
+    spot); 12-step limit, so the gate runs in seconds."""
+    source = yaml.safe_load((REPO / "src/langgap/catalog/registry/langgap99.yaml").read_text())
+    keep = [
+        t for t in source["tasks"] if t["id"] in {"spatial/s0/black-bowl-1-on-plate", "spatial/s0/ramekin-on-plate"}
+    ]
+    already = dict(
+        keep[1],
+        id="spatial/s0/plate-on-plate-spot",
+        goal=["(On plate_1 main_table_plate_region)"],
+        dimension="change_object",
+    )
+    path = tmp_path_factory.mktemp("gate") / "probe.yaml"
+    path.write_text(
+        yaml.safe_dump({"catalog": "probe", "max_steps": {"libero_spatial": 12}, "tasks": [*keep, already]})
+    )
+    return path
+
+
+def test_gate_rows_and_checks(probe_registry):
+    rows = {r.id: r for r in validate(str(probe_registry), "all", inits=2, workers=0, policy="noop", progress=False)}
+    assert set(rows) == {
+        "spatial/s0/black-bowl-1-on-plate",
+        "spatial/s0/ramekin-on-plate",
+        "spatial/s0/plate-on-plate-spot",
+    }
+    for row in rows.values():
+        assert row.episodes == 2 and row.gaps == 0 and not row.feasible and row.checks["env builds"]
+        assert row.checks["scene settles"] and row.settle_drift_mm < 2
+    assert rows["spatial/s0/ramekin-on-plate"].reason == "oracle 0/2"
+    at_t0 = rows["spatial/s0/plate-on-plate-spot"]
+    assert at_t0.goal_true_at_t0 == 2 and not at_t0.checks["goal false at t0"] and "goal false at t0" in at_t0.reason
+
+
+def test_goals_exclude():
+    on = Predicate.parse
+    assert goals_exclude((on("(On a plate)"),), (on("(On a stove)"),))
+    assert not goals_exclude((on("(On a plate)"),), (on("(On b plate)"),))
+    assert not goals_exclude((on("(Open drawer)"),), (on("(On a plate)"),))
+
+
+def test_cli_validate_writes_report_and_records_verdicts(probe_registry, tmp_path):
+    out = tmp_path / "report.json"
+    result = run_cli(
+        "validate",
+        "spatial/s0/ramekin-on-plate",
+        "--catalog",
+        str(probe_registry),
+        "--inits",
+        "1",
+        "--policy",
+        "noop",
+        "--workers",
+        "0",
+        "--out",
+        str(out),
+        "--record",
+        "--no-progress",
+    )
+    assert result.returncode == 1, result.stderr  # exit 1: a task is infeasible
+    rows = json.loads(out.read_text())
+    assert [r["id"] for r in rows] == ["spatial/s0/ramekin-on-plate"]
+    assert {"episodes", "successes", "rate", "mean_steps", "max_steps", "feasible", "reason"} <= set(rows[0])
+    catalog = load_catalog_file(probe_registry)
+    assert catalog.get("spatial/s0/ramekin-on-plate").gate is not None
+    assert catalog.get("spatial/s0/black-bowl-1-on-plate").gate is None
