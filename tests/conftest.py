@@ -12,6 +12,7 @@ import pytest
 from langgap.catalog.catalog import load_catalog
 
 REPO = Path(__file__).resolve().parents[1]
+SHORT_STEPS = 15
 
 
 @pytest.fixture(scope="session")
@@ -31,3 +32,24 @@ def run_cli(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
     return subprocess.run(
         [sys.executable, "-m", "langgap.cli.main", *args], capture_output=True, text=True, timeout=timeout, env=env
     )
+
+
+@pytest.fixture(scope="session")
+def short_catalog(tmp_path_factory):
+    """Three spatial/s0 tasks with a 15-step limit, so harness tests run in seconds."""
+    import yaml
+
+    source = yaml.safe_load((REPO / "src/langgap/catalog/registry/langgap99.yaml").read_text())
+    keep = {
+        "spatial/s0/black-bowl-1-on-plate",
+        "spatial/s0/black-bowl-2-on-plate",
+        "spatial/s0/open-cabinet-top-drawer",
+    }
+    data = {
+        "catalog": "short",
+        "max_steps": {"libero_spatial": SHORT_STEPS},
+        "tasks": [t for t in source["tasks"] if t["id"] in keep],
+    }
+    path = tmp_path_factory.mktemp("catalog") / "short.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return str(path)

@@ -17,30 +17,7 @@ import pytest
 from langgap.engine.evaluate import EvalConfig, evaluate
 from langgap.engine.plan import build_plan, condition_instruction, episode_seed
 from langgap.store import RunStore, StoreError
-from tests.conftest import REPO, run_cli
-
-SHORT_STEPS = 15
-
-
-@pytest.fixture(scope="module")
-def short_catalog(tmp_path_factory, catalog):
-    """Three spatial/s0 tasks with a 15-step limit, so harness tests run in seconds."""
-    import yaml
-
-    source = yaml.safe_load((REPO / "src/langgap/catalog/registry/langgap99.yaml").read_text())
-    keep = {
-        "spatial/s0/black-bowl-1-on-plate",
-        "spatial/s0/black-bowl-2-on-plate",
-        "spatial/s0/open-cabinet-top-drawer",
-    }
-    data = {
-        "catalog": "short",
-        "max_steps": {"libero_spatial": SHORT_STEPS},
-        "tasks": [t for t in source["tasks"] if t["id"] in keep],
-    }
-    path = tmp_path_factory.mktemp("catalog") / "short.yaml"
-    path.write_text(yaml.safe_dump(data))
-    return str(path)
+from tests.conftest import REPO, SHORT_STEPS, run_cli
 
 
 def _rows(run: Path) -> list[dict]:

@@ -56,6 +56,13 @@ def add_parser(subparsers) -> None:
     parser.add_argument(
         "--max-attempts", type=int, default=DEFAULT_MAX_ATTEMPTS, help="attempts before an episode becomes a gap"
     )
+    parser.add_argument(
+        "--backend",
+        choices=("local", "ray"),
+        default="local",
+        help="local worker processes, or actors on a Ray cluster (pip install 'langgap[ray]')",
+    )
+    parser.add_argument("--ray-address", metavar="ADDR", help="Ray cluster to join (default: start a local one)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--quiet", action="store_true", help="print no diagnosis table at the end")
     parser.set_defaults(handler=run)
@@ -77,6 +84,8 @@ def run(args) -> int:
         videos=args.video,
         timeout_s=args.timeout,
         max_attempts=args.max_attempts,
+        backend=args.backend,
+        ray_address=args.ray_address,
     )
     summary = evaluate(config, args.run, resume=args.resume, progress=not args.no_progress)
     print(

@@ -14,6 +14,7 @@ from langgap.catalog.task import DEFAULT_STYLE
 from langgap.engine.local import DEFAULT_MAX_ATTEMPTS, DEFAULT_TIMEOUT_S, LocalBackend, run_in_process
 from langgap.engine.plan import build_plan
 from langgap.engine.runner import RunnerSetup
+from langgap.errors import LangGapError
 from langgap.policies import policy_kwargs
 from langgap.store import EpisodeRecord, RunStore
 from langgap.version import code_version
@@ -39,6 +40,8 @@ class EvalConfig:
     videos: int = 0  # record this many episodes (the first of the plan) as mp4
     timeout_s: float = DEFAULT_TIMEOUT_S
     max_attempts: int = DEFAULT_MAX_ATTEMPTS
+    backend: str = "local"  # local | ray; not part of a run's identity: every backend gives the same episodes
+    ray_address: str | None = None
 
 
 @dataclass
@@ -70,6 +73,7 @@ def evaluate(config: EvalConfig, run: str | Path, *, resume: bool = False, progr
     stored run was made with the same configuration.
     """
     policy_kwargs(config.policy, config.policy_args)
+    _backend(config)  # an unknown backend or a missing Ray fails before anything is stored
     catalog = load_catalog(config.catalog)
     tasks = catalog.select(config.tasks)
     plan = build_plan(
@@ -92,15 +96,33 @@ def evaluate(config: EvalConfig, run: str | Path, *, resume: bool = False, progr
             video_dir=str(Path(run) / "videos") if config.videos else None,
             video_keys=frozenset(p.key for p in plan[: config.videos] if p.key not in done),
         )
-        if config.workers <= 0:
-            records = run_in_process(todo, setup, max_attempts=config.max_attempts)
-        else:
-            backend = LocalBackend(config.workers, timeout_s=config.timeout_s, max_attempts=config.max_attempts)
-            records = backend.run(todo, setup)
+        records = _backend(config).run(todo, setup)
         summary = RunSummary(Path(run), planned=len(plan), skipped=len(plan) - len(todo), ran=0, successes=0, gaps=0)
         for record in _with_progress(records, len(todo), summary, enabled=progress):
             store.write(record)
     return summary
+
+
+class _InProcess:
+    def __init__(self, max_attempts: int):
+        self.max_attempts = max_attempts
+
+    def run(self, plan, setup):
+        return run_in_process(plan, setup, max_attempts=self.max_attempts)
+
+
+def _backend(config: EvalConfig):
+    if config.backend == "ray":
+        from langgap.engine.ray_backend import RayBackend
+
+        return RayBackend(
+            config.workers, address=config.ray_address, timeout_s=config.timeout_s, max_attempts=config.max_attempts
+        )
+    if config.backend != "local":
+        raise LangGapError(f"unknown backend {config.backend!r} (local or ray)")
+    if config.workers <= 0:
+        return _InProcess(config.max_attempts)
+    return LocalBackend(config.workers, timeout_s=config.timeout_s, max_attempts=config.max_attempts)
 
 
 def _with_progress(

@@ -21,9 +21,9 @@ from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
-from langgap.engine.episode import gap_record
-from langgap.engine.plan import EpisodeKey, PlannedEpisode
+from langgap.engine.plan import PlannedEpisode
 from langgap.engine.runner import EpisodeFailure, EpisodeRunner, RunnerSetup
+from langgap.engine.scheduling import Ledger
 from langgap.store import EpisodeRecord
 
 DEFAULT_TIMEOUT_S = 900.0
@@ -31,72 +31,22 @@ DEFAULT_MAX_ATTEMPTS = 3
 _POLL_S = 0.2
 
 
-@dataclass
-class Unit:
-    """Consecutive episodes of one task, handed to one worker."""
-
-    episodes: deque[PlannedEpisode]
-
-
-def make_units(plan: list[PlannedEpisode], workers: int) -> deque[Unit]:
-    """Group episodes by task, splitting a task's episodes when there are too few tasks to keep workers busy."""
-    by_task: dict[str, list[PlannedEpisode]] = {}
-    for planned in plan:
-        by_task.setdefault(planned.key.task_id, []).append(planned)
-    pieces_per_task = max(1, -(-2 * workers // max(1, len(by_task))))
-    units: deque[Unit] = deque()
-    for episodes in by_task.values():
-        size = max(1, -(-len(episodes) // pieces_per_task))
-        for start in range(0, len(episodes), size):
-            units.append(Unit(deque(episodes[start : start + size])))
-    return units
-
-
-class _Attempts:
-    """Counts attempts per episode and decides between a retry and a gap."""
-
-    def __init__(self, max_attempts: int):
-        self.max_attempts = max_attempts
-        self.count: dict[EpisodeKey, int] = {}
-
-    def start(self, key: EpisodeKey) -> int:
-        self.count[key] = self.count.get(key, 0) + 1
-        return self.count[key]
-
-    def upcoming(self, key: EpisodeKey) -> int:
-        """The number the next attempt will have (counted only once it really starts)."""
-        return self.count.get(key, 0) + 1
-
-    def exhausted(self, key: EpisodeKey) -> bool:
-        return self.count.get(key, 0) >= self.max_attempts
-
-
-def _gap(setup: RunnerSetup, runner: EpisodeRunner | None, planned: PlannedEpisode, error: str, attempts: int):
-    from langgap.catalog.catalog import load_catalog
-
-    catalog = runner.catalog if runner is not None else load_catalog(setup.catalog)
-    return gap_record(
-        planned, catalog.get(planned.key.task_id), policy_name=setup.policy, error=error, attempts=attempts
-    )
-
-
 def run_in_process(
     plan: list[PlannedEpisode], setup: RunnerSetup, *, max_attempts: int = DEFAULT_MAX_ATTEMPTS
 ) -> Iterator[EpisodeRecord]:
     """Run the plan sequentially in this process (no timeout enforcement)."""
     runner = EpisodeRunner(setup)
-    attempts = _Attempts(max_attempts)
+    ledger = Ledger(plan, 1, setup, max_attempts)
     try:
-        for planned in plan:
-            while True:
-                attempt = attempts.start(planned.key)
+        while ledger:
+            unit = ledger.take()
+            while unit:
+                planned = unit.popleft()
                 try:
-                    yield runner.run(planned, attempt)
-                    break
+                    yield runner.run(planned, ledger.started(planned.key))
                 except EpisodeFailure as exc:
-                    if attempts.exhausted(planned.key):
-                        yield _gap(setup, runner, planned, str(exc), attempt)
-                        break
+                    if (gap := ledger.failed(planned, str(exc))) is not None:
+                        yield gap
     finally:
         runner.close()
 
@@ -150,8 +100,7 @@ class LocalBackend:
     def run(self, plan: list[PlannedEpisode], setup: RunnerSetup) -> Iterator[EpisodeRecord]:
         context = mp.get_context("spawn")
         outbox = context.Queue()
-        units = make_units(plan, self.workers)
-        attempts = _Attempts(self.max_attempts)
+        ledger = Ledger(plan, self.workers, setup, self.max_attempts)
         workers: dict[int, _Worker] = {}
         next_id = 0
 
@@ -168,22 +117,16 @@ class LocalBackend:
             workers[next_id] = _Worker(process, inbox)
             next_id += 1
 
-        def requeue_or_gap(planned: PlannedEpisode, error: str) -> EpisodeRecord | None:
-            if attempts.exhausted(planned.key):
-                return _gap(setup, None, planned, error, attempts.count[planned.key])
-            units.appendleft(Unit(deque([planned])))
-            return None
-
-        for _ in range(min(self.workers, len(units))):
+        for _ in range(min(self.workers, len(ledger.units))):
             spawn()
         try:
-            while units or any(w.busy for w in workers.values()):
+            while ledger or any(w.busy for w in workers.values()):
                 for state in workers.values():
-                    if not state.busy and units:
-                        state.assigned = deque(units.popleft().episodes)
+                    if not state.busy and ledger:
+                        state.assigned = ledger.take()
                         state.busy = True
                         state.started_at = time.monotonic()
-                        state.inbox.put([(p, attempts.upcoming(p.key)) for p in state.assigned])
+                        state.inbox.put([(p, ledger.upcoming(p.key)) for p in state.assigned])
                 try:
                     message = outbox.get(timeout=_POLL_S)
                 except queue.Empty:
@@ -194,13 +137,13 @@ class LocalBackend:
                     if kind == "started":
                         state.current = next(p for p in state.assigned if p.key == payload)
                         state.started_at = time.monotonic()
-                        attempts.start(payload)
+                        ledger.started(payload)
                     elif kind in ("record", "failed"):
                         finished, state.current = state.current, None
                         state.assigned.remove(finished)
                         if kind == "record":
                             yield payload
-                        elif (gap := requeue_or_gap(finished, rest[0])) is not None:
+                        elif (gap := ledger.failed(finished, rest[0])) is not None:
                             yield gap
                     elif kind == "idle":
                         state.busy = False
@@ -222,14 +165,13 @@ class LocalBackend:
                     victim = state.current
                     if victim is None and state.assigned:
                         victim = state.assigned[0]
-                        attempts.start(victim.key)
+                        ledger.started(victim.key)
                     if victim is not None:
                         state.assigned.remove(victim)
-                        if (gap := requeue_or_gap(victim, reason)) is not None:
+                        if (gap := ledger.failed(victim, reason)) is not None:
                             yield gap
-                    if state.assigned:
-                        units.appendleft(Unit(deque(state.assigned)))
-                    if units:
+                    ledger.give_back(state.assigned)
+                    if ledger:
                         spawn()
         finally:
             for state in workers.values():
