@@ -29,7 +29,7 @@ SAMPLE_TASKS = (
 )
 
 
-def _timed_eval(**kwargs) -> tuple[float, int]:
+def timed_eval(**kwargs) -> tuple[float, int]:
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()
         summary = evaluate(EvalConfig(**kwargs), Path(tmp) / "run", progress=False)
@@ -93,7 +93,7 @@ def overhead(episodes: int) -> None:
         path = os.path.join(tmp, "actions.npy")
         np.save(path, actions)
         bare = bare_loop(task_id, actions, episodes)
-        harness, _ = _timed_eval(
+        harness, _ = timed_eval(
             policy="bench_harness:ReplayPolicy",
             policy_args={"actions": path},
             tasks=task_id,
@@ -129,7 +129,7 @@ def authors(episodes: int, workers: int, policy: str) -> None:
                     on_step=lambda e, _s, _a: [e.render(c) for c in CAMERAS],
                 )
     theirs = time.perf_counter() - start
-    ours, ran = _timed_eval(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, workers=workers)
+    ours, ran = timed_eval(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, workers=workers)
     per_hour_theirs = len(tasks) * episodes / theirs * 3600
     per_hour_ours = ran / ours * 3600
     print(
@@ -139,8 +139,8 @@ def authors(episodes: int, workers: int, policy: str) -> None:
 
 
 def workers(episodes: int, policy: str) -> None:
-    one, ran = _timed_eval(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, workers=1)
-    two, _ = _timed_eval(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, workers=2)
+    one, ran = timed_eval(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, workers=1)
+    two, _ = timed_eval(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, workers=2)
     print(
         f"| {policy}, {ran} episodes | 1 worker {one:.0f} s | 2 workers {two:.0f} s | {one / two:.2f}x "
         "(target >= 1.8x) |"

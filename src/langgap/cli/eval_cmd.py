@@ -63,6 +63,19 @@ def add_parser(subparsers) -> None:
         help="local worker processes, or actors on a Ray cluster (pip install 'langgap[ray]')",
     )
     parser.add_argument("--ray-address", metavar="ADDR", help="Ray cluster to join (default: start a local one)")
+    parser.add_argument(
+        "--shared-policy",
+        action="store_true",
+        help="ray: one policy actor for all environment actors, batching their queries",
+    )
+    parser.add_argument("--max-batch", type=int, default=8, help="shared policy: largest batch (default: %(default)s)")
+    parser.add_argument(
+        "--max-wait-ms",
+        type=float,
+        default=5.0,
+        help="shared policy: how long a query waits for others (default: %(default)s)",
+    )
+    parser.add_argument("--policy-gpus", type=float, default=0.0, help="shared policy: GPUs for the policy actor")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--quiet", action="store_true", help="print no diagnosis table at the end")
     parser.set_defaults(handler=run)
@@ -86,6 +99,10 @@ def run(args) -> int:
         max_attempts=args.max_attempts,
         backend=args.backend,
         ray_address=args.ray_address,
+        shared_policy=args.shared_policy,
+        max_batch=args.max_batch,
+        max_wait_ms=args.max_wait_ms,
+        policy_gpus=args.policy_gpus,
     )
     summary = evaluate(config, args.run, resume=args.resume, progress=not args.no_progress)
     print(

@@ -42,6 +42,10 @@ class EvalConfig:
     max_attempts: int = DEFAULT_MAX_ATTEMPTS
     backend: str = "local"  # local | ray; not part of a run's identity: every backend gives the same episodes
     ray_address: str | None = None
+    shared_policy: bool = False  # ray: one policy actor batching the queries of all environment actors
+    max_batch: int = 8
+    max_wait_ms: float = 5.0
+    policy_gpus: float = 0.0
 
 
 @dataclass
@@ -120,6 +124,8 @@ def _backend(config: EvalConfig):
         )
     if config.backend != "local":
         raise LangGapError(f"unknown backend {config.backend!r} (local or ray)")
+    if config.shared_policy:
+        raise LangGapError("--shared-policy needs --backend ray")
     if config.workers <= 0:
         return _InProcess(config.max_attempts)
     return LocalBackend(config.workers, timeout_s=config.timeout_s, max_attempts=config.max_attempts)

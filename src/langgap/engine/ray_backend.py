@@ -13,11 +13,12 @@ import os
 import time
 from collections import deque
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from langgap.engine.plan import PlannedEpisode
 from langgap.engine.runner import EpisodeFailure, EpisodeRunner, RunnerSetup
 from langgap.engine.scheduling import Ledger
+from langgap.engine.shared_policy import start_server
 from langgap.errors import DependencyNotInstalled, LangGapError
 from langgap.store import EpisodeRecord
 
@@ -48,6 +49,15 @@ class RunnerActor:
         self.runner.close()
 
 
+@dataclass(frozen=True)
+class SharedPolicyOptions:
+    """One policy actor shared by all environment actors, batching their queries."""
+
+    max_batch: int = 8
+    max_wait_ms: float = 5.0
+    gpus: float = 0.0
+
+
 @dataclass
 class _Actor:
     handle: object
@@ -60,11 +70,21 @@ class _Actor:
 class RayBackend:
     """Episodes on Ray actors (`address=None` starts a local Ray instance with `workers` CPUs)."""
 
-    def __init__(self, workers: int, *, address: str | None = None, timeout_s: float = 900.0, max_attempts: int = 3):
+    def __init__(
+        self,
+        workers: int,
+        *,
+        address: str | None = None,
+        timeout_s: float = 900.0,
+        max_attempts: int = 3,
+        shared_policy: SharedPolicyOptions | None = None,
+    ):
         self.workers = max(1, workers)
         self.address = address
         self.timeout_s = timeout_s
         self.max_attempts = max_attempts
+        self.shared_policy = shared_policy
+        self.last_server_stats: dict = {}
         import_ray()
 
     def _connect(self, ray) -> bool:
@@ -86,6 +106,18 @@ class RayBackend:
         from ray.exceptions import GetTimeoutError, RayActorError, RayTaskError
 
         started_ray = self._connect(ray)
+        server = None
+        if self.shared_policy is not None:
+            options = self.shared_policy
+            server = start_server(
+                ray,
+                setup.policy,
+                setup.policy_args,
+                max_batch=options.max_batch,
+                max_wait_ms=options.max_wait_ms,
+                num_gpus=options.gpus,
+            )
+            setup = replace(setup, policy_server=server)
         remote = ray.remote(num_cpus=1, max_restarts=0, max_task_retries=0)(RunnerActor)
         ledger = Ledger(plan, self.workers, setup, self.max_attempts)
         actors: list[_Actor] = []
@@ -142,5 +174,8 @@ class RayBackend:
         finally:
             for actor in actors:
                 ray.kill(actor.handle, no_restart=True)
+            if server is not None:
+                self.last_server_stats = ray.get(server.stats.remote())
+                ray.kill(server, no_restart=True)
             if started_ray:
                 ray.shutdown()

@@ -11,6 +11,7 @@ import contextlib
 import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from langgap.catalog.catalog import load_catalog
 from langgap.engine.episode import execute_episode, video_hook
@@ -32,6 +33,7 @@ class RunnerSetup:
     style: str
     video_dir: str | None = None
     video_keys: frozenset[EpisodeKey] = field(default_factory=frozenset)
+    policy_server: Any = None  # a shared policy actor (Ray); None: each runner builds its own policy
 
 
 class EpisodeFailure(Exception):
@@ -59,7 +61,12 @@ class EpisodeRunner:
     def _run(self, planned: PlannedEpisode, attempts: int) -> EpisodeRecord:
         task = self.catalog.get(planned.key.task_id)
         if self._policy is None:
-            self._policy = make_policy(self.setup.policy, self.setup.policy_args)
+            if self.setup.policy_server is not None:
+                from langgap.engine.shared_policy import SharedPolicyClient
+
+                self._policy = SharedPolicyClient(self.setup.policy_server, slot=self.worker)
+            else:
+                self._policy = make_policy(self.setup.policy, self.setup.policy_args)
             self._policy_hash = config_hash(policy_config(self._policy))
         if self._env is None or self._env.task.id != task.id:
             self._close_env()

@@ -15,6 +15,7 @@ from langgap.policies.base import Policy
 REGISTRY: dict[str, str] = {
     "noop": "langgap.policies.simple:NoopPolicy",
     "random": "langgap.policies.simple:RandomPolicy",
+    "delay": "langgap.policies.simple:DelayPolicy",
 }
 
 

@@ -1,6 +1,9 @@
-"""Trivial reference policies: `noop` (holds still) and `random` (uniform actions, seeded per episode)."""
+"""Trivial reference policies: `noop` (holds still), `random` (uniform actions, seeded per episode) and
+`delay` (holds still at a fixed cost per query, for measuring scheduling and batching)."""
 
 from __future__ import annotations
+
+import time
 
 import numpy as np
 
@@ -38,3 +41,25 @@ class RandomPolicy:
         actions = self._rng.uniform(-self.scale, self.scale, size=(self.spec.chunk, 7))
         actions[:, 6] = np.sign(actions[:, 6]) + (actions[:, 6] == 0)
         return actions
+
+
+class DelayPolicy(NoopPolicy):
+    """Holds still, but each query costs `delay_ms` — per call, however many episodes a batched call serves.
+
+    Stands in for a model whose inference cost is per forward pass, to measure scheduling and batching.
+    """
+
+    def __init__(self, delay_ms: float = 50.0):
+        self.delay_ms = delay_ms
+
+    def config(self) -> dict:
+        return {"delay_ms": self.delay_ms}
+
+    def act(self, observation: Observation) -> np.ndarray:
+        time.sleep(self.delay_ms / 1000)
+        return super().act(observation)
+
+    @staticmethod
+    def act_batch(policies: list[DelayPolicy], observations: list[Observation]) -> list[np.ndarray]:
+        time.sleep(policies[0].delay_ms / 1000)
+        return [NoopPolicy.act(p, o) for p, o in zip(policies, observations, strict=True)]
