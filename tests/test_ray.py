@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import shutil
 import sqlite3
 import subprocess
@@ -132,3 +133,31 @@ def test_core_works_without_ray(short_catalog, tmp_path):
     )
     assert missing.returncode == 2 and "pip install 'langgap[ray]'" in missing.stderr
     assert not (tmp_path / "b").exists()
+
+
+def test_shared_policy_gives_the_same_episodes(short_catalog, tmp_path):
+    common = [
+        "--policy",
+        "random",
+        "--policy-arg",
+        "chunk=3",
+        "--catalog",
+        short_catalog,
+        "--episodes",
+        "2",
+        "--no-progress",
+        "--quiet",
+        "--workers",
+        "2",
+    ]
+    local = tmp_path / "local"
+    assert run_cli("eval", *common, "--run", str(local)).returncode == 0
+    shared = tmp_path / "shared"
+    result = _in_network_namespace(
+        f"python -m langgap.cli.main eval {' '.join(common)} --backend ray --shared-policy --max-batch 2 "
+        f"--run {shared}",
+        _ray_tmp(),
+    )
+    assert result.returncode == 0, result.stderr
+    assert [{k: r[k] for k in KEEP} for r in _rows(shared)] == [{k: r[k] for k in KEEP} for r in _rows(local)]
+    assert all(json.loads(r["physics"]) for r in _rows(shared))
