@@ -25,16 +25,21 @@ CONFIGS = {
 }
 
 
+def median_reset(env: TaskEnv, resets: int) -> float:
+    times = []
+    for k in range(resets):
+        start = time.perf_counter()
+        env.reset(k)
+        times.append(time.perf_counter() - start)
+    return float(np.median(times))
+
+
 def measure(task, options: EnvOptions, steps: int, resets: int) -> dict[str, float]:
     start = time.perf_counter()
     env = TaskEnv(task, options)
     build = time.perf_counter() - start
     try:
-        soft = []
-        for k in range(resets):
-            start = time.perf_counter()
-            env.reset(k)
-            soft.append(time.perf_counter() - start)
+        soft = median_reset(env, resets)
         action = np.array([0.1, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0])
         start = time.perf_counter()
         for i in range(steps):
@@ -50,11 +55,7 @@ def measure(task, options: EnvOptions, steps: int, resets: int) -> dict[str, flo
         ),
     )
     try:
-        hard = []
-        for k in range(resets):
-            start = time.perf_counter()
-            hard_env.reset(k)
-            hard.append(time.perf_counter() - start)
+        hard = median_reset(hard_env, resets)
     finally:
         hard_env.close()
     return {

@@ -26,6 +26,17 @@ def _isolated_cache(tmp_path_factory):
     os.environ["LANGGAP_CACHE"] = str(tmp_path_factory.mktemp("langgap-cache"))
 
 
+def store_rows(run: Path) -> list[dict]:
+    """Every episode row of a run store, as plain dicts, in key order."""
+    import sqlite3
+
+    db = sqlite3.connect(Path(run) / "episodes.sqlite")
+    db.row_factory = sqlite3.Row
+    rows = [dict(r) for r in db.execute("SELECT * FROM episodes ORDER BY task_id, init_index, condition")]
+    db.close()
+    return rows
+
+
 def run_cli(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
     """Run `langgap ARGS` in a fresh interpreter, as a user would."""
     env = {**os.environ, "PYTHONPATH": str(REPO)}

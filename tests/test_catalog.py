@@ -154,32 +154,23 @@ def test_registry_rejects_bad_entries(catalog):
     bad_goal["tasks"][0]["goal"] = ["(Levitate a)"]
     with pytest.raises(CatalogError, match="unknown predicate"):
         catalog_from_data(bad_goal)
-    bad_dim = json.loads(json.dumps(good))
-    bad_dim["tasks"].append(
-        {
-            **bad_dim["tasks"][0],
+
+    def with_extended(source: str, dimension: str) -> dict:
+        data = json.loads(json.dumps(good))
+        extended = {
             "id": "spatial/s0/y",
             "kind": "extended",
-            "source": "spatial/s0/x",
-            "dimension": "change_colour",
+            "source": source,
+            "dimension": dimension,
             "split": "train",
         }
-    )
+        data["tasks"].append({**data["tasks"][0], **extended})
+        return data
+
     with pytest.raises(CatalogError, match="dimension"):
-        catalog_from_data(bad_dim)
-    orphan = json.loads(json.dumps(good))
-    orphan["tasks"].append(
-        {
-            **orphan["tasks"][0],
-            "id": "spatial/s0/z",
-            "kind": "extended",
-            "source": "nope",
-            "dimension": "change_object",
-            "split": "train",
-        }
-    )
+        catalog_from_data(with_extended("spatial/s0/x", "change_colour"))
     with pytest.raises(CatalogError, match="not an original"):
-        catalog_from_data(orphan)
+        catalog_from_data(with_extended("nope", "change_object"))
 
 
 def test_cli_list_json_has_every_field():

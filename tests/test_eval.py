@@ -6,26 +6,16 @@ import json
 import os
 import random
 import signal
-import sqlite3
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
 
 from langgap.engine.evaluate import EvalConfig, evaluate
 from langgap.engine.plan import build_plan, condition_instruction, episode_seed
 from langgap.store import RunStore, StoreError
-from tests.conftest import REPO, SHORT_STEPS, run_cli
-
-
-def _rows(run: Path) -> list[dict]:
-    db = sqlite3.connect(run / "episodes.sqlite")
-    db.row_factory = sqlite3.Row
-    rows = [dict(r) for r in db.execute("SELECT * FROM episodes ORDER BY task_id, init_index, condition")]
-    db.close()
-    return rows
+from tests.conftest import REPO, SHORT_STEPS, run_cli, store_rows
 
 
 def _eval(short_catalog, run, policy="noop", episodes=2, workers=0, **kw):
@@ -36,7 +26,7 @@ def _eval(short_catalog, run, policy="noop", episodes=2, workers=0, **kw):
 def test_episode_rows_carry_full_provenance(short_catalog, tmp_path):
     summary = _eval(short_catalog, tmp_path / "run", policy="tests.policies:ChunkPolicy")
     assert (summary.planned, summary.ran, summary.gaps) == (6, 6, 0)
-    rows = _rows(tmp_path / "run")
+    rows = store_rows(tmp_path / "run")
     assert len(rows) == 6
     row = rows[0]
     assert row["status"] == "done" and row["failure_kind"] == "policy" and row["outcome"] == "no_goal_reached"
@@ -61,14 +51,14 @@ def test_resume_skips_done_and_extends(short_catalog, tmp_path):
     config = EvalConfig(policy="noop", catalog=short_catalog, episodes=2, workers=0)
     summary = evaluate(config, run, resume=True, progress=False)
     assert (summary.skipped, summary.ran) == (3, 3)
-    assert len(_rows(run)) == 6
+    assert len(store_rows(run)) == 6
 
 
 def test_policy_output_errors_are_policy_failures(short_catalog, tmp_path):
     for name, message in (("NanPolicy", "non-finite"), ("WrongShapePolicy", "shape")):
         run = tmp_path / name
         _eval(short_catalog, run, policy=f"tests.policies:{name}", episodes=1)
-        rows = _rows(run)
+        rows = store_rows(run)
         assert all(r["status"] == "done" and r["outcome"] == "policy_error" for r in rows)
         assert all(r["failure_kind"] == "policy" and message in r["error"] for r in rows)
 
@@ -76,7 +66,7 @@ def test_policy_output_errors_are_policy_failures(short_catalog, tmp_path):
 def test_exceptions_are_retried_then_recorded_as_gaps(short_catalog, tmp_path):
     run = tmp_path / "raise"
     summary = _eval(short_catalog, run, policy="tests.policies:RaisingPolicy", episodes=1, max_attempts=2)
-    rows = _rows(run)
+    rows = store_rows(run)
     assert summary.gaps == 3
     assert all(r["status"] == "gap" and r["failure_kind"] == "infra" and r["attempts"] == 2 for r in rows)
     assert all("model exploded" in r["error"] for r in rows)
@@ -93,7 +83,7 @@ def test_a_flaky_policy_succeeds_on_retry_in_worker_processes(short_catalog, tmp
         workers=2,
     )
     summary = evaluate(config, tmp_path / "run", progress=False)
-    rows = _rows(tmp_path / "run")
+    rows = store_rows(tmp_path / "run")
     assert summary.gaps == 0 and len(rows) == 3
     assert all(r["status"] == "done" and r["attempts"] == 2 for r in rows)
 
@@ -112,7 +102,7 @@ def test_hanging_and_crashing_workers_become_gaps_and_the_run_completes(short_ca
         tmp_path / "hang",
         progress=False,
     )
-    rows = _rows(tmp_path / "hang")
+    rows = store_rows(tmp_path / "hang")
     assert hang.gaps == 1 and rows[0]["status"] == "gap" and "timed out" in rows[0]["error"]
     crash = evaluate(
         EvalConfig(
@@ -121,7 +111,7 @@ def test_hanging_and_crashing_workers_become_gaps_and_the_run_completes(short_ca
         tmp_path / "crash",
         progress=False,
     )
-    rows = _rows(tmp_path / "crash")
+    rows = store_rows(tmp_path / "crash")
     assert crash.gaps == 3 and all("worker process died (exit code 17)" in r["error"] for r in rows)
 
 
@@ -129,8 +119,8 @@ def test_worker_backend_equals_in_process(short_catalog, tmp_path):
     _eval(short_catalog, tmp_path / "inproc", policy="random", episodes=2, workers=0)
     _eval(short_catalog, tmp_path / "workers", policy="random", episodes=2, workers=2)
     keep = ("task_id", "init_index", "seed", "success", "steps", "t0_hash", "reached", "outcome")
-    assert [{k: r[k] for k in keep} for r in _rows(tmp_path / "inproc")] == [
-        {k: r[k] for k in keep} for r in _rows(tmp_path / "workers")
+    assert [{k: r[k] for k in keep} for r in store_rows(tmp_path / "inproc")] == [
+        {k: r[k] for k in keep} for r in store_rows(tmp_path / "workers")
     ]
 
 
@@ -165,8 +155,8 @@ def test_kill_minus_nine_and_resume_loses_and_duplicates_nothing(short_catalog, 
         process.wait()
     assert run_cli(*args, "--run", str(run), "--resume").returncode == 0
     keep = ("task_id", "init_index", "seed", "success", "steps", "t0_hash", "reached", "goals_at_end")
-    killed = [{k: r[k] for k in keep} for r in _rows(run)]
-    assert len(killed) == 12 and killed == [{k: r[k] for k in keep} for r in _rows(reference)]
+    killed = [{k: r[k] for k in keep} for r in store_rows(run)]
+    assert len(killed) == 12 and killed == [{k: r[k] for k in keep} for r in store_rows(reference)]
     time.sleep(1.5)
     orphans = subprocess.run(["pgrep", "-f", f"langgap-worker|{run}"], capture_output=True, text=True).stdout.split()
     assert not [p for p in orphans if int(p) != os.getpid()]
@@ -186,7 +176,7 @@ def test_conditions_send_the_planned_strings(catalog):
 
 def test_videos_are_written(short_catalog, tmp_path):
     _eval(short_catalog, tmp_path / "run", tasks="spatial/s0/black-bowl-1-on-plate", episodes=1, videos=1)
-    (row,) = _rows(tmp_path / "run")
+    (row,) = store_rows(tmp_path / "run")
     import cv2
 
     video = cv2.VideoCapture(row["video"])

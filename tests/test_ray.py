@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import shutil
-import sqlite3
 import subprocess
 import sys
 import textwrap
@@ -12,19 +11,11 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import REPO, run_cli
+from tests.conftest import REPO, run_cli, store_rows
 
 pytestmark = pytest.mark.skipif(shutil.which("unshare") is None, reason="needs unshare (util-linux) for a netns")
 
 KEEP = ("task_id", "init_index", "seed", "condition", "success", "steps", "t0_hash", "reached", "goals_at_end")
-
-
-def _rows(run: Path) -> list[dict]:
-    db = sqlite3.connect(run / "episodes.sqlite")
-    db.row_factory = sqlite3.Row
-    rows = [dict(r) for r in db.execute("SELECT * FROM episodes ORDER BY task_id, init_index, condition")]
-    db.close()
-    return rows
 
 
 def _in_network_namespace(script: str, ray_tmp: Path, timeout: float = 600) -> subprocess.CompletedProcess:
@@ -85,9 +76,9 @@ def test_cluster_run_survives_a_killed_worker_and_equals_the_local_backend(short
     )
     assert result.returncode == 0, result.stdout + result.stderr
     assert "killed actor process" in result.stdout
-    rows = _rows(ray_run)
+    rows = store_rows(ray_run)
     assert len(rows) == 12 and all(r["status"] == "done" for r in rows)
-    assert [{k: r[k] for k in KEEP} for r in rows] == [{k: r[k] for k in KEEP} for r in _rows(local)]
+    assert [{k: r[k] for k in KEEP} for r in rows] == [{k: r[k] for k in KEEP} for r in store_rows(local)]
     assert any(r["attempts"] == 2 for r in rows)  # the killed actor's episode ran again elsewhere
     # A resumed run is the same run, whichever backend made it.
     resumed = run_cli("eval", *common, "--workers", "1", "--run", str(ray_run), "--resume")
@@ -104,7 +95,7 @@ def test_local_ray_instance_when_no_address_is_given(short_catalog, tmp_path):
         _ray_tmp(),
     )
     assert result.returncode == 0, result.stderr
-    assert len(_rows(run)) == 3
+    assert len(store_rows(run)) == 3
 
 
 def test_core_works_without_ray(short_catalog, tmp_path):
@@ -159,5 +150,5 @@ def test_shared_policy_gives_the_same_episodes(short_catalog, tmp_path):
         _ray_tmp(),
     )
     assert result.returncode == 0, result.stderr
-    assert [{k: r[k] for k in KEEP} for r in _rows(shared)] == [{k: r[k] for k in KEEP} for r in _rows(local)]
-    assert all(json.loads(r["physics"]) for r in _rows(shared))
+    assert [{k: r[k] for k in KEEP} for r in store_rows(shared)] == [{k: r[k] for k in KEEP} for r in store_rows(local)]
+    assert all(json.loads(r["physics"]) for r in store_rows(shared))

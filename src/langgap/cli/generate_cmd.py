@@ -7,7 +7,7 @@ from collections import Counter
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
 from langgap.catalog.generate import default_registry_path, generate_tasks, write_registry
 from langgap.catalog.task import DIMENSIONS, Task
-from langgap.cli.validate_cmd import add_gate_options
+from langgap.cli.validate_cmd import add_gate_options, run_gate
 from langgap.stack import SUITES
 
 _EXTENDED_DIMENSIONS = [d for d in DIMENSIONS if d != "original"]
@@ -71,17 +71,9 @@ def run(args) -> int:
     print("\n".join(summary_lines(tasks)))
     print(f"wrote {path}")
     if args.gate_inits:
-        from langgap.validate import gate_summary, record, validate
+        from langgap.validate import gate_summary, record
 
-        rows = validate(
-            str(path),
-            "all",
-            inits=args.gate_inits,
-            workers=args.workers,
-            run=args.run,
-            resume=args.resume,
-            progress=not args.no_progress,
-        )
+        rows = run_gate(args, str(path), "all", args.gate_inits)
         print(gate_summary(rows))
         print(f"recorded verdicts in {record(str(path), rows, inits=args.gate_inits)}")
     return 0

@@ -37,19 +37,26 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(handler=run)
 
 
-def run(args) -> int:
-    from langgap.validate import record, table_text, validate
+def run_gate(args, catalog: str, selection: str, inits: int, policy: str = "oracle"):
+    """Run the feasibility gate with the options of `add_gate_options`; returns its rows."""
+    from langgap.validate import validate
 
-    rows = validate(
-        args.catalog,
-        args.tasks,
-        inits=args.inits,
+    return validate(
+        catalog,
+        selection,
+        inits=inits,
         workers=args.workers,
         run=args.run,
         resume=args.resume,
-        policy=args.policy,
+        policy=policy,
         progress=not args.no_progress,
     )
+
+
+def run(args) -> int:
+    from langgap.validate import record, table_text
+
+    rows = run_gate(args, args.catalog, args.tasks, args.inits, args.policy)
     print(table_text(rows))
     if args.out:
         from langgap.validate import report_rows
