@@ -84,7 +84,7 @@ def bare_loop(task_id: str, actions: np.ndarray, episodes: int) -> float:
     return time.perf_counter() - start
 
 
-def overhead(episodes: int) -> None:
+def overhead(episodes: int, rounds: int) -> None:
     task_id = "spatial/s0/black-bowl-1-on-plate"
     steps = load_catalog().get(task_id).max_steps
     actions = np.random.default_rng(0).uniform(-0.3, 0.3, size=(steps, 7))
@@ -92,16 +92,20 @@ def overhead(episodes: int) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "actions.npy")
         np.save(path, actions)
-        bare = bare_loop(task_id, actions, episodes)
-        harness, _ = timed_eval(
-            policy="bench_harness:ReplayPolicy",
-            policy_args={"actions": path},
-            tasks=task_id,
-            episodes=episodes,
-            workers=0,
-        )
-        bare_again = bare_loop(task_id, actions, episodes)
-    bare = min(bare, bare_again)
+        # Alternate the two loops and keep each one's best round: the machine's noise only ever adds time.
+        bare, harness = float("inf"), float("inf")
+        for _ in range(rounds):
+            bare = min(bare, bare_loop(task_id, actions, episodes))
+            harness = min(
+                harness,
+                timed_eval(
+                    policy="bench_harness:ReplayPolicy",
+                    policy_args={"actions": path},
+                    tasks=task_id,
+                    episodes=episodes,
+                    workers=0,
+                )[0],
+            )
     print(
         f"| {episodes} episodes x {steps} steps | bare LIBERO {bare:.1f} s | langgap eval (in-process, sibling "
         f"goals, store) {harness:.1f} s | overhead {100 * (harness / bare - 1):+.1f} % (target <= 3 %) |"
@@ -166,10 +170,11 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=4)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--policy", default="oracle")
+    parser.add_argument("--rounds", type=int, default=3, help="overhead: alternating rounds (best of each)")
     parser.add_argument("--run", help="protocol: keep (and resume) the run here")
     args = parser.parse_args()
     if args.what == "overhead":
-        overhead(args.episodes)
+        overhead(args.episodes, args.rounds)
     elif args.what == "authors":
         authors(args.episodes, args.workers, args.policy)
     elif args.what == "workers":

@@ -105,8 +105,10 @@ class TaskEnv:
         self._goal = tuple(p.as_libero() for p in task.goal)
         bddl = files.task_bddl_path(task)
         configure_rendering()
-        # Imported here: robosuite and MuJoCo load only when an environment is built.
+        # Imported here: robosuite and MuJoCo load only when an environment is built (after the GL choice).
         from libero.libero.envs.env_wrapper import ControlEnv
+
+        from langgap.sim.contacts import ContactIndex
 
         kwargs = dict(
             bddl_file_name=str(bddl),
@@ -124,6 +126,7 @@ class TaskEnv:
         except Exception as exc:  # LIBERO raises bare asserts and XML errors alike
             raise SimulationError(f"cannot build env for {task.id}: {type(exc).__name__}: {exc}") from exc
         self._inner = self._env.env
+        ContactIndex.install(self._inner)
 
     # -- lifecycle ---------------------------------------------------------------------------
 
