@@ -10,16 +10,21 @@ def add_parser(subparsers) -> None:
     parser.add_argument("run", metavar="RUN", help="run directory")
     parser.add_argument("--compare", nargs="+", default=[], metavar="RUN2", help="more runs, side by side")
     parser.add_argument("--format", choices=FORMATS, default="md")
+    parser.add_argument(
+        "--summary",
+        action="store_true",
+        help="only the diagnosis: success by dimension and what the policy did instead",
+    )
     parser.add_argument("--plots", metavar="DIR", help="write PNG figures to DIR")
     parser.add_argument("--episodes", metavar="FILE", help="write the per-episode table (.csv or .parquet)")
     parser.set_defaults(handler=run)
 
 
 def run(args) -> int:
-    from langgap.report.render import load_runs, render
+    from langgap.report.render import diagnosis_text, load_runs, render
 
     paths = [args.run, *args.compare]
-    print(render(paths, args.format), end="")
+    print(diagnosis_text(paths) if args.summary else render(paths, args.format), end="")
     if args.plots:
         from langgap.report.plots import write_plots
 

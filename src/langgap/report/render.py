@@ -392,11 +392,11 @@ def render(paths: list[str | Path], fmt: str = "md") -> str:
 
 
 def diagnosis_text(paths: list[str | Path]) -> str:
-    """The short diagnosis printed after `langgap eval`: dimensions, outcomes, suites (Markdown)."""
+    """The short diagnosis: success by dimension (runs side by side) and what each policy did instead."""
     runs = load_runs(paths)
-    tables = []
+    tables = [dimension_table(runs)]
     for run in runs:
-        tables += [summary_table(run), outcome_table(run)]
+        tables.append(outcome_table(run))
         if (conditions := condition_table(run)) is not None:
             tables.append(conditions)
     return "\n".join(_markdown(t) for t in tables)
