@@ -15,6 +15,7 @@ import langgap
 from langgap.policies.openpi import wait_for_health
 
 TESTS = Path(__file__).resolve().parent
+REPO = TESTS.parent
 SRC = Path(langgap.__file__).resolve().parents[1]
 
 
@@ -25,9 +26,9 @@ def free_port() -> int:
 
 
 def subprocess_env(**extra: str) -> dict[str, str]:
-    """This interpreter's environment with LangGap's source and tests/ importable."""
+    """This interpreter's environment with this LangGap source and the `tests` package importable."""
     env = dict(os.environ, **extra)
-    env["PYTHONPATH"] = os.pathsep.join([str(SRC), str(TESTS), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
+    env["PYTHONPATH"] = os.pathsep.join([str(SRC), str(REPO), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
     return env
 
 
@@ -60,4 +61,4 @@ def langgap_serve(port: int, policy: str, *pairs: str) -> list[str]:
 
 def helper_server(mode: str, port: int, *rest: str) -> list[str]:
     """The command line of a test server from `tests/openpi_servers.py`."""
-    return [sys.executable, str(TESTS / "openpi_servers.py"), mode, str(port), *rest]
+    return [sys.executable, "-m", "tests.openpi_servers", mode, str(port), *rest]

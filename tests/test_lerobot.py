@@ -19,10 +19,7 @@ pytest.importorskip("lerobot", reason="LeRobot lives in .venv-lerobot (./setup.s
 import torch  # noqa: E402
 from lerobot.envs.utils import NEW_ROLLOUT_OPTION, preprocess_observation  # noqa: E402
 from lerobot.processor.env_processor import LiberoProcessorStep  # noqa: E402
-from lerobot_checkpoints import IMAGE_SIZE, N_ACTION_STEPS, diffusion_checkpoint  # noqa: E402
-from servers import subprocess_env  # noqa: E402
 
-from langgap.catalog.catalog import load_catalog  # noqa: E402
 from langgap.engine.context import task_context  # noqa: E402
 from langgap.engine.rollout import env_options_for, run_episode  # noqa: E402
 from langgap.errors import LangGapError  # noqa: E402
@@ -31,15 +28,12 @@ from langgap.lerobot_libero import robot_state  # noqa: E402
 from langgap.policies import make_policy  # noqa: E402
 from langgap.policies.lerobot import CheckpointError  # noqa: E402
 from langgap.sim.env import EnvOptions, TaskEnv  # noqa: E402
+from tests.lerobot_checkpoints import IMAGE_SIZE, N_ACTION_STEPS, diffusion_checkpoint  # noqa: E402
+from tests.servers import subprocess_env  # noqa: E402
 
 TASK_ID = "spatial/s0/black-bowl-1-on-plate"
 SIBLING_ID = "spatial/s0/black-bowl-2-on-plate"
 STEPS = 10
-
-
-@pytest.fixture(scope="module")
-def catalog():
-    return load_catalog("langgap99")
 
 
 @pytest.fixture(scope="module")

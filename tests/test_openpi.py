@@ -3,15 +3,14 @@
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
 import time
 
 import numpy as np
 import pytest
 from openpi_client import image_tools, msgpack_numpy
-from servers import free_port, helper_server, langgap_serve, running, subprocess_env
 
 from langgap import protocol
-from langgap.catalog.catalog import load_catalog
 from langgap.engine.context import task_context
 from langgap.engine.rollout import env_options_for, run_episode
 from langgap.errors import PolicyServerError
@@ -19,14 +18,10 @@ from langgap.imaging import resize_with_pad
 from langgap.policies import make_policy
 from langgap.policies.openpi import OpenpiPolicy
 from langgap.sim.env import Observation, TaskEnv
+from tests.servers import free_port, helper_server, langgap_serve, running, subprocess_env
 
 TASK_ID = "spatial/s0/black-bowl-1-on-plate"
 STEPS = 12  # short episodes: the plumbing, not the policy, is under test
-
-
-@pytest.fixture(scope="module")
-def catalog():
-    return load_catalog("langgap99")
 
 
 def short_task(catalog, task_id: str = TASK_ID):
@@ -118,7 +113,16 @@ def test_plain_openpi_server_receives_openpi_libero_observations(catalog, tmp_pa
 PLAN = [(0, 0), (2, 5)]
 
 
-@pytest.mark.parametrize("name,pairs", [("random", ("chunk=3",)), ("noop", ())])
+ORACLE = pytest.param(
+    "oracle",
+    (),
+    marks=pytest.mark.skipif(
+        importlib.util.find_spec("langgap.policies.oracle") is None, reason="the oracle policy is not in this tree"
+    ),
+)
+
+
+@pytest.mark.parametrize("name,pairs", [("random", ("chunk=3",)), ("noop", ()), ORACLE])
 def test_openpi_server_package_hosts_langgap_policy(catalog, name, pairs):
     port = free_port()
     with running(helper_server("openpi-langgap", port, name, *pairs), port):
@@ -131,12 +135,12 @@ def test_openpi_server_package_hosts_langgap_policy(catalog, name, pairs):
 
 def test_langgap_serve_matches_in_process_with_images_and_privileged_state(catalog):
     port = free_port()
-    with running(langgap_serve(port, "helper_policies:ProbePolicy"), port):
+    with running(langgap_serve(port, "tests.probe_policy:ProbePolicy"), port):
         remote = OpenpiPolicy(port=port)
         assert remote.spec.cameras and remote.spec.privileged and remote.spec.image_size == 64
         remote_outcomes = episodes(remote, catalog, PLAN)
         remote.close()
-    assert_same_episodes(remote_outcomes, episodes(make_policy("helper_policies:ProbePolicy"), catalog, PLAN))
+    assert_same_episodes(remote_outcomes, episodes(make_policy("tests.probe_policy:ProbePolicy"), catalog, PLAN))
 
 
 def test_langgap_serve_gives_each_connection_its_own_policy(catalog):
@@ -192,7 +196,7 @@ def test_server_killed_mid_episode(catalog):
 
 def test_server_that_never_answers_times_out(catalog):
     port = free_port()
-    with running(langgap_serve(port, "helper_policies:SleepPolicy", "seconds=60"), port):
+    with running(langgap_serve(port, "tests.policies:HangingPolicy"), port):
         policy, observation = _started_episode(catalog, port, timeout=1.0)
         start = time.monotonic()
         with pytest.raises(PolicyServerError, match="sent no reply within 1 s"):
@@ -217,7 +221,7 @@ def test_malformed_reply_raises(catalog, mode, message):
 
 def test_policy_error_on_server_is_reported_in_one_line(catalog):
     port = free_port()
-    with running(langgap_serve(port, "helper_policies:FailingPolicy"), port):
+    with running(langgap_serve(port, "tests.policies:RaisingPolicy"), port):
         policy, observation = _started_episode(catalog, port, timeout=5.0)
         with pytest.raises(PolicyServerError, match="failed: RuntimeError: model exploded") as raised:
             policy.act(observation)

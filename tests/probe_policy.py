@@ -1,8 +1,6 @@
-"""Policies used only by tests, loadable by name as `helper_policies:Class` (tests/ on PYTHONPATH)."""
+"""A policy whose actions depend on everything it observes (served by tests as `tests.probe_policy:ProbePolicy`)."""
 
 from __future__ import annotations
-
-import time
 
 import numpy as np
 
@@ -28,30 +26,3 @@ class ProbePolicy:
         actions = 0.5 * np.sin(phase)
         actions[:, 6] = np.where(actions[:, 6] > 0, 1.0, -1.0)
         return actions
-
-
-class SleepPolicy:
-    """Never answers in time: sleeps `seconds` in `act`."""
-
-    def __init__(self, seconds: float = 30.0):
-        self.seconds = seconds
-        self.spec = PolicySpec()
-
-    def reset(self, context: TaskContext) -> None:
-        pass
-
-    def act(self, observation: Observation) -> np.ndarray:
-        time.sleep(self.seconds)
-        return np.zeros(7)
-
-
-class FailingPolicy:
-    """Raises in `act`, as a crashing model would."""
-
-    spec = PolicySpec()
-
-    def reset(self, context: TaskContext) -> None:
-        pass
-
-    def act(self, observation: Observation) -> np.ndarray:
-        raise RuntimeError("model exploded")
