@@ -135,6 +135,7 @@ def test_env_type_applies_init_states_instruction_and_lerobot_orientation(catalo
     config = LangGapEnv(task=TASK_ID, episode_length=STEPS, observation_height=48, observation_width=48)
     (vector,) = config.create_envs(n_envs=2)[TASK_ID].values()
     processor = LiberoProcessorStep()
+    reference = TaskEnv(short_task(catalog), EnvOptions(cameras=("agentview",), image_size=48))
     try:
         assert list(vector.call("task_description")) == [catalog.get(TASK_ID).instruction()] * 2
         assert list(vector.call("_max_episode_steps")) == [STEPS, STEPS]
@@ -143,13 +144,12 @@ def test_env_type_applies_init_states_instruction_and_lerobot_orientation(catalo
             assert list(info["init_index"]) == [2 * batch, 2 * batch + 1]  # LeRobot's scheme: episode k, init k
             seen = processor.observation(preprocess_observation(raw))
             for index, seed in enumerate(seeds):
-                with TaskEnv(short_task(catalog), EnvOptions(cameras=("agentview",), image_size=48)) as env:
-                    env.reset(2 * batch + index, seed=seed)
-                    env.settle()
-                    upright = env.render("agentview")
-                expected = torch.from_numpy(upright.copy()).permute(2, 0, 1).float() / 255
+                reference.reset(2 * batch + index, seed=seed)
+                reference.settle()
+                expected = torch.from_numpy(reference.render("agentview").copy()).permute(2, 0, 1).float() / 255
                 assert torch.equal(seen["observation.images.image"][index], expected)
     finally:
+        reference.close()
         vector.close()
     with pytest.raises(LangGapError, match="does not support changing task_ids"):
         LangGapEnv(task_ids=[0])

@@ -5,9 +5,9 @@ rate and the env processor (`LiberoProcessorStep`: 180-degree flip, 8-D state) a
 differs is where episodes come from: `--env.task` is a LangGap task selection (ids, globs,
 `paper:N`, `spatial&heldout`, ...), each selected task is one vector env (reported under its task
 id), the instruction is the catalog's (`--env.style`), and the simulator is LangGap's `TaskEnv`:
-the task's fixed init states applied after reset, then LangGap's 10 settle steps. Resets are hard by
-default, as in LeRobot's LIBERO env: after a soft reset the settle steps start from leftover
-controller/solver state, so an episode would depend on the episodes before it.
+the task's fixed init states applied after reset, then LangGap's 10 settle steps. Resets are soft by
+default, as in `langgap eval` (LeRobot's LIBERO env rebuilds the model each time): `TaskEnv`'s soft
+reset gives the same episode as a fresh env, and a test pins that.
 
 Episode `k` of a task (k = batch * batch_size + sub-env index, LeRobot's scheme) uses init state
 `k mod 50` and the seed LeRobot passes to `reset` (`--seed` + k).
@@ -50,7 +50,7 @@ class LangGapLiberoEnv(gym.Env):
         cameras: tuple[str, ...] = tuple(CAMERA_KEYS),
         image_size: int = 360,
         episode_length: int | None = None,
-        hard_reset: bool = True,
+        hard_reset: bool = False,
         episode_index: int = 0,
         n_envs: int = 1,
     ):
@@ -123,6 +123,7 @@ class LangGapEnv(LiberoEnv):
     task: str = "spatial/s0/black-bowl-1-on-plate"
     catalog: str = DEFAULT_CATALOG
     style: str = DEFAULT_STYLE
+    hard_reset: bool = False
 
     def __post_init__(self):
         super().__post_init__()
