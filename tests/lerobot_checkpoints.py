@@ -63,3 +63,15 @@ def diffusion_checkpoint(directory: Path, seed: int = 0) -> Path:
     for part in (policy, preprocessor, postprocessor):
         part.save_pretrained(target)
     return target
+
+
+def lora_adapter(checkpoint: Path, directory: Path) -> Path:
+    """A PEFT LoRA adapter on the checkpoint's policy (non-zero weights, so it changes the actions)."""
+    from peft import LoraConfig, get_peft_model
+
+    torch.manual_seed(1)
+    policy = DiffusionPolicy.from_pretrained(checkpoint)
+    linear = [name for name, module in policy.named_modules() if isinstance(module, torch.nn.Linear)]
+    config = LoraConfig(r=4, lora_alpha=8, target_modules=linear, init_lora_weights=False)
+    get_peft_model(policy, config).save_pretrained(directory)
+    return directory

@@ -27,9 +27,10 @@ from langgap.lerobot_env import LangGapEnv  # noqa: E402
 from langgap.lerobot_libero import robot_state  # noqa: E402
 from langgap.policies import make_policy  # noqa: E402
 from langgap.policies.lerobot import CheckpointError  # noqa: E402
+from langgap.policies.openpi import OpenpiPolicy  # noqa: E402
 from langgap.sim.env import EnvOptions, TaskEnv  # noqa: E402
-from tests.lerobot_checkpoints import IMAGE_SIZE, N_ACTION_STEPS, diffusion_checkpoint  # noqa: E402
-from tests.servers import subprocess_env  # noqa: E402
+from tests.lerobot_checkpoints import IMAGE_SIZE, N_ACTION_STEPS, diffusion_checkpoint, lora_adapter  # noqa: E402
+from tests.servers import free_port, langgap_serve, running, subprocess_env  # noqa: E402
 
 TASK_ID = "spatial/s0/black-bowl-1-on-plate"
 SIBLING_ID = "spatial/s0/black-bowl-2-on-plate"
@@ -129,6 +130,30 @@ def test_chunking_follows_checkpoint_and_seed_makes_episodes_reproducible(policy
     assert first.shape == (STEPS, 7) and np.all(np.abs(first) <= 1.0 + 1e-6)
     np.testing.assert_array_equal(_episode(policy, catalog, init_index=0, seed=1), first)
     assert not np.array_equal(_episode(policy, catalog, init_index=0, seed=2), first)  # diffusion samples noise
+
+
+def test_lora_adapter_on_top_of_checkpoint(policy, checkpoint, catalog, tmp_path):
+    from peft import PeftModel
+
+    adapter = lora_adapter(checkpoint, tmp_path / "lora")
+    tuned = make_policy("lerobot", {"path": str(checkpoint), "adapter": str(adapter), "threads": "1"})
+    assert isinstance(tuned.model, PeftModel) and tuned.config()["adapter"] == str(adapter)
+    with_lora = _episode(tuned, catalog, init_index=0, seed=1)
+    assert not np.array_equal(with_lora, _episode(policy, catalog, init_index=0, seed=1))
+    np.testing.assert_array_equal(with_lora, _episode(tuned, catalog, init_index=0, seed=1))
+
+
+def test_served_checkpoint_matches_in_process(policy, checkpoint, catalog):
+    """A checkpoint behind `langgap serve`, driven by the `openpi` policy: the same episodes as in process."""
+    port = free_port()
+    serve = langgap_serve(port, "lerobot", f"path={checkpoint}", "threads=1")
+    with running(serve, port, env=subprocess_env(OMP_NUM_THREADS="1"), startup=180):
+        remote = OpenpiPolicy(port=port, connect_timeout=120)
+        assert remote.spec == policy.spec
+        served = [_episode(remote, catalog, init_index=1, seed=seed) for seed in (3, 4)]
+        remote.close()
+    for seed, actions in zip((3, 4), served, strict=True):
+        np.testing.assert_array_equal(actions, _episode(policy, catalog, init_index=1, seed=seed))
 
 
 def test_env_type_applies_init_states_instruction_and_lerobot_orientation(catalog):

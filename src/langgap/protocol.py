@@ -26,6 +26,7 @@ server never sees it):
 from __future__ import annotations
 
 import dataclasses
+import json
 from typing import Any
 
 import msgpack
@@ -82,11 +83,21 @@ def unpack(frame: bytes) -> Any:
         raise ProtocolError(f"not a msgpack message ({type(exc).__name__}: {exc})") from None
 
 
+def jsonable(value: Any) -> Any:
+    """`value` as plain JSON data: arrays become lists, bytes hex, anything else unknown its `str`."""
+
+    def fallback(item: Any) -> Any:
+        if isinstance(item, np.ndarray | np.generic):
+            return item.tolist()
+        return item.hex() if isinstance(item, bytes) else str(item)
+
+    return json.loads(json.dumps(value, default=fallback))
+
+
 def server_metadata(name: str, spec: PolicySpec, config: dict) -> dict:
-    """The metadata a LangGap server announces for a policy named `name`."""
-    return {
-        METADATA_KEY: {"protocol": PROTOCOL_VERSION, "policy": name, "spec": dataclasses.asdict(spec), "config": config}
-    }
+    """The metadata a LangGap server announces for a policy named `name` (`config` as in `policy_config`)."""
+    entry = {"protocol": PROTOCOL_VERSION, "policy": name, "spec": dataclasses.asdict(spec), "config": config}
+    return {METADATA_KEY: jsonable(entry)}
 
 
 def served_spec(metadata: Any) -> PolicySpec | None:

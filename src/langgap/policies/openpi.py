@@ -154,12 +154,7 @@ class OpenpiPolicy:
             raise PolicyServerError("openpi: need replan_steps >= 1, resize_size >= 16 and positive timeouts")
         self.resize_size = resize_size
         self._connection = ServerConnection(host, port, connect_timeout, timeout)
-        self.metadata = self._connection.open()
-        try:
-            self.served = protocol.served_spec(self.metadata)
-        except protocol.ProtocolError as exc:
-            self.close()
-            raise PolicyServerError(f"policy server {self._connection.address}: {exc}") from None
+        self.metadata, self.served = self._connect()
         self.spec = self.served or PolicySpec(
             cameras=CAMERAS, image_size=RENDER_SIZE, chunk=replan_steps, replan=replan_steps
         )
@@ -173,18 +168,25 @@ class OpenpiPolicy:
         return {
             "server": self._connection.address,
             "resize_size": None if self.served else self.resize_size,
-            "server_metadata": _jsonable(self.metadata),
+            "server_metadata": protocol.jsonable(self.metadata),
         }
 
     def reset(self, context: TaskContext) -> None:
         """Start an episode; reconnects first if an earlier failure dropped the connection."""
-        if not self._connection.is_open:
-            metadata = self._connection.open()
-            if protocol.served_spec(metadata) != self.served:
-                self.close()
-                raise PolicyServerError(f"policy server {self._connection.address} now serves a different policy")
+        if not self._connection.is_open and self._connect()[1] != self.served:
+            self.close()
+            raise PolicyServerError(f"policy server {self._connection.address} now serves a different policy")
         self._context = context
         self._episode = f"{self._client_token}-{next(self._episodes)}"
+
+    def _connect(self) -> tuple[dict, PolicySpec | None]:
+        """Open the connection; return the server's metadata and its served spec (None: plain openpi)."""
+        metadata = self._connection.open()
+        try:
+            return metadata, protocol.served_spec(metadata)
+        except protocol.ProtocolError as exc:
+            self.close()
+            raise PolicyServerError(f"policy server {self._connection.address}: {exc}") from None
 
     def act(self, observation: Observation) -> np.ndarray:
         """Ask the server for an action chunk; returns at least `spec.replan` actions."""
@@ -218,16 +220,3 @@ class OpenpiPolicy:
             if self.spec.privileged:
                 request[protocol.PRIVILEGED_KEY] = observation.privileged
         return request
-
-
-def _jsonable(value):
-    """Server metadata as JSON-able data (arrays become lists)."""
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray | np.generic):
-        return value.tolist()
-    if isinstance(value, bytes):
-        return value.hex()
-    return value
