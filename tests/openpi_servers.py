@@ -40,14 +40,14 @@ def _serve_raw(port: int, reply: bytes) -> None:
     from websockets.sync.server import serve
 
     from langgap import protocol
-    from langgap.serve import _health_check
+    from langgap.serve import health_check
 
     def handle(connection):
         connection.send(protocol.pack({}))
         for _ in connection:
             connection.send(reply)
 
-    with serve(handle, "127.0.0.1", port, process_request=_health_check, max_size=None) as server:
+    with serve(handle, "127.0.0.1", port, process_request=health_check, max_size=None) as server:
         server.serve_forever()
 
 

@@ -143,6 +143,7 @@ def test_lora_adapter_on_top_of_checkpoint(policy, checkpoint, catalog, tmp_path
     np.testing.assert_array_equal(with_lora, _episode(tuned, catalog, init_index=0, seed=1))
 
 
+@pytest.mark.slow
 def test_served_checkpoint_matches_in_process(policy, checkpoint, catalog):
     """A checkpoint behind `langgap serve`, driven by the `openpi` policy: the same episodes as in process."""
     port = free_port()

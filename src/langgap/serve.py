@@ -97,7 +97,8 @@ class PolicyPool:
             self._idle.clear()
 
 
-def _health_check(connection: ServerConnection, request: Request) -> Response | None:
+def health_check(connection: ServerConnection, request: Request) -> Response | None:
+    """openpi's health route: `GET /healthz` answers 200; every other request proceeds to the websocket."""
     if request.path == protocol.HEALTH_PATH:
         return connection.respond(http.HTTPStatus.OK, "OK\n")
     return None
@@ -135,13 +136,16 @@ def serve(name: str, args: dict[str, str], host: str = "127.0.0.1", port: int = 
     """Serve policy `name` (built with `args`) on ws://host:port until interrupted."""
     pool = PolicyPool(lambda: ServedPolicy(make_policy(name, args), name))
     try:
-        with websocket_serve(
-            _handler(pool), host, port, compression=None, max_size=None, process_request=_health_check
-        ) as server:
+        server = websocket_serve(
+            _handler(pool), host, port, compression=None, max_size=None, process_request=health_check
+        )
+    except OSError as exc:
+        pool.close()
+        raise PolicyServerError(f"cannot listen on {host}:{port}: {exc.strerror or exc}") from None
+    try:
+        with server:
             print(f"langgap serve: {name} on ws://{host}:{port} (spec {pool.metadata['langgap']['spec']})", flush=True)
             server.serve_forever()
-    except OSError as exc:
-        raise PolicyServerError(f"cannot listen on {host}:{port}: {exc.strerror or exc}") from None
     finally:
         pool.close()
         print("langgap serve: stopped", file=sys.stderr, flush=True)
