@@ -16,6 +16,7 @@ from langgap.engine.rollout import env_options_for, run_episode
 from langgap.errors import PolicyServerError
 from langgap.imaging import resize_with_pad
 from langgap.policies import make_policy
+from langgap.policies.base import PolicyOutputError
 from langgap.policies.openpi import OpenpiPolicy
 from langgap.sim.env import Observation, TaskEnv
 from tests.servers import free_port, helper_server, langgap_serve, running, subprocess_env
@@ -208,7 +209,7 @@ def test_server_that_never_answers_times_out(catalog):
 
 
 @pytest.mark.parametrize(
-    "mode,message", [("garbage", "not a msgpack message"), ("bad-actions", "'actions' is not a numeric array")]
+    "mode,message", [("garbage", "not a msgpack message"), ("bad-actions", "'actions' is not a 1-D or 2-D numeric")]
 )
 def test_malformed_reply_raises(catalog, mode, message):
     port = free_port()
@@ -217,6 +218,17 @@ def test_malformed_reply_raises(catalog, mode, message):
         with pytest.raises(PolicyServerError, match=message):
             policy.act(observation)
         policy.close()
+
+
+def test_nan_from_a_served_policy_is_a_policy_failure_as_in_process(catalog):
+    port = free_port()
+    with running(langgap_serve(port, "tests.policies:NanPolicy"), port):
+        remote = OpenpiPolicy(port=port, timeout=5.0)
+        with pytest.raises(PolicyOutputError, match="non-finite"):
+            episodes(remote, catalog, [(0, 0)])
+        remote.close()
+    with pytest.raises(PolicyOutputError, match="non-finite"):
+        episodes(make_policy("tests.policies:NanPolicy"), catalog, [(0, 0)])
 
 
 def test_policy_error_on_server_is_reported_in_one_line(catalog):

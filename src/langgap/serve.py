@@ -24,7 +24,7 @@ from websockets.sync.server import serve as websocket_serve
 from langgap import protocol
 from langgap.errors import PolicyServerError
 from langgap.policies import make_policy
-from langgap.policies.base import Policy, as_action_chunk, policy_config
+from langgap.policies.base import Policy, policy_config
 from langgap.sim.env import Observation
 
 log = logging.getLogger("langgap.serve")
@@ -40,7 +40,11 @@ class ServedPolicy:
         self._episode: str | None = None
 
     def infer(self, request: dict) -> dict:
-        """Answer one request with `{"actions": (k, 7) float64}`; `ProtocolError` if it lacks what is needed."""
+        """Answer one request with `{"actions": float64 array}`; `ProtocolError` if it lacks what is needed.
+
+        The policy's output is passed on unjudged (a NaN or a wrong shape is the client's rollout to
+        classify as a policy failure, as in process); only non-numeric output fails here.
+        """
         if not isinstance(request, dict):
             raise protocol.ProtocolError(f"a request must be a map, got {type(request).__name__}")
         episode = request.get(protocol.EPISODE_KEY)
@@ -59,7 +63,7 @@ class ServedPolicy:
         except KeyError as exc:
             raise protocol.ProtocolError(f"request lacks {exc.args[0]!r}, which this policy's spec needs") from None
         observation = Observation(state=state, images=images, privileged=privileged)
-        return {protocol.ACTIONS_KEY: as_action_chunk(self.policy.act(observation), spec)}
+        return {protocol.ACTIONS_KEY: np.asarray(self.policy.act(observation), dtype=np.float64)}
 
     def reset(self) -> None:
         """openpi's interface: the next request starts from a fresh episode."""
