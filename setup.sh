@@ -1,8 +1,36 @@
 #!/usr/bin/env bash
 # Install LangGap and its pinned simulation stack into ./.venv, then run the main job.
-# Safe to re-run: an existing .venv is updated in place.
+# `--lerobot` (or LANGGAP_LEROBOT=1) also creates ./.venv-lerobot: Python 3.12, LeRobot 0.6.1 with torch,
+# LangGap and the `--env.type=langgap` plugin (set PYTHON312 to choose the interpreter).
+# Safe to re-run: existing environments are updated in place.
 set -euo pipefail
 cd "$(dirname "$0")"
+
+WITH_LEROBOT="${LANGGAP_LEROBOT:-0}"
+for arg in "$@"; do
+    case "$arg" in
+        --lerobot) WITH_LEROBOT=1 ;;
+        *) echo "usage: ./setup.sh [--lerobot]" >&2; exit 2 ;;
+    esac
+done
+
+# robosuite warns on every import until a private macro file exists; create it once (same content).
+private_macros() {
+    "$1" - <<'PY'
+import pathlib, shutil, importlib.util
+root = pathlib.Path(importlib.util.find_spec("robosuite").origin).parent
+if not (root / "macros_private.py").exists():
+    shutil.copyfile(root / "macros.py", root / "macros_private.py")
+PY
+}
+
+python312() {
+    if [ -n "${PYTHON312:-}" ]; then echo "$PYTHON312"
+    elif command -v python3.12 >/dev/null && python3.12 -c '' 2>/dev/null; then echo python3.12
+    elif command -v pyenv >/dev/null && pyenv prefix 3.12 >/dev/null 2>&1; then echo "$(pyenv prefix 3.12)/bin/python3.12"
+    else return 1
+    fi
+}
 
 PYTHON="${PYTHON:-python3}"
 if ! "$PYTHON" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))'; then
@@ -12,14 +40,20 @@ fi
 [ -x .venv/bin/python ] || "$PYTHON" -m venv .venv
 .venv/bin/python -m pip install --quiet --upgrade pip
 .venv/bin/python -m pip install --quiet -e ".[dev,ray]"
+# For the tests only: openpi's own client and server packages (the reference the `openpi` policy is
+# tested against). They pin numpy<2, which would downgrade the simulation stack's numpy; the modules
+# used (msgpack_numpy, image_tools, WebsocketPolicyServer) work with numpy 2, so they go in without
+# their pins (their other needs, msgpack/websockets/pillow, are LangGap dependencies).
+.venv/bin/python -m pip install --quiet --no-deps openpi-client==0.1.2 openpi-server==0.1.0
+private_macros .venv/bin/python
 
-# robosuite warns on every import until a private macro file exists; create it once (same content).
-.venv/bin/python - <<'PY'
-import pathlib, shutil, importlib.util
-root = pathlib.Path(importlib.util.find_spec("robosuite").origin).parent
-if not (root / "macros_private.py").exists():
-    shutil.copyfile(root / "macros.py", root / "macros_private.py")
-PY
+if [ "$WITH_LEROBOT" = "1" ]; then
+    PY312="$(python312)" || { echo "setup.sh: --lerobot needs Python 3.12; set PYTHON312=/path/to/python3.12" >&2; exit 1; }
+    [ -x .venv-lerobot/bin/python ] || "$PY312" -m venv .venv-lerobot
+    .venv-lerobot/bin/python -m pip install --quiet --upgrade pip
+    .venv-lerobot/bin/python -m pip install --quiet -e ".[dev,lerobot]" ./plugins/lerobot_env_langgap
+    private_macros .venv-lerobot/bin/python
+fi
 
 if [ "${LANGGAP_SETUP_ONLY:-0}" = "1" ]; then
     exit 0

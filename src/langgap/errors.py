@@ -27,3 +27,7 @@ class InitStateError(SimulationError):
 
 class DependencyNotInstalled(LangGapError):
     """An optional dependency is missing; the message says how to install it."""
+
+
+class PolicyServerError(LangGapError):
+    """A remote policy server is unreachable, timed out, failed, or sent a malformed reply."""

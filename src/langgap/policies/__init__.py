@@ -16,6 +16,8 @@ REGISTRY: dict[str, str] = {
     "noop": "langgap.policies.simple:NoopPolicy",
     "random": "langgap.policies.simple:RandomPolicy",
     "delay": "langgap.policies.simple:DelayPolicy",
+    "openpi": "langgap.policies.openpi:OpenpiPolicy",
+    "lerobot": "langgap.policies.lerobot:LeRobotPolicy",
 }
 
 

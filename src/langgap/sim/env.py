@@ -140,6 +140,7 @@ class TaskEnv:
         """Release the simulator and its GL context (avoids EGL errors at interpreter exit)."""
         env = getattr(self, "_env", None)
         if env is not None:
+            self._make_render_context_current()  # MuJoCo frees its GL objects in whatever context is current
             env.close()
             self._env = None
 
@@ -152,6 +153,13 @@ class TaskEnv:
     def robosuite_env(self):
         """The underlying LIBERO/robosuite environment (privileged access)."""
         return self._inner
+
+    @property
+    def robosuite_observation(self) -> dict:
+        """robosuite's latest observation dict (proprioception; no images), for adapters that need its raw form."""
+        if self._raw_obs is None:
+            raise SimulationError("no observation before reset()")
+        return self._raw_obs
 
     # -- episode -----------------------------------------------------------------------------
 
@@ -234,8 +242,17 @@ class TaskEnv:
     def render(self, camera: str) -> np.ndarray:
         """One upright uint8 image (H, W, 3) from `camera`."""
         size = self.options.image_size
+        self._make_render_context_current()
         raw = self.sim.render(camera_name=camera, width=size, height=size)
         return np.ascontiguousarray(raw[::-1, ::-1])
+
+    def _make_render_context_current(self) -> None:
+        # robosuite makes a GL context current only when it creates one, and MuJoCo draws into (and frees
+        # GL objects of) whatever context is current: with several envs in one process, this env's context
+        # must be made current before each render and before close.
+        context = self.sim._render_context_offscreen if self.options.renders else None
+        if context is not None:
+            context.gl_ctx.make_current()
 
     def _reapply_render_flags(self) -> None:
         # A hard reset creates a new render context, so the flag is set after every reset.

@@ -1,0 +1,79 @@
+"""Servers for tests, run as `python -m tests.openpi_servers MODE PORT [POLICY [KEY=VALUE ...]]`.
+
+Modes:
+  openpi-langgap  openpi's own `WebsocketPolicyServer` (PyPI `openpi-server`) hosting a LangGap policy
+                  through `ServedPolicy`, i.e. announcing LangGap's extension in its metadata.
+  openpi-record   openpi's server with plain metadata: a stand-in for an openpi model server that saves
+                  every observation it receives to RECORD_DIR/<n>.npz and answers a (10, 7) chunk.
+  garbage         a websocket server that answers every request with bytes that are not msgpack.
+  bad-actions     a websocket server that answers `{"actions": "not an array"}`.
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import sys
+
+import numpy as np
+
+
+class RecordingOpenpiModel:
+    """openpi's server-side policy interface: `infer(obs) -> {"actions": ...}`."""
+
+    def __init__(self, directory: pathlib.Path):
+        self.directory = directory
+        self.calls = 0
+
+    def infer(self, obs: dict) -> dict:
+        np.savez(self.directory / f"{self.calls:04d}.npz", **{k: np.asarray(v) for k, v in obs.items()})
+        self.calls += 1
+        actions = np.zeros((10, 7))
+        actions[:, 6] = -1.0
+        return {"actions": actions}
+
+    def reset(self) -> None:
+        pass
+
+
+def _serve_raw(port: int, reply: bytes) -> None:
+    from websockets.sync.server import serve
+
+    from langgap import protocol
+    from langgap.serve import health_check
+
+    def handle(connection):
+        connection.send(protocol.pack({}))
+        for _ in connection:
+            connection.send(reply)
+
+    with serve(handle, "127.0.0.1", port, process_request=health_check, max_size=None) as server:
+        server.serve_forever()
+
+
+def main(mode: str, port: int, *rest: str) -> None:
+    from langgap import protocol
+
+    if mode in ("openpi-langgap", "openpi-record"):
+        from openpi_server import WebsocketPolicyServer
+
+        if mode == "openpi-langgap":
+            from langgap.policies import make_policy
+            from langgap.serve import ServedPolicy
+
+            name, pairs = rest[0], rest[1:]
+            served = ServedPolicy(make_policy(name, dict(p.split("=", 1) for p in pairs)), name)
+            policy, metadata = served, served.metadata
+        else:
+            policy, metadata = RecordingOpenpiModel(pathlib.Path(os.environ["RECORD_DIR"])), {"model": "recorder"}
+        WebsocketPolicyServer(policy, host="127.0.0.1", port=port, metadata=metadata).serve_forever()
+    elif mode == "garbage":
+        _serve_raw(port, b"\xc1\xc1 not msgpack")
+    elif mode == "bad-actions":
+        _serve_raw(port, protocol.pack({"actions": "not an array"}))
+    else:
+        raise SystemExit(f"unknown mode {mode}")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], int(sys.argv[2]), *sys.argv[3:])
