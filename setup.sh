@@ -1,16 +1,17 @@
 #!/usr/bin/env bash
-# Install LangGap and its pinned simulation stack into ./.venv, then run the main job.
-# `--lerobot` (or LANGGAP_LEROBOT=1) also creates ./.venv-lerobot: Python 3.12, LeRobot 0.6.1 with torch,
-# LangGap and the `--env.type=langgap` plugin (set PYTHON312 to choose the interpreter).
-# Safe to re-run: existing environments are updated in place.
+# Install everything, then run the main job:
+#   ./.venv          Python 3.11: LangGap, its pinned simulation stack, Ray, the test tools;
+#   ./.venv-lerobot  Python 3.12: LeRobot 0.6.1 with torch, LangGap and the `--env.type=langgap` plugin
+#                    (skip it with --core; set PYTHON312 to choose the interpreter).
+# Safe to re-run: existing environments are updated in place, and the main job skips stored episodes.
 set -euo pipefail
 cd "$(dirname "$0")"
 
-WITH_LEROBOT="${LANGGAP_LEROBOT:-0}"
+WITH_LEROBOT="${LANGGAP_LEROBOT:-1}"
 for arg in "$@"; do
     case "$arg" in
-        --lerobot) WITH_LEROBOT=1 ;;
-        *) echo "usage: ./setup.sh [--lerobot]" >&2; exit 2 ;;
+        --core) WITH_LEROBOT=0 ;;
+        *) echo "usage: ./setup.sh [--core]" >&2; exit 2 ;;
     esac
 done
 
@@ -48,7 +49,7 @@ fi
 private_macros .venv/bin/python
 
 if [ "$WITH_LEROBOT" = "1" ]; then
-    PY312="$(python312)" || { echo "setup.sh: --lerobot needs Python 3.12; set PYTHON312=/path/to/python3.12" >&2; exit 1; }
+    PY312="$(python312)" || { echo "setup.sh: the LeRobot environment needs Python 3.12; set PYTHON312=/path/to/python3.12, or pass --core" >&2; exit 1; }
     [ -x .venv-lerobot/bin/python ] || "$PY312" -m venv .venv-lerobot
     .venv-lerobot/bin/python -m pip install --quiet --upgrade pip
     .venv-lerobot/bin/python -m pip install --quiet -e ".[dev,lerobot]" ./plugins/lerobot_env_langgap

@@ -1,6 +1,6 @@
 """The `lerobot` adapter and `--env.type=langgap`, with a real LeRobot policy (small, random weights).
 
-Runs in the LeRobot environment (`./setup.sh --lerobot` creates .venv-lerobot); skipped elsewhere.
+Runs in the LeRobot environment (`./setup.sh` creates .venv-lerobot); skipped elsewhere.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("lerobot", reason="LeRobot lives in .venv-lerobot (./setup.sh --lerobot)")
+pytest.importorskip("lerobot", reason="LeRobot lives in .venv-lerobot (created by ./setup.sh)")
 
 import torch  # noqa: E402
 from lerobot.envs.utils import NEW_ROLLOUT_OPTION, preprocess_observation  # noqa: E402
