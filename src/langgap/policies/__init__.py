@@ -15,6 +15,8 @@ from langgap.policies.base import Policy
 REGISTRY: dict[str, str] = {
     "noop": "langgap.policies.simple:NoopPolicy",
     "random": "langgap.policies.simple:RandomPolicy",
+    "oracle": "langgap.policies.oracle:OraclePolicy",
+    "blind": "langgap.policies.oracle:BlindPolicy",
 }
 
 

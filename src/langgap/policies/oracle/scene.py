@@ -1,0 +1,135 @@
+"""A read-only view of one privileged observation (see `langgap.sim.privileged`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from langgap.policies.oracle.geometry import quat_to_mat, transform_boxes
+
+
+@dataclass(frozen=True)
+class Articulation:
+    """One articulated part (a drawer, a door, a knob) as the privileged state describes it."""
+
+    qpos: float
+    anchor: np.ndarray
+    axis: np.ndarray
+    slide: bool
+    limits: np.ndarray
+    bbox: np.ndarray
+    handle: np.ndarray
+    intervals: dict[str, np.ndarray]
+    world_shape: np.ndarray  # collision boxes of the moving part as world AABBs (n, 6)
+
+    def target(self, state: str) -> float:
+        """A qpos deep inside the interval where predicate `state` (open, close, on, off) holds."""
+        lo, hi = self.intervals[state]
+        others = [v.mean() for k, v in self.intervals.items() if k != state]
+        # Aim at the end of the interval farthest from the opposite state, a little inside the limit.
+        far_end = hi if not others or abs(hi - np.mean(others)) > abs(lo - np.mean(others)) else lo
+        return float(far_end + (np.mean([lo, hi]) - far_end) * 0.1)
+
+    def holds(self, state: str) -> bool:
+        lo, hi = self.intervals[state]
+        return bool(lo <= self.qpos <= hi)
+
+
+@dataclass(frozen=True)
+class Region:
+    """A region site: frame and the half-sizes LIBERO's `In`/`On` checks use."""
+
+    name: str
+    pos: np.ndarray
+    mat: np.ndarray
+    size: np.ndarray
+
+
+class Scene:
+    """Typed accessors over a privileged dict; raises KeyError for names the scene lacks."""
+
+    def __init__(self, privileged: dict[str, np.ndarray]):
+        self.raw = privileged
+        self.eef_pos = np.asarray(privileged["eef_pos"], dtype=np.float64)
+        self.eef_mat = np.asarray(privileged["eef_mat"], dtype=np.float64)
+        self.gripper_width = float(np.sum(np.abs(privileged["gripper_qpos"])))
+        self.base_pos = np.asarray(privileged["base_pos"], dtype=np.float64)
+        self.entities = tuple(k.split("/", 1)[1] for k in privileged if k.startswith("body/"))
+        self.regions = tuple(k.split("/", 1)[1] for k in privileged if k.startswith("site/"))
+        self.articulated = tuple(k.split("/")[1] for k in privileged if k.startswith("art/") and k.endswith("/qpos"))
+
+    def reach(self, point: np.ndarray) -> float:
+        """Horizontal distance from the robot's base to `point`."""
+        return float(np.linalg.norm(np.asarray(point)[:2] - self.base_pos[:2]))
+
+    def has_entity(self, name: str) -> bool:
+        return f"body/{name}" in self.raw
+
+    def has_region(self, name: str) -> bool:
+        return f"site/{name}" in self.raw
+
+    def pos(self, name: str) -> np.ndarray:
+        return np.asarray(self.raw[f"body/{name}"][:3], dtype=np.float64)
+
+    def rot(self, name: str) -> np.ndarray:
+        return quat_to_mat(self.raw[f"body/{name}"][3:7])
+
+    def bbox(self, name: str) -> np.ndarray:
+        return np.asarray(self.raw[f"bbox/{name}"], dtype=np.float64)
+
+    def shape(self, name: str) -> np.ndarray:
+        """Collision boxes of `name` in its body frame (n, 6)."""
+        return np.asarray(self.raw[f"shape/{name}"], dtype=np.float64).reshape(-1, 6)
+
+    def world_shape(self, name: str) -> np.ndarray:
+        """Collision boxes of `name` as world AABBs (n, 6) at its current pose."""
+        return transform_boxes(self.shape(name), self.rot(name), self.pos(name))
+
+    def touches_other(self, name: str) -> bool:
+        """Whether `name` touches anything except itself and the robot."""
+        return bool(self.raw[f"contact/{name}"][0] > 0.5)
+
+    def touches_gripper(self, name: str) -> bool:
+        return bool(self.raw[f"contact/{name}"][1] > 0.5)
+
+    def region(self, name: str) -> Region:
+        return Region(
+            name=name,
+            pos=np.asarray(self.raw[f"site/{name}"], dtype=np.float64),
+            mat=np.asarray(self.raw[f"site_mat/{name}"], dtype=np.float64).reshape(3, 3),
+            size=np.asarray(self.raw[f"site_size/{name}"], dtype=np.float64),
+        )
+
+    def articulation(self, name: str) -> Articulation:
+        prefix = f"art/{name}/"
+        body = self.raw[prefix + "body"]
+        shape = np.asarray(self.raw[prefix + "shape"], dtype=np.float64).reshape(-1, 6)
+        return Articulation(
+            qpos=float(self.raw[prefix + "qpos"][0]),
+            anchor=np.asarray(self.raw[prefix + "anchor"], dtype=np.float64),
+            axis=np.asarray(self.raw[prefix + "axis"], dtype=np.float64),
+            slide=bool(self.raw[prefix + "slide"][0] > 0.5),
+            limits=np.asarray(self.raw[prefix + "limits"], dtype=np.float64),
+            bbox=np.asarray(self.raw[prefix + "bbox"], dtype=np.float64),
+            handle=np.asarray(self.raw[prefix + "handle"], dtype=np.float64),
+            intervals={
+                key: np.asarray(self.raw[prefix + key], dtype=np.float64)
+                for key in ("open", "close", "on", "off")
+                if prefix + key in self.raw
+            },
+            world_shape=transform_boxes(shape, quat_to_mat(body[3:7]), np.asarray(body[:3], dtype=np.float64)),
+        )
+
+    def obstacles(self, exclude: tuple[str, ...] = ()) -> np.ndarray:
+        """World boxes (n, 6) of every entity's collision geometry except `exclude` (moving parts included)."""
+        boxes = [self.world_shape(e) for e in self.entities if e not in exclude]
+        # Every articulated part once: a fixture's first joint is also listed under the fixture's name.
+        parts = {self.articulation(name).world_shape.tobytes(): name for name in self.articulated}
+        excluded = {
+            self.articulation(name).world_shape.tobytes()
+            for name in self.articulated
+            if any(name == e or name.startswith(e + "_") for e in exclude)
+        }
+        boxes += [np.frombuffer(key).reshape(-1, 6) for key in parts if key not in excluded]
+        return np.concatenate(boxes) if boxes else np.zeros((0, 6))
