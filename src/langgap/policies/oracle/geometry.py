@@ -1,8 +1,9 @@
-"""Small rigid-body helpers: rotations, top-down gripper frames and axis-aligned boxes."""
+"""Small rigid-body helpers: rotations, top-down gripper frames and oriented boxes."""
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -72,12 +73,6 @@ def wrap_half_turn(yaw: float, reference: float) -> float:
     return best
 
 
-def box_corners(box: np.ndarray) -> np.ndarray:
-    """The 8 corners (8, 3) of an axis-aligned box (min xyz, max xyz)."""
-    lo, hi = box[:3], box[3:]
-    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
-
-
 def transform_boxes(boxes: np.ndarray, rot: np.ndarray, pos: np.ndarray) -> np.ndarray:
     """World AABBs (n, 6) of body-frame boxes (n, 6) of a body at pose (rot, pos)."""
     if len(boxes) == 0:
@@ -89,28 +84,81 @@ def transform_boxes(boxes: np.ndarray, rot: np.ndarray, pos: np.ndarray) -> np.n
     return np.concatenate([world_centre - world_half, world_centre + world_half], axis=1)
 
 
-def oriented_box(centre: np.ndarray, half: np.ndarray, yaw: float) -> np.ndarray:
-    """World AABB of a box with `half` extents (along its x, y, z) rotated by `yaw` about z."""
-    return transform_boxes(np.concatenate([-half, half])[None, :], top_down_yaw_only(yaw), centre)[0]
+@dataclass(frozen=True)
+class Boxes:
+    """Oriented boxes: centres (n, 3), half extents (n, 3) and rotations (n, 3, 3) (columns = box axes)."""
+
+    centre: np.ndarray
+    half: np.ndarray
+    rot: np.ndarray
+
+    @staticmethod
+    def empty() -> Boxes:
+        return Boxes(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3, 3)))
+
+    @staticmethod
+    def from_local(local: np.ndarray, rot: np.ndarray, pos: np.ndarray) -> Boxes:
+        """Boxes given as (min xyz, max xyz) rows in the frame of a body at pose (rot, pos)."""
+        local = np.asarray(local, dtype=np.float64).reshape(-1, 6)
+        centre = (local[:, :3] + local[:, 3:]) / 2.0 @ rot.T + pos
+        half = (local[:, 3:] - local[:, :3]) / 2.0
+        return Boxes(centre, half, np.repeat(rot[None, :, :], len(local), axis=0))
+
+    @staticmethod
+    def concat(parts: list[Boxes]) -> Boxes:
+        parts = [p for p in parts if len(p)]
+        if not parts:
+            return Boxes.empty()
+        return Boxes(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("centre", "half", "rot")))
+
+    def __len__(self) -> int:
+        return len(self.centre)
+
+    def select(self, mask: np.ndarray) -> Boxes:
+        return Boxes(self.centre[mask], self.half[mask], self.rot[mask])
+
+    def shifted(self, offset: np.ndarray) -> Boxes:
+        return Boxes(self.centre + offset, self.half, self.rot)
+
+    def aabb(self) -> np.ndarray:
+        """World axis-aligned bounds (n, 6)."""
+        extent = np.einsum("nij,nj->ni", np.abs(self.rot), self.half)
+        return np.concatenate([self.centre - extent, self.centre + extent], axis=1)
+
+    def under(self, xy: np.ndarray, radius: float = 0.0) -> np.ndarray:
+        """Which boxes' footprints (in their own frames) contain the point `xy`, grown by `radius`."""
+        offset = np.zeros((len(self), 3))
+        offset[:, :2] = np.asarray(xy)[None, :2] - self.centre[:, :2]
+        local = np.einsum("nji,nj->ni", self.rot, offset)
+        return np.all(np.abs(local[:, :2]) <= self.half[:, :2] + radius, axis=1)
+
+
+def penetration(centre: np.ndarray, half: np.ndarray, rot: np.ndarray, others: Boxes) -> np.ndarray:
+    """How deep one oriented box overlaps each of `others` (separating-axis test); <= 0 means apart."""
+    if len(others) == 0:
+        return np.zeros(0)
+    n = len(others)
+    axes_a = np.repeat(rot.T[None, :, :], n, axis=0)  # (n, 3, 3): rows are A's axes
+    axes_b = np.transpose(others.rot, (0, 2, 1))  # rows are B's axes
+    cross = np.cross(axes_a[:, :, None, :], axes_b[:, None, :, :]).reshape(n, 9, 3)
+    axes = np.concatenate([axes_a, axes_b, cross], axis=1)  # (n, 15, 3)
+    norm = np.linalg.norm(axes, axis=2)
+    valid = norm > 1e-6
+    axes = axes / np.where(valid, norm, 1.0)[:, :, None]
+    radius_a = np.abs(np.einsum("nkj,ji->nki", axes, rot)) @ half
+    radius_b = np.einsum("nki,ni->nk", np.abs(np.einsum("nkj,nji->nki", axes, others.rot)), others.half)
+    distance = np.abs(np.einsum("nkj,nj->nk", axes, others.centre - centre[None, :]))
+    overlap = np.where(valid, radius_a + radius_b - distance, np.inf)
+    return overlap.min(axis=1)
+
+
+def boxes_hit(boxes: Boxes, others: Boxes, tolerance: float) -> bool:
+    """Whether any of `boxes` penetrates any of `others` deeper than `tolerance`."""
+    return any(
+        np.any(penetration(c, h, r, others) > tolerance) for c, h, r in zip(boxes.centre, boxes.half, boxes.rot, strict=True)
+    )
 
 
 def top_down_yaw_only(yaw: float) -> np.ndarray:
     c, s = math.cos(yaw), math.sin(yaw)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def boxes_overlap(box: np.ndarray, others: np.ndarray, margin: float = 0.0) -> np.ndarray:
-    """Per row of `others` (n, 6): whether it intersects `box` grown by `margin`."""
-    if len(others) == 0:
-        return np.zeros(0, dtype=bool)
-    lo, hi = box[:3] - margin, box[3:] + margin
-    return np.all((others[:, :3] < hi) & (others[:, 3:] > lo), axis=1)
-
-
-def overlap_volume(box: np.ndarray, others: np.ndarray) -> float:
-    """Total volume of the intersections of `box` with each row of `others`."""
-    if len(others) == 0:
-        return 0.0
-    lo = np.maximum(others[:, :3], box[:3])
-    hi = np.minimum(others[:, 3:], box[3:])
-    return float(np.prod(np.clip(hi - lo, 0.0, None), axis=1).sum())

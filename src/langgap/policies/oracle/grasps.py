@@ -4,8 +4,9 @@ Candidates are lines through the object's centre at several yaws. Along each lin
 material (within a thin strip, at the height the finger pads will be) forms segments; a segment
 narrow enough for the pads is a grasp: the one containing the centre is a centre grasp (a can, a
 box), one off-centre is a rim or edge grasp (the wall of a bowl or a mug). A candidate is kept when
-the fingers and the palm are clear of everything else at the object and where it will be placed;
-the cheapest (least wrist rotation, centre before rim, most clearance) wins.
+the fingers and the palm are clear of everything else, at the object and where it will be placed;
+the cheapest (least wrist rotation, centre before rim, most clearance, least stretch of the arm)
+wins.
 """
 
 from __future__ import annotations
@@ -16,14 +17,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from langgap.policies.oracle import hand
-from langgap.policies.oracle.geometry import closing_yaw, overlap_volume, top_down, transform_boxes, wrap_half_turn
+from langgap.policies.oracle.geometry import Boxes, closing_yaw, penetration, top_down, wrap_half_turn
 from langgap.policies.oracle.scene import Scene
 
 YAW_STEPS = 12  # candidate closing axes, every 15 degrees over a half turn
 STRIP = 0.008  # half-width of the strip of material the pads close on
-GRASP_DEPTH = 0.023  # grip site below the object's top (the palm must stay above the top)
+GRASP_DEPTHS = (0.023, 0.017, 0.012)  # grip site below the object's top, deepest first (the palm stays above)
+SHALLOW_COST = 20.0  # per metre of depth given up
 MIN_TIP_CLEARANCE = 0.002  # finger tips above the object's bottom (the table)
-COLLISION_TOLERANCE = 2e-7  # m^3 of overlap ignored (mesh boxes are conservative)
+PENETRATION_TOLERANCE = 0.0015  # metres of overlap ignored (collision boxes are conservative)
 RIM_COST = 0.6  # preference for centre grasps, in radians of wrist rotation
 CLEARANCE_WEIGHT = 20.0  # cost per metre of missing clearance around the fingers
 WANTED_CLEARANCE = 0.02
@@ -46,31 +48,37 @@ class Grasp:
         return top_down(self.yaw)
 
 
-def _segments(boxes: np.ndarray, origin: np.ndarray, direction: np.ndarray) -> list[tuple[float, float]]:
+def footprint_corners(boxes: Boxes) -> np.ndarray:
+    """The four horizontal corners (n, 4, 2) of each box's footprint (boxes rotated about z only)."""
+    signs = np.array([[1, 1], [1, -1], [-1, 1], [-1, -1]], dtype=np.float64)
+    axes = boxes.rot[:, :2, :2]  # the xy part of the box's x and y axes (columns)
+    offsets = np.einsum("nij,kj,nj->nki", axes, signs, boxes.half[:, :2])
+    return boxes.centre[:, None, :2] + offsets
+
+
+def _segments(boxes: Boxes, origin: np.ndarray, direction: np.ndarray) -> list[tuple[float, float]]:
     """Merged intervals (along `direction` from `origin`) where `boxes` cross a thin strip on that line."""
+    if len(boxes) == 0:
+        return []
     normal = np.array([-direction[1], direction[0]])
-    intervals = []
-    for box in boxes:
-        corners = np.array([[x, y] for x in (box[0], box[3]) for y in (box[1], box[4])]) - origin
-        across = corners @ normal
-        if across.min() > STRIP or across.max() < -STRIP:
-            continue
-        along = corners @ direction
-        intervals.append((float(along.min()), float(along.max())))
-    intervals.sort()
+    corners = footprint_corners(boxes) - origin
+    across = corners @ normal
+    crossing = (across.min(axis=1) <= STRIP) & (across.max(axis=1) >= -STRIP)
+    along = corners[crossing] @ direction
+    intervals = sorted(zip(along.min(axis=1), along.max(axis=1), strict=True))
     merged: list[list[float]] = []
     for lo, hi in intervals:
         if merged and lo <= merged[-1][1] + 1e-4:
             merged[-1][1] = max(merged[-1][1], hi)
         else:
-            merged.append([lo, hi])
+            merged.append([float(lo), float(hi)])
     return [(lo, hi) for lo, hi in merged]
 
 
-def grasp_height(boxes: np.ndarray) -> float:
-    """Grip-site height for a top-down grasp of an object made of `boxes` (world AABBs)."""
-    top, bottom = boxes[:, 5].max(), boxes[:, 2].min()
-    return max(top - GRASP_DEPTH, bottom + hand.TIP + MIN_TIP_CLEARANCE)
+def grasp_height(bounds: np.ndarray, depth: float = GRASP_DEPTHS[0]) -> float:
+    """Grip-site height for a top-down grasp `depth` below the top of an object with world bounds (n, 6)."""
+    top, bottom = bounds[:, 5].max(), bounds[:, 2].min()
+    return max(top - depth, bottom + hand.TIP + MIN_TIP_CLEARANCE)
 
 
 def pad_span(z: float) -> tuple[float, float]:
@@ -79,25 +87,28 @@ def pad_span(z: float) -> tuple[float, float]:
     return centre - hand.PAD_HALF_HEIGHT, centre + hand.PAD_HALF_HEIGHT
 
 
-def hand_boxes(point: np.ndarray, yaw: float, width: float = hand.PAD_GAP_OPEN) -> np.ndarray:
-    """World AABBs of the fingers and the palm of a top-down gripper at `point`."""
+def hand_boxes(point: np.ndarray, yaw: float, *, width: float = hand.PAD_GAP_OPEN, sweep: float = 0.0) -> Boxes:
+    """The fingers and the palm of a top-down gripper at `point`, swept up by `sweep` (its approach)."""
     local = np.concatenate([hand.finger_boxes(width), hand.palm_box()])
-    return transform_boxes(local, top_down(yaw), point)
+    local[:, 2] -= sweep  # the site frame's z points down: sweeping up extends the boxes to lower z
+    return Boxes.from_local(local, top_down(yaw), point)
 
 
-def _collision(point: np.ndarray, yaw: float, obstacles: np.ndarray, approach: float) -> float:
-    """Overlap volume of the open hand (swept down from `approach` above `point`) with `obstacles`."""
-    boxes = hand_boxes(point, yaw)
-    boxes[:, 5] += approach
-    return sum(overlap_volume(box, obstacles) for box in boxes)
+def hand_hits(point: np.ndarray, yaw: float, obstacles: Boxes, *, sweep: float = 0.0, grow: float = 0.0) -> bool:
+    """Whether the open hand at `point` (swept down from `sweep` above) touches `obstacles`."""
+    boxes = hand_boxes(point, yaw, sweep=sweep)
+    for index, (centre, half, rot) in enumerate(zip(boxes.centre, boxes.half, boxes.rot, strict=True)):
+        margin = grow if index < 2 else 0.0  # only the fingers are grown when measuring clearance
+        grown = half + np.array([margin, margin, 0.0])
+        if np.any(penetration(centre, grown, rot, obstacles) > PENETRATION_TOLERANCE):
+            return True
+    return False
 
 
-def _clearance(point: np.ndarray, yaw: float, obstacles: np.ndarray) -> float:
+def _clearance(point: np.ndarray, yaw: float, obstacles: Boxes) -> float:
     """How far (up to WANTED_CLEARANCE) the open fingers are from the nearest obstacle."""
-    fingers = hand_boxes(point, yaw)[:2]
     for margin in np.linspace(0.0, WANTED_CLEARANCE, 5)[1:]:
-        grown = fingers + np.array([-margin, -margin, 0.0, margin, margin, 0.0])
-        if any(overlap_volume(box, obstacles) > COLLISION_TOLERANCE for box in grown):
+        if hand_hits(point, yaw, obstacles, grow=float(margin)):
             return float(margin)
     return WANTED_CLEARANCE
 
@@ -107,51 +118,65 @@ def plan_grasp(
     obj: str,
     *,
     place_shift: np.ndarray | None = None,
-    place_obstacles: np.ndarray | None = None,
+    place_obstacles: Boxes | None = None,
     approach: float = 0.08,
 ) -> Grasp | None:
     """The best top-down grasp of `obj`, or None if none fits.
 
     `place_shift` moves the object from its current pose to where it will be released; with
     `place_obstacles` the hand is also checked there, so a grasp that would hit the target's
-    surroundings (a drawer, a basket wall) is not chosen.
+    surroundings (a drawer's walls, a basket's rim) is avoided.
     """
-    boxes = scene.world_shape(obj)
-    z = grasp_height(boxes)
-    pad_lo, pad_hi = pad_span(z)
-    pads = boxes[(boxes[:, 2] < pad_hi) & (boxes[:, 5] > pad_lo)]
-    if len(pads) == 0:
-        return None
-    centre = (pads[:, :2].min(axis=0) + pads[:, 3:5].max(axis=0)) / 2.0
-    own_below = boxes[boxes[:, 5] <= pad_lo]  # e.g. a bowl's floor under the fingers
-    around = scene.obstacles(exclude=(obj,))
-    obstacles = np.concatenate([around, own_below]) if len(own_below) else around
-    current = closing_yaw(scene.eef_mat)
+    boxes = scene.boxes(obj)
+    bounds = boxes.aabb()
+    others = scene.obstacles(exclude=(obj,))
     best: Grasp | None = None
+    for depth in GRASP_DEPTHS:
+        z = grasp_height(bounds, depth)
+        for grasp in _grasps_at(scene, boxes, bounds, others, z, approach):
+            cost = grasp.cost + SHALLOW_COST * (GRASP_DEPTHS[0] - depth)
+            if place_shift is not None and place_obstacles is not None:
+                at_place = grasp.point + place_shift
+                if hand_hits(at_place, grasp.yaw, place_obstacles, sweep=approach):
+                    cost += 10.0  # still possible, but only if nothing else is
+                cost += REACH_WEIGHT * max(0.0, scene.reach(at_place) - COMFORTABLE_REACH)
+            if best is None or cost < best.cost:
+                best = Grasp(point=grasp.point, yaw=grasp.yaw, width=grasp.width, rim=grasp.rim, cost=cost)
+        if best is not None:
+            return best
+    return best
+
+
+def _grasps_at(scene: Scene, boxes: Boxes, bounds: np.ndarray, others: Boxes, z: float, approach: float):
+    """Collision-free grasps with the grip site at height `z`, each with its cost before placement."""
+    pad_lo, pad_hi = pad_span(z)
+    at_pads = (bounds[:, 2] < pad_hi) & (bounds[:, 5] > pad_lo)
+    if not at_pads.any():
+        return
+    pads = boxes.select(at_pads)
+    pad_bounds = bounds[at_pads]
+    centre = (pad_bounds[:, :2].min(axis=0) + pad_bounds[:, 3:5].max(axis=0)) / 2.0
+    below = bounds[:, 5] <= pad_lo  # e.g. a bowl's floor under the fingers
+    obstacles = Boxes.concat([others, boxes.select(below)])
+    current = closing_yaw(scene.eef_mat)
+    reach = hand.PAD_GAP_OPEN / 2 + hand.FINGER_THICKNESS
     for k in range(YAW_STEPS):
         yaw = wrap_half_turn(k * math.pi / YAW_STEPS, current)
         direction = np.array([math.cos(yaw), math.sin(yaw)])
-        for lo, hi in _segments(pads, centre, direction):
+        segments = _segments(pads, centre, direction)
+        for lo, hi in segments:
             width = hi - lo
             if width > hand.MAX_GRASP_WIDTH:
                 continue
             mid = (lo + hi) / 2.0
-            rim = not lo - 1e-3 <= 0.0 <= hi + 1e-3
+            # The rest of this object must stay outside the fingers' span.
+            if any(s_hi > mid - reach and s_lo < mid + reach for s_lo, s_hi in segments if (s_lo, s_hi) != (lo, hi)):
+                continue
             point = np.array([*(centre + mid * direction), z])
-            # The other parts of this object in the finger span must stay outside the pads.
-            others = [s for s in _segments(pads, centre, direction) if s != (lo, hi)]
-            reach = hand.PAD_GAP_OPEN / 2 + hand.FINGER_THICKNESS
-            if any(s_hi > mid - reach and s_lo < mid + reach for s_lo, s_hi in others):
+            if hand_hits(point, yaw, obstacles, sweep=approach):
                 continue
-            if _collision(point, yaw, obstacles, approach) > COLLISION_TOLERANCE:
-                continue
+            rim = not lo - 1e-3 <= 0.0 <= hi + 1e-3
             cost = abs(yaw - current) + (RIM_COST if rim else 0.0)
             cost += CLEARANCE_WEIGHT * (WANTED_CLEARANCE - _clearance(point, yaw, obstacles))
             cost += REACH_WEIGHT * max(0.0, scene.reach(point) - COMFORTABLE_REACH)
-            if place_shift is not None and place_obstacles is not None:
-                at_place = point + place_shift
-                cost += 1e6 * max(0.0, _collision(at_place, yaw, place_obstacles, approach) - COLLISION_TOLERANCE)
-                cost += REACH_WEIGHT * max(0.0, scene.reach(at_place) - COMFORTABLE_REACH)
-            if best is None or cost < best.cost:
-                best = Grasp(point=point, yaw=yaw, width=width, rim=rim, cost=cost)
-    return best
+            yield Grasp(point=point, yaw=yaw, width=width, rim=rim, cost=cost)

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from langgap.policies.oracle.geometry import overlap_volume
+from langgap.policies.oracle.geometry import Boxes, boxes_hit
 from langgap.policies.oracle.predicates import region_box, region_frame_points
 from langgap.policies.oracle.scene import Scene
 
@@ -25,33 +25,26 @@ class Spot:
     support: float
 
 
-def support_height(boxes: np.ndarray, xy: np.ndarray, below: float, radius: float = 0.0) -> float | None:
+def support_height(obstacles: Boxes, xy: np.ndarray, below: float, radius: float = 0.0) -> float | None:
     """The highest box top under `xy` (within `radius`) that is not above `below`; None if none."""
-    under = (
-        (boxes[:, 0] <= xy[0] + radius)
-        & (boxes[:, 3] >= xy[0] - radius)
-        & (boxes[:, 1] <= xy[1] + radius)
-        & (boxes[:, 4] >= xy[1] - radius)
-        & (boxes[:, 5] <= below)
-    )
-    return float(boxes[under, 5].max()) if under.any() else None
+    tops = obstacles.aabb()[:, 5]
+    under = obstacles.under(xy, radius) & (tops <= below)
+    return float(tops[under].max()) if under.any() else None
 
 
-def footprint_at(scene: Scene, obj: str, xy: np.ndarray, bottom: float) -> np.ndarray:
-    """The object's world boxes moved so its origin is over `xy` and its lowest point at `bottom`."""
-    boxes = scene.world_shape(obj).copy()
-    shift = np.array([*(xy - scene.pos(obj)[:2]), bottom - boxes[:, 2].min()])
-    boxes[:, :3] += shift
-    boxes[:, 3:] += shift
-    return boxes
+def footprint_at(scene: Scene, obj: str, xy: np.ndarray, bottom: float) -> Boxes:
+    """The object's boxes moved so its origin is over `xy` and its lowest point at `bottom`."""
+    boxes = scene.boxes(obj)
+    lowest = boxes.aabb()[:, 2].min()
+    return boxes.shifted(np.array([*(xy - scene.pos(obj)[:2]), bottom - lowest]))
 
 
 def spot_on_object(scene: Scene, obj: str, target: str) -> Spot:
     """On another object: over its origin (LIBERO checks origins within 3 cm), resting on its top."""
     xy = scene.pos(target)[:2]
-    boxes = scene.world_shape(target)
+    boxes = scene.boxes(target)
     support = support_height(boxes, xy, np.inf, radius=0.01)
-    return Spot(xy=xy, support=float(boxes[:, 5].max()) if support is None else support)
+    return Spot(xy=xy, support=float(boxes.aabb()[:, 5].max()) if support is None else support)
 
 
 def spot_in_region(scene: Scene, obj: str, region_name: str, *, inside: bool) -> Spot:
@@ -65,9 +58,9 @@ def spot_in_region(scene: Scene, obj: str, region_name: str, *, inside: bool) ->
         support = support_height(obstacles, point[:2], hi[2])
         support = max(lo[2] + 0.01, region.pos[2]) if support is None else support
         placed = footprint_at(scene, obj, point[:2], support + LIFT_GAP)
-        collision = sum(overlap_volume(box, obstacles) for box in placed)
         spread = float(np.linalg.norm(point[:2] - region.pos[:2]))
-        cost = 1e4 * collision + spread - 0.5 * _nearest_free_distance(placed, obstacles, support)
+        cost = (100.0 if boxes_hit(placed, obstacles, 0.001) else 0.0) + spread
+        cost -= 0.5 * _nearest_free_distance(placed.aabb(), obstacles.aabb(), support)
         if cost < best_cost:
             best, best_cost = Spot(xy=point[:2], support=support), cost
     return best
@@ -98,7 +91,7 @@ def flight_path(
     reaches sideways. The path rises straight up first, flies at the height each stretch needs
     and ends straight above `end`, so the last move is a vertical descent.
     """
-    obstacles = scene.obstacles(exclude=exclude)
+    obstacles = scene.obstacles(exclude=exclude).aabb()
     length = float(np.linalg.norm(end[:2] - start[:2]))
     count = max(2, int(length / PATH_SPACING) + 1)
     samples = start[None, :2] + np.linspace(0.0, 1.0, count)[:, None] * (end[:2] - start[:2])[None, :]

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from langgap.policies.oracle.geometry import quat_to_mat, transform_boxes
+from langgap.policies.oracle.geometry import Boxes, quat_to_mat
 
 
 @dataclass(frozen=True)
@@ -21,7 +21,7 @@ class Articulation:
     bbox: np.ndarray
     handle: np.ndarray
     intervals: dict[str, np.ndarray]
-    world_shape: np.ndarray  # collision boxes of the moving part as world AABBs (n, 6)
+    boxes: Boxes  # collision boxes of the moving part
 
     def target(self, state: str) -> float:
         """A qpos deep inside the interval where predicate `state` (open, close, on, off) holds."""
@@ -82,9 +82,13 @@ class Scene:
         """Collision boxes of `name` in its body frame (n, 6)."""
         return np.asarray(self.raw[f"shape/{name}"], dtype=np.float64).reshape(-1, 6)
 
+    def boxes(self, name: str) -> Boxes:
+        """Collision boxes of `name` at its current pose."""
+        return Boxes.from_local(self.shape(name), self.rot(name), self.pos(name))
+
     def world_shape(self, name: str) -> np.ndarray:
-        """Collision boxes of `name` as world AABBs (n, 6) at its current pose."""
-        return transform_boxes(self.shape(name), self.rot(name), self.pos(name))
+        """Collision boxes of `name` as world axis-aligned bounds (n, 6)."""
+        return self.boxes(name).aabb()
 
     def touches_other(self, name: str) -> bool:
         """Whether `name` touches anything except itself and the robot."""
@@ -118,18 +122,20 @@ class Scene:
                 for key in ("open", "close", "on", "off")
                 if prefix + key in self.raw
             },
-            world_shape=transform_boxes(shape, quat_to_mat(body[3:7]), np.asarray(body[:3], dtype=np.float64)),
+            boxes=Boxes.from_local(shape, quat_to_mat(body[3:7]), np.asarray(body[:3], dtype=np.float64)),
         )
 
-    def obstacles(self, exclude: tuple[str, ...] = ()) -> np.ndarray:
-        """World boxes (n, 6) of every entity's collision geometry except `exclude` (moving parts included)."""
-        boxes = [self.world_shape(e) for e in self.entities if e not in exclude]
+    def obstacles(self, exclude: tuple[str, ...] = ()) -> Boxes:
+        """Collision boxes of every entity and moving part except those of `exclude` (names or their parts)."""
+        parts = [self.boxes(e) for e in self.entities if e not in exclude]
         # Every articulated part once: a fixture's first joint is also listed under the fixture's name.
-        parts = {self.articulation(name).world_shape.tobytes(): name for name in self.articulated}
-        excluded = {
-            self.articulation(name).world_shape.tobytes()
-            for name in self.articulated
-            if any(name == e or name.startswith(e + "_") for e in exclude)
-        }
-        boxes += [np.frombuffer(key).reshape(-1, 6) for key in parts if key not in excluded]
-        return np.concatenate(boxes) if boxes else np.zeros((0, 6))
+        seen: dict[bytes, Boxes] = {}
+        excluded: set[bytes] = set()
+        for name in self.articulated:
+            boxes = self.articulation(name).boxes
+            key = boxes.centre.tobytes()
+            seen[key] = boxes
+            if any(name == e or name.startswith(e + "_") for e in exclude):
+                excluded.add(key)
+        parts += [boxes for key, boxes in seen.items() if key not in excluded]
+        return Boxes.concat(parts)

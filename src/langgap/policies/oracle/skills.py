@@ -39,8 +39,7 @@ def pick(agent: Agent, obj: str, spot: Spot | None = None) -> Program:
         scene = agent.scene
         shift = place_obstacles = None
         if spot is not None:
-            placed = footprint_at(scene, obj, spot.xy, spot.support)
-            shift = placed[0, :3] - scene.world_shape(obj)[0, :3]
+            shift = footprint_at(scene, obj, spot.xy, spot.support).centre[0] - scene.boxes(obj).centre[0]
             place_obstacles = scene.obstacles(exclude=(obj,))
         grasp = plan_grasp(scene, obj, place_shift=shift, place_obstacles=place_obstacles, approach=APPROACH)
         if grasp is None:
@@ -159,7 +158,7 @@ def turn(agent: Agent, fixture: str, state: str) -> Program:
     art = agent.scene.articulation(fixture)
     top = art.bbox[5]
     grasp_point = np.array([art.anchor[0], art.anchor[1], top - 0.015])
-    knob = art.world_shape
+    knob = art.boxes.aabb()
     grip_slab = knob[knob[:, 5] > top - 0.02]
     extent = grip_slab[:, 3:5].max(axis=0) - grip_slab[:, :2].min(axis=0)
     # Close across the knob's narrow side.
@@ -224,7 +223,7 @@ def close_door(agent: Agent, fixture: str) -> Program:
         art = agent.scene.articulation(fixture)
         if art.holds("close"):
             break
-        parts = art.world_shape
+        parts = art.boxes.aabb()
         centres = (parts[:, :3] + parts[:, 3:]) / 2.0
         arm = centres[:, :2] - art.anchor[:2]
         far = centres[np.argmax(np.linalg.norm(arm, axis=1))]
