@@ -8,6 +8,7 @@ also be served remotely. Keys (`<e>` = an object or fixture of the scene, `<s>` 
   `base_pos` (3): the robot's base (how far the arm must reach).
 * `body/<e>` (7): position + wxyz quaternion of the entity's root body.
 * `bbox/<e>` (6): world-frame axis-aligned box (min xyz, max xyz) of the entity's collision geoms.
+* `movable/<e>` (1): 1.0 for a loose object, 0.0 for a fixture.
 * `shape/<e>` (n, 6): the entity's collision geoms as boxes (min xyz, max xyz) in its root body's
   frame; for fixtures only the parts no joint moves. Static.
 * `contact/<e>` (2): whether the entity touches something other than itself and the robot, and
@@ -62,6 +63,7 @@ class _Layout:
     shapes: dict[str, np.ndarray]
     geom_entity: np.ndarray  # geom -> entity index, -1 robot, -2 other (table, walls)
     entity_names: list[str]
+    movable: dict[str, np.ndarray]
     gripper_geom: np.ndarray  # bool per geom
     sites: dict[str, tuple[int, np.ndarray]]
     joints: dict[str, int]
@@ -196,6 +198,7 @@ def _layout(env) -> _Layout:
         shapes=shapes,
         geom_entity=geom_entity,
         entity_names=names,
+        movable={name: np.array([1.0 if name in inner.objects_dict else 0.0]) for name in names},
         gripper_geom=gripper_geom,
         sites=sites,
         joints=joints,
@@ -257,6 +260,7 @@ def privileged_state(env) -> dict[str, np.ndarray]:
         if geoms.size:
             out[f"bbox/{name}"] = _union(_geom_boxes(model, data, geoms))
         out[f"shape/{name}"] = layout.shapes[name]
+        out[f"movable/{name}"] = layout.movable[name]
     for name, touch in _contacts(layout, data).items():
         out[f"contact/{name}"] = touch
     for name, (site_id, size) in layout.sites.items():

@@ -22,10 +22,12 @@ from langgap.policies.oracle.scene import Scene
 
 YAW_STEPS = 12  # candidate closing axes, every 15 degrees over a half turn
 STRIP = 0.008  # half-width of the strip of material the pads close on
-GRASP_DEPTHS = (0.023, 0.017, 0.012)  # grip site below the object's top, deepest first (the palm stays above)
+GRASP_DEPTHS = (0.027, 0.02, 0.014)  # grip site below the object's top, deepest first (the palm stays above)
 SHALLOW_COST = 20.0  # per metre of depth given up
 MIN_TIP_CLEARANCE = 0.002  # finger tips above the object's bottom (the table)
 PENETRATION_TOLERANCE = 0.0015  # metres of overlap ignored (collision boxes are conservative)
+NUDGE_LIMIT = 0.012  # the palm may brush a loose object this deep (it gets nudged), at a cost
+NUDGE_WEIGHT = 150.0  # cost per metre of such overlap
 RIM_COST = 0.6  # preference for centre grasps, in radians of wrist rotation
 CLEARANCE_WEIGHT = 20.0  # cost per metre of missing clearance around the fingers
 WANTED_CLEARANCE = 0.02
@@ -33,15 +35,23 @@ COMFORTABLE_REACH = 0.62  # horizontal distance from the robot's base beyond whi
 REACH_WEIGHT = 25.0  # cost per metre beyond the comfortable reach
 
 
+APPROACHES = (0.08, 0.05, 0.03, 0.015)  # pre-grasp heights above the grasp, highest first
+SIDE_STEP = 0.07  # a low approach enters sideways from this far
+SIDE_DIRECTIONS = 8
+SIDE_COST = 0.5
+
+
 @dataclass(frozen=True)
 class Grasp:
-    """A top-down grasp: the grip-site position, the closing yaw, and the material width between the pads."""
+    """A top-down grasp: the grip-site position, the closing yaw, the material width between the pads,
+    and the waypoints that lead the open hand to it (the first is reached from straight above)."""
 
     point: np.ndarray
     yaw: float
     width: float
     rim: bool
     cost: float
+    entry: tuple[np.ndarray, ...] = ()
 
     @property
     def rot(self) -> np.ndarray:
@@ -89,20 +99,54 @@ def pad_span(z: float) -> tuple[float, float]:
 
 def hand_boxes(point: np.ndarray, yaw: float, *, width: float = hand.PAD_GAP_OPEN, sweep: float = 0.0) -> Boxes:
     """The fingers and the palm of a top-down gripper at `point`, swept up by `sweep` (its approach)."""
-    local = np.concatenate([hand.finger_boxes(width), hand.palm_box()])
+    local = np.concatenate([hand.finger_boxes(width), hand.palm_boxes()])
     local[:, 2] -= sweep  # the site frame's z points down: sweeping up extends the boxes to lower z
     return Boxes.from_local(local, top_down(yaw), point)
 
 
-def hand_hits(point: np.ndarray, yaw: float, obstacles: Boxes, *, sweep: float = 0.0, grow: float = 0.0) -> bool:
-    """Whether the open hand at `point` (swept down from `sweep` above) touches `obstacles`."""
+def hand_depth(point: np.ndarray, yaw: float, obstacles: Boxes, *, sweep: float = 0.0, grow: float = 0.0) -> float:
+    """How deep the open hand at `point` (swept down from `sweep` above) overlaps `obstacles` (<= 0: clear)."""
     boxes = hand_boxes(point, yaw, sweep=sweep)
+    deepest = -np.inf
     for index, (centre, half, rot) in enumerate(zip(boxes.centre, boxes.half, boxes.rot, strict=True)):
         margin = grow if index < 2 else 0.0  # only the fingers are grown when measuring clearance
-        grown = half + np.array([margin, margin, 0.0])
-        if np.any(penetration(centre, grown, rot, obstacles) > PENETRATION_TOLERANCE):
-            return True
-    return False
+        depth = penetration(centre, half + np.array([margin, margin, 0.0]), rot, obstacles)
+        if len(depth):
+            deepest = max(deepest, float(depth.max()))
+    return deepest
+
+
+def hand_hits(point: np.ndarray, yaw: float, obstacles: Boxes, *, sweep: float = 0.0, grow: float = 0.0) -> bool:
+    """Whether the open hand at `point` (swept down from `sweep` above) touches `obstacles`."""
+    return hand_depth(point, yaw, obstacles, sweep=sweep, grow=grow) > PENETRATION_TOLERANCE
+
+
+def approach_path(
+    point: np.ndarray, yaw: float, obstacles: Boxes, approach: float, lowest: float = 0.0
+) -> tuple[np.ndarray, ...] | None:
+    """Waypoints leading the open hand down to `point`, or None if it cannot get there.
+
+    Straight down from `approach` above when that is clear; otherwise down to the highest clear
+    pre-grasp height (at least `lowest`, where the finger tips clear the object) from a point
+    beside it, then sideways (something overhangs the object, e.g. an open drawer).
+    """
+    if not hand_hits(point, yaw, obstacles, sweep=approach):
+        return (point + np.array([0.0, 0.0, approach]),)
+    for height in APPROACHES[1:]:
+        if height < lowest or hand_hits(point, yaw, obstacles, sweep=height):
+            continue
+        low = point + np.array([0.0, 0.0, height])
+        for k in range(SIDE_DIRECTIONS):
+            angle = 2 * math.pi * k / SIDE_DIRECTIONS
+            side = low + SIDE_STEP * np.array([math.cos(angle), math.sin(angle), 0.0])
+            if hand_hits(side, yaw, obstacles, sweep=approach):
+                continue
+            steps = np.linspace(0.0, 1.0, 5)[1:-1]
+            if any(hand_hits(side + t * (low - side), yaw, obstacles) for t in steps):
+                continue
+            return (side + np.array([0.0, 0.0, approach]), side, low)
+        return None
+    return None
 
 
 def _clearance(point: np.ndarray, yaw: float, obstacles: Boxes) -> float:
@@ -129,11 +173,12 @@ def plan_grasp(
     """
     boxes = scene.boxes(obj)
     bounds = boxes.aabb()
-    others = scene.obstacles(exclude=(obj,))
+    fixed = scene.obstacles(exclude=(obj,), fixtures_only=True)
+    loose = Boxes.concat([scene.boxes(e) for e in scene.entities if e != obj and scene.movable(e)])
     best: Grasp | None = None
     for depth in GRASP_DEPTHS:
         z = grasp_height(bounds, depth)
-        for grasp in _grasps_at(scene, boxes, bounds, others, z, approach):
+        for grasp in _grasps_at(scene, boxes, bounds, fixed, loose, z, approach):
             cost = grasp.cost + SHALLOW_COST * (GRASP_DEPTHS[0] - depth)
             if place_shift is not None and place_obstacles is not None:
                 at_place = grasp.point + place_shift
@@ -141,14 +186,17 @@ def plan_grasp(
                     cost += 10.0  # still possible, but only if nothing else is
                 cost += REACH_WEIGHT * max(0.0, scene.reach(at_place) - COMFORTABLE_REACH)
             if best is None or cost < best.cost:
-                best = Grasp(point=grasp.point, yaw=grasp.yaw, width=grasp.width, rim=grasp.rim, cost=cost)
+                best = Grasp(grasp.point, grasp.yaw, grasp.width, grasp.rim, cost, grasp.entry)
         if best is not None:
             return best
     return best
 
 
-def _grasps_at(scene: Scene, boxes: Boxes, bounds: np.ndarray, others: Boxes, z: float, approach: float):
-    """Collision-free grasps with the grip site at height `z`, each with its cost before placement."""
+def _grasps_at(scene: Scene, boxes: Boxes, bounds: np.ndarray, fixed: Boxes, loose: Boxes, z: float, approach: float):
+    """Grasps with the grip site at height `z` clear of fixtures, each with its cost before placement.
+
+    The hand may brush loose objects (they get nudged) up to NUDGE_LIMIT deep, at a cost.
+    """
     pad_lo, pad_hi = pad_span(z)
     at_pads = (bounds[:, 2] < pad_hi) & (bounds[:, 5] > pad_lo)
     if not at_pads.any():
@@ -157,7 +205,8 @@ def _grasps_at(scene: Scene, boxes: Boxes, bounds: np.ndarray, others: Boxes, z:
     pad_bounds = bounds[at_pads]
     centre = (pad_bounds[:, :2].min(axis=0) + pad_bounds[:, 3:5].max(axis=0)) / 2.0
     below = bounds[:, 5] <= pad_lo  # e.g. a bowl's floor under the fingers
-    obstacles = Boxes.concat([others, boxes.select(below)])
+    obstacles = Boxes.concat([fixed, boxes.select(below)])
+    everything = Boxes.concat([obstacles, loose])
     current = closing_yaw(scene.eef_mat)
     reach = hand.PAD_GAP_OPEN / 2 + hand.FINGER_THICKNESS
     for k in range(YAW_STEPS):
@@ -173,10 +222,15 @@ def _grasps_at(scene: Scene, boxes: Boxes, bounds: np.ndarray, others: Boxes, z:
             if any(s_hi > mid - reach and s_lo < mid + reach for s_lo, s_hi in segments if (s_lo, s_hi) != (lo, hi)):
                 continue
             point = np.array([*(centre + mid * direction), z])
-            if hand_hits(point, yaw, obstacles, sweep=approach):
+            entry = approach_path(point, yaw, obstacles, approach, lowest=bounds[:, 5].max() - z + hand.TIP + 0.005)
+            if entry is None:
+                continue
+            nudge = max(0.0, hand_depth(point, yaw, loose, sweep=entry[-1][2] - z))
+            if nudge > NUDGE_LIMIT:
                 continue
             rim = not lo - 1e-3 <= 0.0 <= hi + 1e-3
-            cost = abs(yaw - current) + (RIM_COST if rim else 0.0)
-            cost += CLEARANCE_WEIGHT * (WANTED_CLEARANCE - _clearance(point, yaw, obstacles))
+            cost = abs(yaw - current) + (RIM_COST if rim else 0.0) + NUDGE_WEIGHT * nudge
+            cost += SIDE_COST * (len(entry) > 1)
+            cost += CLEARANCE_WEIGHT * (WANTED_CLEARANCE - _clearance(point, yaw, everything))
             cost += REACH_WEIGHT * max(0.0, scene.reach(point) - COMFORTABLE_REACH)
-            yield Grasp(point=point, yaw=yaw, width=width, rim=rim, cost=cost)
+            yield Grasp(point=point, yaw=yaw, width=width, rim=rim, cost=cost, entry=entry)

@@ -27,6 +27,8 @@ INTEGRAL_GAIN = 0.3
 MAX_BIAS = 0.03
 STALL_STEPS = 10
 STALL_PROGRESS = 0.002
+LARGE_TURN = 0.8  # radians; larger reorientations are done near the base
+TURNING_REACH = 0.55  # horizontal distance from the base where the arm turns freely
 
 
 class Agent:
@@ -117,6 +119,24 @@ def travel(
     for waypoint in [] if path is None else path:
         yield from move(agent, waypoint, rot=rot, grip=grip, tol=PASS_TOLERANCE, steps=60, through=True)
     return (yield from move(agent, pos, rot=rot, grip=grip, tol=tol, speed=speed))
+
+
+def reorient(agent: Agent, rot: np.ndarray) -> Program:
+    """Turn the hand to `rot` before a motion, first drawing it nearer the base if the turn is large.
+
+    A large turn with the arm stretched out can straighten the elbow against its limit, where the
+    controller no longer moves the hand; near the base the arm has room to turn.
+    """
+    turn = float(np.linalg.norm(mat_to_axis_angle(rot @ agent.scene.eef_mat.T)))
+    if turn < LARGE_TURN:
+        return True
+    here = agent.scene.eef_pos
+    outward = here[:2] - agent.scene.base_pos[:2]
+    distance = float(np.linalg.norm(outward))
+    if distance > TURNING_REACH:
+        staging = np.array([*(agent.scene.base_pos[:2] + outward / distance * TURNING_REACH), here[2] + 0.03])
+        yield from move(agent, staging, rot=agent.scene.eef_mat.copy(), tol=PASS_TOLERANCE, steps=30, through=True)
+    return (yield from move(agent, agent.scene.eef_pos.copy(), rot=rot, tol=0.03, steps=30))
 
 
 def hold(agent: Agent) -> Program:

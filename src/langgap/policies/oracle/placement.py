@@ -15,6 +15,9 @@ EDGE_MARGIN = 0.012  # keep the object's origin this far inside a region
 GRID = 9  # candidate spots per region side
 LIFT_GAP = 0.004  # a candidate footprint is tested this far above the support
 PATH_SPACING = 0.05
+WRIST_HEIGHT = 0.2  # the hand and wrist rise this far above the grip site
+ESCAPE_DISTANCES = (0.05, 0.08, 0.12)
+HAND_HALF_WIDTH = 0.03
 
 
 @dataclass(frozen=True)
@@ -84,12 +87,14 @@ def flight_path(
     exclude: tuple[str, ...] = (),
     hang: float = 0.0,
     reach: float = 0.05,
+    footprint: np.ndarray | None = None,
 ) -> np.ndarray:
     """Waypoints (n, 3) from `start` to above `end` that keep a load clear of every obstacle.
 
     `hang` is how far the load (or the fingers) reaches below the grip site, `reach` how far it
-    reaches sideways. The path rises straight up first, flies at the height each stretch needs
-    and ends straight above `end`, so the last move is a vertical descent.
+    reaches sideways; `footprint` (x/y lo, x/y hi) is its extent at the start. The path slides out
+    from under anything overhanging the load, rises, flies at the height each stretch needs and
+    ends straight above `end`, so the last move is a vertical descent.
     """
     obstacles = scene.obstacles(exclude=exclude).aabb()
     length = float(np.linalg.norm(end[:2] - start[:2]))
@@ -104,4 +109,33 @@ def flight_path(
     heights[0] = max(heights[0], start[2])
     path = [np.array([*samples[0], heights[0]])]
     path += [np.array([*xy, z]) for xy, z in zip(samples[1:], heights[1:], strict=True)]
-    return np.array(path)
+    if footprint is None:
+        footprint = np.concatenate([start[:2] - HAND_HALF_WIDTH, start[:2] + HAND_HALF_WIDTH])
+    escape = _escape(obstacles, start, footprint, float(heights.max()), hang)
+    return np.array(([escape] if escape is not None else []) + path)
+
+
+def _overhead(obstacles: np.ndarray, footprint: np.ndarray, low: float, high: float) -> bool:
+    """Whether any obstacle over the rectangle `footprint` (x/y lo, x/y hi) occupies heights in (low, high)."""
+    over = np.all((obstacles[:, :2] < footprint[2:]) & (obstacles[:, 3:5] > footprint[:2]), axis=1)
+    return bool(np.any(over & (obstacles[:, 2] < high) & (obstacles[:, 5] > low)))
+
+
+def _escape(obstacles: np.ndarray, start: np.ndarray, footprint: np.ndarray, cruise: float, hang: float):
+    """A point beside `start`, at its height, from which the load can rise: None if it can rise where it is.
+
+    Something may overhang the load (an open drawer above a bowl); then slide out from under it first.
+    """
+    low, high = start[2] - hang + 0.005, cruise + WRIST_HEIGHT
+    if not _overhead(obstacles, footprint, start[2] + 0.01, high):
+        return None
+    for distance in ESCAPE_DISTANCES:
+        for k in range(8):
+            shift = distance * np.array([np.cos(2 * np.pi * k / 8), np.sin(2 * np.pi * k / 8)])
+            if _overhead(obstacles, footprint + np.tile(shift, 2), start[2] + 0.01, high):
+                continue
+            steps = np.linspace(0.0, 1.0, 6)[1:]
+            if any(_overhead(obstacles, footprint + np.tile(t * shift, 2), low, start[2] + 0.01) for t in steps):
+                continue
+            return np.array([*(start[:2] + shift), start[2]])
+    return None

@@ -83,8 +83,7 @@ def _achieve(agent: Agent, predicate: Predicate) -> Program:
             return (yield from skills.push_to(agent, obj, spot))
         if not (yield from skills.pick(agent, obj, spot)):
             return False
-        exclude = (target,) if scene.has_entity(target) else ()
-        return (yield from skills.place(agent, obj, spot, exclude=exclude))
+        return (yield from skills.place(agent, obj, spot))
     (part,) = args
     art = scene.articulation(part)
     if name in ("Turnon", "Turnoff"):

@@ -9,6 +9,9 @@ import numpy as np
 from langgap.policies.oracle.geometry import Boxes, quat_to_mat
 
 
+INTERVAL_MARGIN = 0.15
+
+
 @dataclass(frozen=True)
 class Articulation:
     """One articulated part (a drawer, a door, a knob) as the privileged state describes it."""
@@ -24,12 +27,18 @@ class Articulation:
     boxes: Boxes  # collision boxes of the moving part
 
     def target(self, state: str) -> float:
-        """A qpos deep inside the interval where predicate `state` (open, close, on, off) holds."""
+        """A qpos safely inside the interval where `state` (open, close, on, off) holds.
+
+        It is the interval's boundary nearest the other states, moved 15 % into the interval: far
+        enough to hold after release, no further than needed (an opened drawer sticks out less).
+        """
         lo, hi = self.intervals[state]
         others = [v.mean() for k, v in self.intervals.items() if k != state]
-        # Aim at the end of the interval farthest from the opposite state, a little inside the limit.
-        far_end = hi if not others or abs(hi - np.mean(others)) > abs(lo - np.mean(others)) else lo
-        return float(far_end + (np.mean([lo, hi]) - far_end) * 0.1)
+        if not others:
+            return float((lo + hi) / 2.0)
+        reference = float(np.mean(others))
+        inner = lo if abs(lo - reference) < abs(hi - reference) else hi
+        return float(inner + (hi + lo - 2 * inner) * INTERVAL_MARGIN)
 
     def holds(self, state: str) -> bool:
         lo, hi = self.intervals[state]
@@ -90,6 +99,10 @@ class Scene:
         """Collision boxes of `name` as world axis-aligned bounds (n, 6)."""
         return self.boxes(name).aabb()
 
+    def movable(self, name: str) -> bool:
+        """A loose object (True) or a fixture (False)."""
+        return bool(self.raw[f"movable/{name}"][0] > 0.5)
+
     def touches_other(self, name: str) -> bool:
         """Whether `name` touches anything except itself and the robot."""
         return bool(self.raw[f"contact/{name}"][0] > 0.5)
@@ -125,9 +138,9 @@ class Scene:
             boxes=Boxes.from_local(shape, quat_to_mat(body[3:7]), np.asarray(body[:3], dtype=np.float64)),
         )
 
-    def obstacles(self, exclude: tuple[str, ...] = ()) -> Boxes:
+    def obstacles(self, exclude: tuple[str, ...] = (), *, fixtures_only: bool = False) -> Boxes:
         """Collision boxes of every entity and moving part except those of `exclude` (names or their parts)."""
-        parts = [self.boxes(e) for e in self.entities if e not in exclude]
+        parts = [self.boxes(e) for e in self.entities if e not in exclude and not (fixtures_only and self.movable(e))]
         # Every articulated part once: a fixture's first joint is also listed under the fixture's name.
         seen: dict[bytes, Boxes] = {}
         excluded: set[bytes] = set()

@@ -14,7 +14,7 @@ from langgap.policies.oracle import hand
 from langgap.policies.oracle.control import CLOSE, OPEN
 from langgap.policies.oracle.geometry import closing_yaw, rotation_about, top_down, wrap_half_turn
 from langgap.policies.oracle.grasps import plan_grasp
-from langgap.policies.oracle.motion import PASS_TOLERANCE, Agent, Program, actuate, move, travel
+from langgap.policies.oracle.motion import PASS_TOLERANCE, Agent, Program, actuate, move, reorient, travel
 from langgap.policies.oracle.placement import Spot, flight_path, footprint_at
 
 APPROACH = 0.08  # pre-grasp height above the grasp point
@@ -44,9 +44,12 @@ def pick(agent: Agent, obj: str, spot: Spot | None = None) -> Program:
         grasp = plan_grasp(scene, obj, place_shift=shift, place_obstacles=place_obstacles, approach=APPROACH)
         if grasp is None:
             return False
-        above = grasp.point + np.array([0.0, 0.0, APPROACH])
-        path = flight_path(scene, scene.eef_pos, above, hang=hand.TIP, reach=HAND_REACH)
-        yield from travel(agent, above, path=path, rot=grasp.rot, grip=OPEN, tol=0.01)
+        first = grasp.entry[0]
+        yield from reorient(agent, grasp.rot)
+        path = flight_path(agent.scene, agent.scene.eef_pos, first, hang=hand.TIP, reach=HAND_REACH)
+        yield from travel(agent, first, path=path, rot=grasp.rot, grip=OPEN, tol=0.01)
+        for waypoint in grasp.entry[1:]:
+            yield from move(agent, waypoint, tol=0.01, steps=30, speed=0.6)
         start_z = agent.scene.pos(obj)[2]
         yield from move(agent, grasp.point, tol=GRASP_TOLERANCE, steps=40, speed=0.5)
         yield from actuate(agent, CLOSE)
@@ -59,7 +62,7 @@ def pick(agent: Agent, obj: str, spot: Spot | None = None) -> Program:
     return False
 
 
-def place(agent: Agent, obj: str, spot: Spot, *, exclude: tuple[str, ...] = ()) -> Program:
+def place(agent: Agent, obj: str, spot: Spot) -> Program:
     """Carry the held `obj` over `spot`, lower it until it touches down, release it and back off."""
     scene = agent.scene
     hang = _hang(agent, obj)
@@ -68,7 +71,8 @@ def place(agent: Agent, obj: str, spot: Spot, *, exclude: tuple[str, ...] = ()) 
     above_z = spot.support + hang + PLACE_CLEARANCE
     reach = float(np.max(np.abs(scene.bbox(obj)[:2] - scene.pos(obj)[:2]))) + 0.02
     above = np.array([*goal_xy, above_z])
-    path = flight_path(scene, scene.eef_pos, above, exclude=(obj, *exclude), hang=hang, reach=reach)
+    footprint = scene.bbox(obj)[[0, 1, 3, 4]] + np.array([-0.01, -0.01, 0.01, 0.01])
+    path = flight_path(scene, scene.eef_pos, above, exclude=(obj,), hang=hang, reach=reach, footprint=footprint)
     yield from travel(agent, above, path=path, tol=0.012)
     floor = spot.support + hang
     for _ in range(60):
@@ -115,17 +119,23 @@ def pull_open(agent: Agent, region: str) -> Program:
     rot = _facing(direction, agent.scene.eef_mat)
     grasp = art.handle + hand.PAD_CENTRE * direction
     front = grasp + 0.10 * direction
+    yield from reorient(agent, rot)
     path = flight_path(agent.scene, agent.scene.eef_pos, front, hang=hand.PALM_HALF_LENGTH, reach=HAND_REACH)
     yield from travel(agent, front, path=path, rot=rot, grip=OPEN, tol=0.01)
     yield from move(agent, grasp, tol=0.006, steps=40, speed=0.5)
     yield from actuate(agent, CLOSE)
     goal = art.target("open")
+    start = art.qpos
     for _ in range(80):
         art = agent.scene.articulation(region)
-        if art.holds("open") and abs(art.qpos - goal) < 0.01:
+        left = (goal - art.qpos) / (goal - start)
+        if left <= 0.03:
             break
-        target = art.handle + (goal - art.qpos) * art.axis + (hand.PAD_CENTRE + 0.01) * direction
-        yield agent.command(target, speed=0.6)
+        target = art.handle + (goal - art.qpos) * art.axis + hand.PAD_CENTRE * direction
+        # Slow down near the goal so the drawer does not slide on past it.
+        speed = float(np.clip(abs(goal - art.qpos) / 0.03, 0.15, 0.6))
+        yield agent.command(target, speed=speed)
+    yield from move(agent, agent.scene.eef_pos, tol=0.002, steps=3)  # let the drawer stop with the hand
     yield from actuate(agent, OPEN)
     yield from move(agent, agent.scene.eef_pos + 0.08 * direction, tol=0.02, steps=20)
     return agent.scene.articulation(region).holds("open")
@@ -139,8 +149,10 @@ def push_closed(agent: Agent, region: str) -> Program:
     rot = top_down(yaw)
     contact = art.handle + direction * (hand.FINGER_DEPTH + 0.02)
     contact[2] = art.handle[2] + hand.TIP
-    path = flight_path(agent.scene, agent.scene.eef_pos, contact + np.array([0.0, 0.0, 0.05]), hang=hand.TIP, reach=HAND_REACH)
     yield from actuate(agent, CLOSE, max_steps=8)
+    yield from reorient(agent, rot)
+    above = contact + np.array([0.0, 0.0, 0.05])
+    path = flight_path(agent.scene, agent.scene.eef_pos, above, hang=hand.TIP, reach=HAND_REACH)
     yield from travel(agent, contact, path=path, rot=rot, grip=CLOSE, tol=0.01)
     for _ in range(60):
         art = agent.scene.articulation(region)
@@ -165,6 +177,7 @@ def turn(agent: Agent, fixture: str, state: str) -> Program:
     yaw = 0.0 if extent[0] < extent[1] else math.pi / 2
     yaw = wrap_half_turn(yaw, closing_yaw(agent.scene.eef_mat))
     above = grasp_point + np.array([0.0, 0.0, APPROACH])
+    yield from reorient(agent, top_down(yaw))
     path = flight_path(agent.scene, agent.scene.eef_pos, above, hang=hand.TIP, reach=HAND_REACH)
     yield from travel(agent, above, path=path, rot=top_down(yaw), grip=OPEN, tol=0.01)
     yield from move(agent, grasp_point, tol=0.004, steps=40, speed=0.4)
@@ -197,6 +210,8 @@ def push_to(agent: Agent, obj: str, spot: Spot, *, tolerance: float = 0.01) -> P
         yaw = wrap_half_turn(math.atan2(direction[1], direction[0]) + math.pi / 2, closing_yaw(scene.eef_mat))
         z = box[2] + hand.TIP + 0.006
         start = np.array([*(scene.pos(obj)[:2] - direction * (radius + hand.FINGER_DEPTH + 0.02)), z])
+        yield from reorient(agent, top_down(yaw))
+        scene = agent.scene
         path = flight_path(scene, scene.eef_pos, start + np.array([0.0, 0.0, 0.05]), hang=hand.TIP, reach=HAND_REACH)
         yield from travel(agent, start, path=path, rot=top_down(yaw), grip=CLOSE, tol=0.008)
         for _ in range(80):
