@@ -28,7 +28,8 @@ MIN_TIP_CLEARANCE = 0.002  # finger tips above the object's bottom (the table)
 PENETRATION_TOLERANCE = 0.0015  # metres of overlap ignored (collision boxes are conservative)
 NUDGE_LIMIT = 0.012  # the palm may brush a loose object this deep (it gets nudged), at a cost
 NUDGE_WEIGHT = 150.0  # cost per metre of such overlap
-RIM_COST = 0.6  # preference for centre grasps, in radians of wrist rotation
+OFF_CENTRE_WEIGHT = 13.0  # cost per metre between the grasp and the middle of the object (radians of wrist turn)
+LINE_SPACING = 0.01  # between parallel grasp lines
 CLEARANCE_WEIGHT = 20.0  # cost per metre of missing clearance around the fingers
 WANTED_CLEARANCE = 0.02
 COMFORTABLE_REACH = 0.62  # horizontal distance from the robot's base beyond which the arm nears full stretch
@@ -157,6 +158,16 @@ def _clearance(point: np.ndarray, yaw: float, obstacles: Boxes) -> float:
     return WANTED_CLEARANCE
 
 
+@dataclass(frozen=True)
+class _Candidate:
+    point: np.ndarray
+    yaw: float
+    width: float
+    rim: bool
+    cost: float  # the part of the cost known before any collision check
+    own: Boxes  # the object's own parts the hand must not touch
+
+
 def plan_grasp(
     scene: Scene,
     obj: str,
@@ -169,68 +180,102 @@ def plan_grasp(
 
     `place_shift` moves the object from its current pose to where it will be released; with
     `place_obstacles` the hand is also checked there, so a grasp that would hit the target's
-    surroundings (a drawer's walls, a basket's rim) is avoided.
+    surroundings (a drawer's walls, a basket's rim) is avoided. Candidates are checked for
+    collisions cheapest first, and the search stops once no unchecked one can win.
     """
     boxes = scene.boxes(obj)
     bounds = boxes.aabb()
     fixed = scene.obstacles(exclude=(obj,), fixtures_only=True)
     loose = Boxes.concat([scene.boxes(e) for e in scene.entities if e != obj and scene.movable(e)])
+    candidates = sorted(_candidates(scene, boxes, bounds), key=lambda c: c.cost)
+    lowest = {}
     best: Grasp | None = None
-    for depth in GRASP_DEPTHS:
-        z = grasp_height(bounds, depth)
-        for grasp in _grasps_at(scene, boxes, bounds, fixed, loose, z, approach):
-            cost = grasp.cost + SHALLOW_COST * (GRASP_DEPTHS[0] - depth)
-            if place_shift is not None and place_obstacles is not None:
-                at_place = grasp.point + place_shift
-                if hand_hits(at_place, grasp.yaw, place_obstacles, sweep=approach):
-                    cost += 10.0  # still possible, but only if nothing else is
-                cost += REACH_WEIGHT * max(0.0, scene.reach(at_place) - COMFORTABLE_REACH)
-            if best is None or cost < best.cost:
-                best = Grasp(grasp.point, grasp.yaw, grasp.width, grasp.rim, cost, grasp.entry)
-        if best is not None:
-            return best
+    for candidate in candidates:
+        if best is not None and candidate.cost >= best.cost:
+            break
+        z = candidate.point[2]
+        if z not in lowest:
+            lowest[z] = bounds[:, 5].max() - z + hand.TIP + 0.005
+        grasp = _evaluate(scene, candidate, fixed, loose, approach, lowest[z])
+        if grasp is None:
+            continue
+        cost = grasp.cost
+        if place_shift is not None and place_obstacles is not None:
+            at_place = grasp.point + place_shift
+            if hand_hits(at_place, grasp.yaw, place_obstacles, sweep=approach):
+                cost += 10.0  # still possible, but only if nothing else is
+            cost += REACH_WEIGHT * max(0.0, scene.reach(at_place) - COMFORTABLE_REACH)
+        if best is None or cost < best.cost:
+            best = Grasp(grasp.point, grasp.yaw, grasp.width, grasp.rim, cost, grasp.entry)
     return best
 
 
-def _grasps_at(scene: Scene, boxes: Boxes, bounds: np.ndarray, fixed: Boxes, loose: Boxes, z: float, approach: float):
-    """Grasps with the grip site at height `z` clear of fixtures, each with its cost before placement.
+def _candidates(scene: Scene, boxes: Boxes, bounds: np.ndarray):
+    """Every grasp line (yaw, offset) at every depth whose material between the pads is narrow enough."""
+    current = closing_yaw(scene.eef_mat)
+    reach = hand.PAD_GAP_OPEN / 2 + hand.FINGER_THICKNESS
+    corners_all = footprint_corners(boxes)
+    for depth in GRASP_DEPTHS:
+        z = grasp_height(bounds, depth)
+        pad_lo, pad_hi = pad_span(z)
+        at_pads = (bounds[:, 2] < pad_hi) & (bounds[:, 5] > pad_lo)
+        if not at_pads.any():
+            continue
+        pads = boxes.select(at_pads)
+        pad_bounds = bounds[at_pads]
+        centre = (pad_bounds[:, :2].min(axis=0) + pad_bounds[:, 3:5].max(axis=0)) / 2.0
+        standing = bounds[:, 5] > pad_lo
+        below = boxes.select(~standing)  # e.g. a bowl's floor under the fingers
+        for k in range(YAW_STEPS):
+            yaw = wrap_half_turn(k * math.pi / YAW_STEPS, current)
+            direction = np.array([math.cos(yaw), math.sin(yaw)])
+            normal = np.array([-direction[1], direction[0]])
+            across = (footprint_corners(pads) - centre) @ normal
+            offsets = np.arange(across.min() + STRIP, across.max() - STRIP + 1e-9, LINE_SPACING)
+            for offset in np.unique(np.round(np.append(offsets, 0.0), 4)):
+                origin = centre + offset * normal
+                segments = _segments(pads, origin, direction)
+                for lo, hi in segments:
+                    width = hi - lo
+                    mid = (lo + hi) / 2.0
+                    if width > hand.MAX_GRASP_WIDTH or any(
+                        s_hi > mid - reach and s_lo < mid + reach for s_lo, s_hi in segments if (s_lo, s_hi) != (lo, hi)
+                    ):
+                        continue
+                    point = np.array([*(origin + mid * direction), z])
+                    # The object's parts outside the strip between the pads are obstacles for the hand.
+                    rel = corners_all - origin
+                    along, side = rel @ direction, rel @ normal
+                    gripped = (
+                        (side.min(axis=1) <= STRIP)
+                        & (side.max(axis=1) >= -STRIP)
+                        & (along.min(axis=1) <= hi)
+                        & (along.max(axis=1) >= lo)
+                    )
+                    own = Boxes.concat([below, boxes.select(standing & ~gripped)])
+                    off_centre = float(np.linalg.norm(point[:2] - centre))
+                    centred = lo - 1e-3 <= float(np.dot(centre - origin, direction)) <= hi + 1e-3
+                    rim = not centred or abs(offset) > STRIP
+                    cost = abs(yaw - current) + OFF_CENTRE_WEIGHT * off_centre + SHALLOW_COST * (GRASP_DEPTHS[0] - depth)
+                    cost += REACH_WEIGHT * max(0.0, scene.reach(point) - COMFORTABLE_REACH)
+                    yield _Candidate(point=point, yaw=yaw, width=width, rim=rim, cost=cost, own=own)
+
+
+def _evaluate(
+    scene: Scene, candidate: _Candidate, fixed: Boxes, loose: Boxes, approach: float, lowest: float
+) -> Grasp | None:
+    """The candidate as a grasp with its full cost, or None if the hand cannot get there.
 
     The hand may brush loose objects (they get nudged) up to NUDGE_LIMIT deep, at a cost.
     """
-    pad_lo, pad_hi = pad_span(z)
-    at_pads = (bounds[:, 2] < pad_hi) & (bounds[:, 5] > pad_lo)
-    if not at_pads.any():
-        return
-    pads = boxes.select(at_pads)
-    pad_bounds = bounds[at_pads]
-    centre = (pad_bounds[:, :2].min(axis=0) + pad_bounds[:, 3:5].max(axis=0)) / 2.0
-    below = bounds[:, 5] <= pad_lo  # e.g. a bowl's floor under the fingers
-    obstacles = Boxes.concat([fixed, boxes.select(below)])
-    everything = Boxes.concat([obstacles, loose])
-    current = closing_yaw(scene.eef_mat)
-    reach = hand.PAD_GAP_OPEN / 2 + hand.FINGER_THICKNESS
-    for k in range(YAW_STEPS):
-        yaw = wrap_half_turn(k * math.pi / YAW_STEPS, current)
-        direction = np.array([math.cos(yaw), math.sin(yaw)])
-        segments = _segments(pads, centre, direction)
-        for lo, hi in segments:
-            width = hi - lo
-            if width > hand.MAX_GRASP_WIDTH:
-                continue
-            mid = (lo + hi) / 2.0
-            # The rest of this object must stay outside the fingers' span.
-            if any(s_hi > mid - reach and s_lo < mid + reach for s_lo, s_hi in segments if (s_lo, s_hi) != (lo, hi)):
-                continue
-            point = np.array([*(centre + mid * direction), z])
-            entry = approach_path(point, yaw, obstacles, approach, lowest=bounds[:, 5].max() - z + hand.TIP + 0.005)
-            if entry is None:
-                continue
-            nudge = max(0.0, hand_depth(point, yaw, loose, sweep=entry[-1][2] - z))
-            if nudge > NUDGE_LIMIT:
-                continue
-            rim = not lo - 1e-3 <= 0.0 <= hi + 1e-3
-            cost = abs(yaw - current) + (RIM_COST if rim else 0.0) + NUDGE_WEIGHT * nudge
-            cost += SIDE_COST * (len(entry) > 1)
-            cost += CLEARANCE_WEIGHT * (WANTED_CLEARANCE - _clearance(point, yaw, everything))
-            cost += REACH_WEIGHT * max(0.0, scene.reach(point) - COMFORTABLE_REACH)
-            yield Grasp(point=point, yaw=yaw, width=width, rim=rim, cost=cost, entry=entry)
+    point, yaw = candidate.point, candidate.yaw
+    obstacles = Boxes.concat([fixed, candidate.own])
+    entry = approach_path(point, yaw, obstacles, approach, lowest=lowest)
+    if entry is None:
+        return None
+    nudge = max(0.0, hand_depth(point, yaw, loose, sweep=entry[-1][2] - point[2]))
+    if nudge > NUDGE_LIMIT:
+        return None
+    cost = candidate.cost + NUDGE_WEIGHT * nudge + SIDE_COST * (len(entry) > 1)
+    cost += CLEARANCE_WEIGHT * (WANTED_CLEARANCE - _clearance(point, yaw, Boxes.concat([obstacles, loose])))
+    return Grasp(point=point, yaw=yaw, width=candidate.width, rim=candidate.rim, cost=cost, entry=entry)

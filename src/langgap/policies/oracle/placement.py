@@ -107,6 +107,8 @@ def flight_path(
     tops = np.where(near, obstacles[None, :, 5], -np.inf).max(axis=1)
     heights = np.maximum(tops + hang + CLEARANCE, end[2])
     heights[0] = max(heights[0], start[2])
+    # No dips between two higher stretches: rise once, cross, descend once.
+    heights = np.minimum(np.maximum.accumulate(heights), np.maximum.accumulate(heights[::-1])[::-1])
     path = [np.array([*samples[0], heights[0]])]
     path += [np.array([*xy, z]) for xy, z in zip(samples[1:], heights[1:], strict=True)]
     if footprint is None:

@@ -25,6 +25,7 @@ RETREAT = 0.08
 PLACE_CLEARANCE = 0.03  # released objects are lowered from this high above the support
 PLACE_SPEED = 0.35
 PICK_ATTEMPTS = 3
+PLACE_STALL = 5  # steps without descending after which the load is released where it is
 HAND_REACH = 0.06  # how far the open fingers reach sideways from the grip site
 
 
@@ -75,13 +76,17 @@ def place(agent: Agent, obj: str, spot: Spot) -> Program:
     path = flight_path(scene, scene.eef_pos, above, exclude=(obj,), hang=hang, reach=reach, footprint=footprint)
     yield from travel(agent, above, path=path, tol=0.012)
     floor = spot.support + hang
+    heights: list[float] = []
     for _ in range(60):
         scene = agent.scene
         if not scene.touches_gripper(obj):
             break  # dropped on the way: let it be
-        correction = spot.xy - scene.pos(obj)[:2]
         if scene.eef_pos[2] <= floor + 0.002 or (scene.touches_other(obj) and scene.eef_pos[2] < above_z - 0.01):
             break
+        heights.append(float(scene.eef_pos[2]))
+        if len(heights) > PLACE_STALL and heights[-PLACE_STALL - 1] - heights[-1] < 0.002:
+            break  # the hand rests on something (a basket's rim): release from here
+        correction = spot.xy - scene.pos(obj)[:2]
         target = np.array([*(scene.eef_pos[:2] + correction), floor - 0.01])
         yield agent.command(target, speed=PLACE_SPEED)
     yield from actuate(agent, OPEN, min_steps=5)
