@@ -40,7 +40,9 @@ def run_episode(
     *,
     watch: Mapping[str, tuple[tuple[str, ...], ...]] | None = None,
     on_step: StepHook | None = None,
+    on_start: Callable[[TaskEnv], None] | None = None,
     settle_steps: int = SETTLE_STEPS,
+    sampled_start: bool = False,
 ) -> RolloutResult:
     """Run one episode of `policy` on `env` and return its outcome.
 
@@ -48,12 +50,17 @@ def run_episode(
     first step at which each becomes true is returned in `reached` (a goal already true after
     settling is reported in `at_start` instead, never as reached). The episode stops at the first step
     the task's own goal holds (LIBERO's success criterion) or at the task's step limit.
+    `on_start` sees the environment after settling, before the first action. `sampled_start` starts
+    from the placement LIBERO samples with the context's seed instead of init state `init_index`
+    (demonstrations; see `TaskEnv.reset`).
     Exceptions from the policy propagate; a malformed action raises `PolicyOutputError`.
     """
     spec = policy.spec
-    env.reset(context.init_index, seed=context.seed)
+    env.reset(None if sampled_start else context.init_index, seed=context.seed)
     policy.reset(context)
     env.settle(settle_steps)
+    if on_start is not None:
+        on_start(env)
     watch = dict(watch or {})
     at_start = [name for name, goal in watch.items() if env.goal_holds(goal)]
     pending = {name: goal for name, goal in watch.items() if name not in at_start}

@@ -163,20 +163,33 @@ class TaskEnv:
 
     # -- episode -----------------------------------------------------------------------------
 
-    def reset(self, init_index: int, seed: int = 0) -> Observation:
-        """Reset, then apply init state `init_index`; returns the t0 observation."""
-        if not 0 <= init_index < len(self.init_states):
+    def reset(self, init_index: int | None, seed: int = 0) -> Observation:
+        """Reset, then apply init state `init_index`; returns the t0 observation.
+
+        `init_index=None` keeps the placement LIBERO's samplers draw from the BDDL regions (seeded by
+        `seed`, fixtures included): a fresh start that is none of the fixed init states (demonstrations).
+        """
+        if init_index is not None and not 0 <= init_index < len(self.init_states):
             raise InitStateError(
                 f"init index {init_index} out of range: {self.task.id} has {len(self.init_states)} init states"
             )
-        state = self.init_states[init_index]
-        # LIBERO samples fixture placements (not part of the init state) from NumPy's global RNG.
+        # LIBERO samples object and fixture placements (fixtures are not part of an init state) from
+        # NumPy's global RNG.
         np.random.seed(seed)
-        self._env.reset()
+        self._raw_obs = self._env.reset()
         # robosuite keeps the gripper's commanded opening across soft resets (only a new model zeroes it);
         # without this, an episode would start with the previous episode's gripper command.
         for robot in self._inner.robots:
             robot.gripper.current_action = np.zeros(robot.gripper.dof)
+        if init_index is not None:
+            self._apply_init_state(init_index)
+        self.t0_hash = self.state_hash()
+        self.steps = 0
+        self._reapply_render_flags()
+        return self.observe()
+
+    def _apply_init_state(self, init_index: int) -> None:
+        state = self.init_states[init_index]
         self._raw_obs = self._env.set_init_state(state)
         applied = self._env.get_sim_state()
         if applied.shape != state.shape or not np.array_equal(applied, state):
@@ -184,10 +197,12 @@ class TaskEnv:
                 f"{self.task.id}: init state {init_index} did not apply (state size "
                 f"{applied.shape[0]} vs {state.shape[0]})"
             )
-        self.t0_hash = self.state_hash()
-        self.steps = 0
-        self._reapply_render_flags()
-        return self.observe()
+
+    def nearest_init_distance(self) -> float:
+        """Max-abs distance of the current positions (qpos) to the closest of the task's fixed init states."""
+        nq = self.sim.model.nq
+        qpos = self.sim_state()[1 : 1 + nq]
+        return float(np.abs(self.init_states[:, 1 : 1 + nq] - qpos).max(axis=1).min())
 
     def settle(self, steps: int = SETTLE_STEPS) -> None:
         """The no-op steps (gripper open) that let objects come to rest; not counted, not shown to policies."""

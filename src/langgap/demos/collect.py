@@ -1,0 +1,132 @@
+"""`collect`: N successful oracle demonstrations per task, from sampled starts, in worker processes.
+
+Attempt `j` of every task uses env seed `seed + j`; attempts run in order until `demos` succeed or
+`max_attempts` are spent, so the result depends only on the arguments, not on the number of workers.
+Failed attempts are dropped (and counted); the states of kept ones are replayed once for their
+privileged observations. Nothing is rendered here.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import time
+from collections.abc import Iterator
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+from langgap import stack
+from langgap.catalog.catalog import load_catalog
+from langgap.demos.compact import FORMAT_VERSION, read_manifest, save_demo, write_manifest
+from langgap.demos.record import add_privileged, record_attempt
+from langgap.errors import LangGapError
+from langgap.policies import make_policy
+from langgap.sim.env import EnvOptions, TaskEnv
+from langgap.version import code_version
+
+
+@dataclass(frozen=True)
+class CollectConfig:
+    """What to collect. `policy` is the scripted demonstrator (`oracle`), `noise` its action noise."""
+
+    catalog: str
+    tasks: tuple[str, ...]
+    demos: int
+    seed: int = 0
+    noise: float = 0.0
+    style: str = "libero"
+    max_attempts: int = 0  # per task; 0 = 3 * demos + 10
+    policy: str = "oracle"
+
+    @property
+    def attempts_cap(self) -> int:
+        return self.max_attempts or 3 * self.demos + 10
+
+
+@dataclass
+class TaskCollection:
+    """How collecting one task went."""
+
+    task_id: str
+    attempts: int = 0
+    kept: list[int] = field(default_factory=list)  # seeds of the kept demonstrations
+    failed: list[int] = field(default_factory=list)  # seeds of dropped attempts
+    steps: int = 0  # simulated policy steps, kept and dropped
+    wall_time_s: float = 0.0
+
+    @property
+    def success_rate(self) -> float:
+        return len(self.kept) / self.attempts if self.attempts else 0.0
+
+
+def collect_task(config: CollectConfig, task_id: str, out: str) -> TaskCollection:
+    """Collect one task's demonstrations into `out` (runs in a worker process)."""
+    catalog = load_catalog(config.catalog)
+    task = catalog.get(task_id)
+    policy = make_policy(config.policy, {"noise": str(config.noise)})
+    stats = TaskCollection(task_id)
+    started = time.perf_counter()
+    with TaskEnv(task, EnvOptions(privileged=True)) as env:
+        for attempt in range(config.attempts_cap):
+            if len(stats.kept) == config.demos:
+                break
+            seed = config.seed + attempt
+            success, demo = record_attempt(env, policy, task, catalog, seed=seed, style=config.style)
+            stats.attempts += 1
+            stats.steps += demo.length
+            if not success:
+                stats.failed.append(seed)
+                continue
+            add_privileged(env, demo)
+            save_demo(Path(out), demo)
+            stats.kept.append(seed)
+    stats.wall_time_s = time.perf_counter() - started
+    return stats
+
+
+def _collect_task_star(args) -> TaskCollection:
+    return collect_task(*args)
+
+
+def _run(config: CollectConfig, out: Path, workers: int) -> Iterator[TaskCollection]:
+    jobs = [(config, task_id, str(out)) for task_id in config.tasks]
+    if workers <= 0:
+        yield from map(_collect_task_star, jobs)
+        return
+    # Spawned, not forked: no GL or MuJoCo state may cross into a worker.
+    with multiprocessing.get_context("spawn").Pool(min(workers, len(jobs))) as pool:
+        yield from pool.imap_unordered(_collect_task_star, jobs)
+
+
+def collect(config: CollectConfig, out: str | Path, *, workers: int = 1, progress: bool = True) -> dict:
+    """Collect every task of `config` into `out` and write its manifest; returns the manifest."""
+    out = Path(out)
+    if (out / "collection.json").exists():
+        raise LangGapError(f"{out} already holds a collection ({read_manifest(out)['demos']} demos per task)")
+    out.mkdir(parents=True, exist_ok=True)
+    results: dict[str, TaskCollection] = {}
+    for stats in _progress(_run(config, out, workers), len(config.tasks), enabled=progress):
+        results[stats.task_id] = stats
+    manifest = {
+        "format": FORMAT_VERSION,
+        **asdict(config),
+        "tasks": {
+            task_id: {**asdict(stats), "success_rate": stats.success_rate} for task_id, stats in sorted(results.items())
+        },
+        "physics": stack.physics_stack(),
+        "code_version": code_version(),
+    }
+    write_manifest(out, manifest)
+    return manifest
+
+
+def _progress(items: Iterator[TaskCollection], total: int, *, enabled: bool) -> Iterator[TaskCollection]:
+    if not enabled:
+        yield from items
+        return
+    from tqdm import tqdm
+
+    with tqdm(total=total, unit="task", desc="collect", dynamic_ncols=True) as bar:
+        for stats in items:
+            bar.set_postfix_str(f"{stats.task_id}: {len(stats.kept)}/{stats.attempts}")
+            bar.update()
+            yield stats

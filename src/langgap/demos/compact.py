@@ -1,0 +1,107 @@
+"""The compact form of a collection: one NPZ per demonstration plus `collection.json`.
+
+Layout of a collection directory::
+
+    collection.json                       what was asked, per-task attempts/kept/success rate, versions
+    demos/<task id>/<seed>.npz            one demonstration (arrays below)
+    lerobot/                              the LeRobot v3 dataset (when LeRobot is installed)
+
+A demonstration NPZ holds `states` (T, D) flattened sim states (the layout of LIBERO's init states),
+`actions` (T, 7), `robot_states` (T, 8), `priv/<key>` (T, ...) the privileged observations
+(`eef_pos`, `eef_mat`, `gripper_qpos`, `body/<entity>`, `joint/<name>`), and `meta` (JSON: task id,
+instruction, seed, distance of the start to the nearest fixed init state). Row t is the state before
+action t; the episode it replays starts from `reset` with that seed, then the 10 settle steps.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from langgap.demos.record import Demo
+from langgap.errors import LangGapError
+
+MANIFEST = "collection.json"
+DEMOS_DIR = "demos"
+LEROBOT_DIR = "lerobot"
+FORMAT_VERSION = 1
+
+
+class DemoFileError(LangGapError):
+    """A collection directory or demonstration file is missing or malformed."""
+
+
+def demo_path(root: Path, task_id: str, seed: int) -> Path:
+    return Path(root) / DEMOS_DIR / task_id / f"{seed:08d}.npz"
+
+
+def save_demo(root: Path, demo: Demo) -> Path:
+    """Write one demonstration (atomically: a crash leaves no half-written file)."""
+    path = demo_path(root, demo.task_id, demo.seed)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    meta = {
+        "task_id": demo.task_id,
+        "instruction": demo.instruction,
+        "seed": demo.seed,
+        "nearest_init_distance": demo.nearest_init_distance,
+    }
+    arrays = {
+        "states": demo.states,
+        "actions": demo.actions,
+        "robot_states": demo.robot_states,
+        "meta": np.array(json.dumps(meta)),
+        **{f"priv/{k}": v for k, v in demo.privileged.items()},
+    }
+    tmp = path.with_suffix(".tmp.npz")
+    np.savez_compressed(tmp, **arrays)
+    tmp.replace(path)
+    return path
+
+
+def load_demo(path: Path) -> Demo:
+    """Read one demonstration file."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            meta = json.loads(str(data["meta"]))
+            return Demo(
+                task_id=meta["task_id"],
+                instruction=meta["instruction"],
+                seed=int(meta["seed"]),
+                states=data["states"],
+                actions=data["actions"],
+                robot_states=data["robot_states"],
+                nearest_init_distance=float(meta["nearest_init_distance"]),
+                privileged={k[5:]: data[k] for k in data.files if k.startswith("priv/")},
+            )
+    except (OSError, KeyError, ValueError) as exc:
+        raise DemoFileError(f"cannot read demonstration {path}: {exc}") from None
+
+
+def read_manifest(root: Path) -> dict:
+    path = Path(root) / MANIFEST
+    if not path.is_file():
+        raise DemoFileError(f"{root} is not a demonstration collection (no {MANIFEST}); make one with `langgap collect`")
+    return json.loads(path.read_text())
+
+
+def write_manifest(root: Path, manifest: dict) -> None:
+    path = Path(root) / MANIFEST
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(manifest, indent=2, sort_keys=True) + "\n")
+    tmp.replace(path)
+
+
+def demo_files(root: Path) -> list[Path]:
+    """All demonstration files of a collection, ordered by task id then seed (a stable dataset order)."""
+    manifest = read_manifest(root)
+    return [
+        demo_path(root, task_id, seed) for task_id, stats in sorted(manifest["tasks"].items()) for seed in stats["kept"]
+    ]
+
+
+def load_demos(roots: list[Path] | Path) -> list[Demo]:
+    """Every demonstration of one or several collections, in `demo_files` order."""
+    roots = [roots] if isinstance(roots, str | Path) else roots
+    return [load_demo(path) for root in roots for path in demo_files(Path(root))]

@@ -1,0 +1,106 @@
+"""Recording one oracle attempt from a sampled start, and replaying recorded states (privileged state, frames)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from langgap.catalog.catalog import Catalog
+from langgap.catalog.task import Task
+from langgap.engine.context import task_context
+from langgap.engine.rollout import run_episode
+from langgap.errors import SimulationError
+from langgap.policies.base import Policy
+from langgap.sim.env import TaskEnv, state_from_robosuite
+from langgap.sim.privileged import privileged_state
+
+# The dynamic part of the privileged state that demonstrations keep (what `small-bc` observes).
+PRIVILEGED_PREFIXES = ("body/", "joint/")
+PRIVILEGED_KEYS = ("eef_pos", "eef_mat", "gripper_qpos")
+# A sampled start closer than this (max-abs qpos) to a fixed init state counts as that init state.
+SAME_STATE_TOLERANCE = 1e-6
+
+
+@dataclass
+class Demo:
+    """One successful demonstration: row t holds the state before action t."""
+
+    task_id: str
+    instruction: str
+    seed: int
+    states: np.ndarray  # (T, D) flattened sim states
+    actions: np.ndarray  # (T, 7)
+    robot_states: np.ndarray  # (T, 8) LangGap/LeRobot 8-D state
+    nearest_init_distance: float
+    privileged: dict[str, np.ndarray] = field(default_factory=dict)  # key -> (T, ...)
+
+    @property
+    def length(self) -> int:
+        return len(self.actions)
+
+
+def privileged_subset(env: TaskEnv) -> dict[str, np.ndarray]:
+    """The privileged keys a demonstration keeps, at the env's current state."""
+    full = privileged_state(env)
+    return {k: v for k, v in full.items() if k in PRIVILEGED_KEYS or k.startswith(PRIVILEGED_PREFIXES)}
+
+
+def record_attempt(
+    env: TaskEnv, policy: Policy, task: Task, catalog: Catalog, *, seed: int, style: str
+) -> tuple[bool, Demo]:
+    """Run `policy` once on `task` from the placement sampled with `seed`; returns (success, recording)."""
+    states: list[np.ndarray] = []
+    robot: list[np.ndarray] = []
+    actions: list[np.ndarray] = []
+    start: dict = {}
+
+    def on_start(e: TaskEnv) -> None:
+        start["distance"] = e.nearest_init_distance()
+        states.append(e.sim_state().copy())
+        robot.append(state_from_robosuite(e.robosuite_observation))
+
+    def on_step(e: TaskEnv, _step: int, action: np.ndarray) -> None:
+        actions.append(np.asarray(action, dtype=np.float64).copy())
+        states.append(e.sim_state().copy())
+        robot.append(state_from_robosuite(e.robosuite_observation))
+
+    # init_index 0 only names the attempt for the policy's own RNG; the start is the sampled placement.
+    context = task_context(task, catalog, init_index=0, seed=seed, style=style)
+    result = run_episode(env, policy, context, on_step=on_step, on_start=on_start, sampled_start=True)
+    if start["distance"] < SAME_STATE_TOLERANCE:
+        raise SimulationError(f"{task.id}: the start sampled with seed {seed} is one of the fixed init states")
+    # The last recorded state follows the last action; a demonstration keeps pre-action states only.
+    demo = Demo(
+        task_id=task.id,
+        instruction=context.instruction,
+        seed=seed,
+        states=np.array(states[:-1]),
+        actions=np.array(actions).reshape(-1, 7),
+        robot_states=np.array(robot[:-1], dtype=np.float32),
+        nearest_init_distance=start["distance"],
+    )
+    return result.success, demo
+
+
+def start_episode(env: TaskEnv, demo: Demo) -> None:
+    """Reset and settle `env` as the demonstration's episode began; checks it reaches the recorded first state."""
+    env.reset(None, seed=demo.seed)
+    env.settle()
+    if not np.array_equal(env.sim_state(), demo.states[0]):
+        raise SimulationError(f"{demo.task_id}: seed {demo.seed} does not reproduce the demonstration's first state")
+
+
+def replay_states(env: TaskEnv, demo: Demo, read: Callable[[TaskEnv], object]) -> Iterator[object]:
+    """`read(env)` at each recorded state of `demo`, in the scene (fixtures included) of its seed."""
+    start_episode(env, demo)
+    for state in demo.states:
+        env.set_sim_state(state)
+        yield read(env)
+
+
+def add_privileged(env: TaskEnv, demo: Demo) -> None:
+    """Fill `demo.privileged` by replaying its states."""
+    rows = list(replay_states(env, demo, privileged_subset))
+    demo.privileged = {key: np.stack([row[key] for row in rows]) for key in rows[0]}
