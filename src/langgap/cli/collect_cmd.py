@@ -59,7 +59,9 @@ def run(args) -> int:
         print(f"{task_id:<48} {kept:>5} {stats['attempts']:>8} {stats['success_rate']:>8.0%}")
     print(f"wrote the compact form to {args.out}")
     if export:
-        path = write_lerobot_dataset(args.out, repo_id=args.repo_id, workers=args.workers, progress=not args.no_progress)
+        path = write_lerobot_dataset(
+            args.out, repo_id=args.repo_id, workers=args.workers, progress=not args.no_progress
+        )
         print(f"wrote the LeRobot dataset to {path}")
     else:
         print("LeRobot is not installed here: wrote the compact form only (export it with `langgap export-lerobot`)")

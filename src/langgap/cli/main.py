@@ -5,10 +5,36 @@ from __future__ import annotations
 import argparse
 import sys
 
-from langgap.cli import bddl_cmd, doctor_cmd, eval_cmd, generate_cmd, report_cmd, serve_cmd, tasks_cmd, validate_cmd
+from langgap.cli import (
+    bddl_cmd,
+    collect_cmd,
+    doctor_cmd,
+    eval_cmd,
+    export_lerobot_cmd,
+    generate_cmd,
+    report_cmd,
+    serve_cmd,
+    tasks_cmd,
+    train_cmd,
+    validate_cmd,
+    verify_demos_cmd,
+)
 from langgap.errors import LangGapError
 
-VERBS = (tasks_cmd, eval_cmd, serve_cmd, report_cmd, validate_cmd, generate_cmd, doctor_cmd, bddl_cmd)
+VERBS = (
+    tasks_cmd,
+    eval_cmd,
+    serve_cmd,
+    report_cmd,
+    validate_cmd,
+    generate_cmd,
+    doctor_cmd,
+    bddl_cmd,
+    collect_cmd,
+    verify_demos_cmd,
+    export_lerobot_cmd,
+    train_cmd,
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

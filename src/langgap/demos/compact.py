@@ -82,7 +82,9 @@ def load_demo(path: Path) -> Demo:
 def read_manifest(root: Path) -> dict:
     path = Path(root) / MANIFEST
     if not path.is_file():
-        raise DemoFileError(f"{root} is not a demonstration collection (no {MANIFEST}); make one with `langgap collect`")
+        raise DemoFileError(
+            f"{root} is not a demonstration collection (no {MANIFEST}); make one with `langgap collect`"
+        )
     return json.loads(path.read_text())
 
 

@@ -20,6 +20,7 @@ REGISTRY: dict[str, str] = {
     "lerobot": "langgap.policies.lerobot:LeRobotPolicy",
     "oracle": "langgap.policies.oracle:OraclePolicy",
     "blind": "langgap.policies.oracle:BlindPolicy",
+    "small-bc": "langgap.policies.small_bc:SmallBCPolicy",
 }
 
 

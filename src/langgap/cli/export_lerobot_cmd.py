@@ -1,0 +1,24 @@
+"""`langgap export-lerobot`: write a collection's LeRobot v3 dataset (in the LeRobot environment)."""
+
+from __future__ import annotations
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "export-lerobot", help="render a collection's demonstrations into a LeRobot v3 dataset (DIR/lerobot)"
+    )
+    parser.add_argument("collection", metavar="DIR", help="a directory written by `langgap collect`")
+    parser.add_argument("--repo-id", default="local/langgap_demos", help="dataset repo id (nothing is uploaded)")
+    parser.add_argument("--workers", type=int, default=1, help="rendering processes (0: here)")
+    parser.add_argument("--no-progress", action="store_true")
+    parser.set_defaults(handler=run)
+
+
+def run(args) -> int:
+    from langgap.demos.export import write_lerobot_dataset
+
+    path = write_lerobot_dataset(
+        args.collection, repo_id=args.repo_id, workers=args.workers, progress=not args.no_progress
+    )
+    print(f"wrote the LeRobot dataset to {path}")
+    return 0

@@ -1,0 +1,65 @@
+"""The `small-bc` policy: a checkpoint trained by `langgap train small-bc`, acting on privileged state.
+
+It reads the instruction as text (word tokens through the model's learned embeddings) and the
+scene from `observation.privileged` (entity poses, proprioception); it never sees the task id or
+the goal. Inference runs on one CPU thread, deterministically.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from langgap.policies.base import PolicySpec, TaskContext
+from langgap.sim.env import Observation
+
+
+class SmallBCPolicy:
+    """`--policy-arg checkpoint=PATH` (required); `replan=k` executes the first k actions of each chunk."""
+
+    def __init__(self, checkpoint: str = "", replan: int = 4):
+        from langgap.training.small_bc import CheckpointError, load_checkpoint
+
+        if not checkpoint:
+            raise CheckpointError("small-bc needs --policy-arg checkpoint=PATH (a file written by `langgap train`)")
+        import torch
+
+        torch.set_num_threads(1)
+        self.checkpoint = checkpoint
+        self._torch = torch
+        self.model, self.vocab, self.training = load_checkpoint(checkpoint)
+        chunk = self.model.config.chunk
+        self.spec = PolicySpec(state=False, privileged=True, chunk=chunk, replan=min(replan, chunk))
+        self._instruction = None
+        self._names: list[str] | None = None
+        self._name_ids = None
+
+    def config(self) -> dict:
+        return {"checkpoint": self.checkpoint, "training": self.training}
+
+    def reset(self, context: TaskContext) -> None:
+        torch = self._torch
+        ids = self.vocab.encode(context.instruction, self.model.config.max_words)
+        self._instruction = torch.tensor([ids], dtype=torch.int64)
+        self._names = None
+
+    def act(self, observation: Observation) -> np.ndarray:
+        from langgap.training import features
+
+        torch = self._torch
+        privileged = observation.privileged
+        if self._names is None:
+            self._names = features.entity_names(privileged)
+            width = self.model.config.max_name_words
+            self._name_ids = torch.tensor(
+                [[self.vocab.encode(features.name_words(n), width) for n in self._names]], dtype=torch.int64
+            )
+        with torch.inference_mode():
+            actions = self.model(
+                torch.from_numpy(features.proprio(privileged))[None],
+                torch.from_numpy(features.entities(privileged, self._names))[None],
+                self._name_ids,
+                self._instruction,
+            )[0].numpy()
+        actions = np.clip(actions.astype(np.float64), -1.0, 1.0)
+        actions[:, 6] = np.where(actions[:, 6] >= 0, 1.0, -1.0)
+        return actions

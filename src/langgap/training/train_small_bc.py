@@ -1,0 +1,143 @@
+"""Training `small-bc` by behaviour cloning on collected demonstrations (CPU).
+
+Every frame of every selected demonstration is a sample: its observation, its instruction, and the
+next `chunk` actions (the loss ignores steps past the demonstration's end). Deterministic for a given
+seed and thread count.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from langgap.demos.compact import load_demos
+from langgap.demos.record import Demo
+from langgap.errors import LangGapError
+from langgap.training import features
+from langgap.training.small_bc import ModelConfig, Normalizer, SmallBC, save_checkpoint
+from langgap.training.text import Vocabulary
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """What to train on and how long. `tasks` selects demonstrations by task id (None: all)."""
+
+    data: tuple[str, ...]
+    tasks: tuple[str, ...] | None = None
+    steps: int = 3000
+    batch_size: int = 128
+    lr: float = 1e-3
+    seed: int = 0
+    threads: int = 2
+    model: ModelConfig = field(default_factory=ModelConfig)
+
+
+@dataclass
+class Samples:
+    """All frames as arrays (N = frames, E = max entities, W = name words, L = instruction words)."""
+
+    proprio: np.ndarray  # (N, 14)
+    entities: np.ndarray  # (N, E, 11)
+    names: np.ndarray  # (N, E, W) word ids
+    instruction: np.ndarray  # (N, L) word ids
+    actions: np.ndarray  # (N, chunk, 7)
+    action_mask: np.ndarray  # (N, chunk)
+
+
+def build_vocabulary(demos: list[Demo]) -> Vocabulary:
+    names = {features.name_words(n) for d in demos for n in features.entity_names(d.privileged)}
+    return Vocabulary.from_texts([d.instruction for d in demos] + sorted(names))
+
+
+def build_samples(demos: list[Demo], vocab: Vocabulary, config: ModelConfig) -> Samples:
+    """Turn demonstrations into training arrays."""
+    max_entities = max(len(features.entity_names(d.privileged)) for d in demos)
+    parts: dict[str, list[np.ndarray]] = {k: [] for k in Samples.__dataclass_fields__}
+    steps = np.arange(config.chunk)
+    for demo in demos:
+        n = demo.length
+        names = features.entity_names(demo.privileged)
+        ents = np.zeros((n, max_entities, features.ENTITY_DIM), dtype=np.float32)
+        ents[:, : len(names)] = features.entities(demo.privileged, names)
+        name_ids = np.zeros((max_entities, config.max_name_words), dtype=np.int64)
+        for i, name in enumerate(names):
+            name_ids[i] = vocab.encode(features.name_words(name), config.max_name_words)
+        index = np.arange(n)[:, None] + steps[None, :]
+        parts["proprio"].append(features.proprio(demo.privileged))
+        parts["entities"].append(ents)
+        parts["names"].append(np.broadcast_to(name_ids, (n, *name_ids.shape)))
+        parts["instruction"].append(np.tile(vocab.encode(demo.instruction, config.max_words), (n, 1)))
+        parts["actions"].append(demo.actions[np.minimum(index, n - 1)].astype(np.float32))
+        parts["action_mask"].append(index < n)
+    return Samples(**{k: np.concatenate(v) for k, v in parts.items()})
+
+
+def select_demos(config: TrainConfig) -> list[Demo]:
+    demos = load_demos([Path(p) for p in config.data])
+    if config.tasks is not None:
+        wanted = set(config.tasks)
+        demos = [d for d in demos if d.task_id in wanted]
+        missing = wanted - {d.task_id for d in demos}
+        if missing:
+            raise LangGapError(f"no demonstrations of {len(missing)} selected task(s), e.g. {sorted(missing)[0]}")
+    if not demos:
+        raise LangGapError("no demonstrations to train on")
+    return demos
+
+
+def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=print) -> dict:
+    """Train a small-bc model on `config`'s demonstrations and save it to `out`; returns training facts."""
+    started = time.perf_counter()
+    torch.set_num_threads(config.threads)
+    torch.manual_seed(config.seed)
+    demos = select_demos(config)
+    vocab = build_vocabulary(demos)
+    samples = build_samples(demos, vocab, config.model)
+    tensors = {k: torch.from_numpy(np.ascontiguousarray(v)) for k, v in asdict(samples).items()}
+    normalizer = Normalizer.fit(samples.proprio, samples.entities, samples.names[..., 0] > 0)
+    model = SmallBC(config.model, len(vocab), normalizer)
+    optimizer = torch.optim.AdamW(model.parameters(), lr=config.lr, weight_decay=1e-4)
+    schedule = torch.optim.lr_scheduler.OneCycleLR(
+        optimizer, max_lr=config.lr, total_steps=config.steps, pct_start=0.05
+    )
+    generator = torch.Generator().manual_seed(config.seed)
+    frames = len(samples.proprio)
+    model.train()
+    loss_value = float("nan")
+    for step in range(1, config.steps + 1):
+        batch = torch.randint(frames, (config.batch_size,), generator=generator)
+        pred = model(
+            tensors["proprio"][batch],
+            tensors["entities"][batch],
+            tensors["names"][batch],
+            tensors["instruction"][batch],
+        )
+        mask = tensors["action_mask"][batch].unsqueeze(-1).float()
+        loss = (((pred - tensors["actions"][batch]) ** 2) * mask).sum() / (mask.sum() * 7)
+        optimizer.zero_grad(set_to_none=True)
+        loss.backward()
+        torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
+        optimizer.step()
+        schedule.step()
+        loss_value = float(loss)
+        if log and (step % log_every == 0 or step == config.steps):
+            log(f"step {step}/{config.steps}  loss {loss_value:.5f}  {time.perf_counter() - started:.0f}s")
+    model.eval()
+    facts = {
+        "data": list(config.data),
+        "tasks": sorted({d.task_id for d in demos}),
+        "demos": len(demos),
+        "frames": frames,
+        "steps": config.steps,
+        "batch_size": config.batch_size,
+        "lr": config.lr,
+        "seed": config.seed,
+        "final_loss": loss_value,
+        "train_time_s": round(time.perf_counter() - started, 1),
+    }
+    save_checkpoint(out, model, vocab, facts)
+    return facts
