@@ -39,7 +39,7 @@ def store_rows(run: Path) -> list[dict]:
 
 def run_cli(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
     """Run `langgap ARGS` in a fresh interpreter, as a user would."""
-    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO / "src"), str(REPO)])}
     return subprocess.run(
         [sys.executable, "-m", "langgap.cli.main", *args], capture_output=True, text=True, timeout=timeout, env=env
     )
@@ -64,3 +64,16 @@ def short_catalog(tmp_path_factory):
     path = tmp_path_factory.mktemp("catalog") / "short.yaml"
     path.write_text(yaml.safe_dump(data))
     return str(path)
+
+
+TINY_TASK = "spatial/s0/black-bowl-1-on-plate"
+
+
+@pytest.fixture(scope="session")
+def tiny_collection(tmp_path_factory) -> Path:
+    """Two oracle demonstrations of one spatial task (compact form), collected once per session."""
+    from langgap.demos.collect import CollectConfig, collect
+
+    out = tmp_path_factory.mktemp("demos") / "tiny"
+    collect(CollectConfig(catalog="langgap99", tasks=(TINY_TASK,), demos=2, seed=7), out, workers=0, progress=False)
+    return out

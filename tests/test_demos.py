@@ -1,0 +1,96 @@
+"""Demonstrations: sampled starts (never evaluation init states), collection, compact form, verify-demos."""
+
+from __future__ import annotations
+
+import shutil
+
+import numpy as np
+
+from langgap.demos.collect import CollectConfig, collect
+from langgap.demos.compact import demo_files, load_demo, read_manifest, save_demo
+from langgap.demos.record import SAME_STATE_TOLERANCE
+from langgap.sim.env import TaskEnv
+from tests.conftest import TINY_TASK, run_cli
+
+
+def test_sampled_start_is_none_of_the_fixed_init_states(catalog):
+    with TaskEnv(catalog.get(TINY_TASK)) as env:
+        env.reset(3)
+        assert env.nearest_init_distance() == 0.0  # the check sees a fixed init state for what it is
+        starts = []
+        for seed in (11, 11, 12):
+            env.reset(None, seed=seed)
+            assert env.nearest_init_distance() > 1e-3
+            starts.append(env.sim_state())
+    np.testing.assert_array_equal(starts[0], starts[1])  # the seed decides the placement
+    assert np.abs(starts[0] - starts[2]).max() > 1e-3
+
+
+def test_collection_keeps_successes_from_fresh_starts(tiny_collection, catalog):
+    manifest = read_manifest(tiny_collection)
+    stats = manifest["tasks"][TINY_TASK]
+    assert len(stats["kept"]) == 2 and stats["attempts"] == 2 + len(stats["failed"])
+    assert sorted(stats["kept"] + stats["failed"]) == list(range(7, 7 + stats["attempts"]))
+    assert manifest["physics"]["mujoco"] == "3.2.3"
+    for path in demo_files(tiny_collection):
+        demo = load_demo(path)
+        assert demo.instruction == catalog.get(TINY_TASK).instruction()
+        assert demo.nearest_init_distance > SAME_STATE_TOLERANCE
+        assert demo.states.shape[0] == demo.actions.shape[0] == demo.robot_states.shape[0] > 20
+        assert demo.robot_states.shape[1] == 8 and demo.actions.shape[1] == 7
+        assert set(demo.privileged) >= {"eef_pos", "eef_mat", "gripper_qpos", "body/akita_black_bowl_1"}
+        assert demo.privileged["body/plate_1"].shape == (demo.length, 7)
+
+
+def test_collection_is_deterministic_across_worker_counts(tiny_collection, tmp_path):
+    config = CollectConfig(catalog="langgap99", tasks=(TINY_TASK,), demos=2, seed=7)
+    collect(config, tmp_path / "again", workers=1, progress=False)
+    for a, b in zip(demo_files(tiny_collection), demo_files(tmp_path / "again"), strict=True):
+        first, second = load_demo(a), load_demo(b)
+        np.testing.assert_array_equal(first.actions, second.actions)
+        np.testing.assert_array_equal(first.states, second.states)
+    for key in ("attempts", "kept", "failed", "steps"):
+        assert (
+            read_manifest(tmp_path / "again")["tasks"][TINY_TASK][key]
+            == read_manifest(tiny_collection)["tasks"][TINY_TASK][key]
+        )
+
+
+def test_verify_demos_passes_good_and_catches_corrupted_demos(tiny_collection, tmp_path):
+    good = run_cli("verify-demos", str(tiny_collection))
+    assert good.returncode == 0, good.stderr
+    assert "2/2 demonstrations replay to success" in good.stdout
+    broken = tmp_path / "broken"
+    shutil.copytree(tiny_collection, broken)
+    path = demo_files(broken)[0]
+    demo = load_demo(path)
+    demo.actions[:, 6] = -1.0  # the gripper never closes: the bowl is never picked up
+    save_demo(broken, demo)
+    bad = run_cli("verify-demos", str(broken))
+    assert bad.returncode == 1
+    assert f"FAIL {TINY_TASK} seed {demo.seed}: goal never reached" in bad.stdout
+    assert "1/2 demonstrations replay to success" in bad.stdout
+
+
+def test_collect_cli_without_lerobot_writes_compact_form(tmp_path):
+    result = run_cli(
+        "collect",
+        "--tasks",
+        TINY_TASK,
+        "--demos",
+        "1",
+        "--out",
+        str(tmp_path / "c"),
+        "--format",
+        "compact",
+        "--workers",
+        "0",
+        "--no-progress",
+        "--seed",
+        "7",
+    )
+    assert result.returncode == 0, result.stderr
+    assert "wrote the compact form" in result.stdout
+    assert len(demo_files(tmp_path / "c")) == 1
+    again = run_cli("collect", "--tasks", TINY_TASK, "--demos", "1", "--out", str(tmp_path / "c"))
+    assert again.returncode == 2 and again.stderr.startswith("error: ") and len(again.stderr.splitlines()) == 1
