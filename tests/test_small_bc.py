@@ -1,0 +1,99 @@
+"""small-bc: tokenizer, training on a tiny real collection, checkpoint round trip, `langgap eval` in a worker."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from langgap.training.text import Vocabulary, words
+from tests.conftest import TINY_TASK, run_cli, store_rows
+
+torch = pytest.importorskip("torch", reason="small-bc needs PyTorch (pip install 'langgap[train]')")
+
+
+def test_words_and_vocabulary():
+    assert words("Pick up the black bowl_1 on the Stove") == [
+        "pick",
+        "up",
+        "the",
+        "black",
+        "bowl",
+        "1",
+        "on",
+        "the",
+        "stove",
+    ]
+    assert words("glazed_rim_porcelain_ramekin_1") == ["glazed", "rim", "porcelain", "ramekin", "1"]
+    vocab = Vocabulary.from_texts(["place it on the plate", "akita_black_bowl_1"])
+    assert vocab.tokens[:2] == ["<pad>", "<unk>"]
+    ids = vocab.encode("place it on the stove", 7)
+    assert ids[4] == 1 and ids[5:] == [0, 0] and 0 not in ids[:5]
+    assert Vocabulary(vocab.tokens).tokens == vocab.tokens  # what a checkpoint stores restores the same ids
+
+
+@pytest.fixture(scope="module")
+def checkpoint(tiny_collection, tmp_path_factory):
+    out = tmp_path_factory.mktemp("bc") / "tiny.safetensors"
+    result = run_cli(
+        "train", "small-bc", "--data", str(tiny_collection), "--out", str(out), "--steps", "20", "--batch-size", "32",
+        "--threads", "1",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert "trained on 2 demonstrations" in result.stdout
+    return out
+
+
+def test_training_is_deterministic_and_checkpoint_round_trips(tiny_collection, checkpoint, tmp_path):
+    from langgap.training.small_bc import load_checkpoint
+    from langgap.training.train_small_bc import TrainConfig, train
+
+    facts = train(
+        TrainConfig(data=(str(tiny_collection),), steps=20, batch_size=32, threads=1), tmp_path / "again.safetensors",
+        log=None,
+    )  # fmt: skip
+    first, vocab, info = load_checkpoint(checkpoint)
+    second, _, _ = load_checkpoint(tmp_path / "again.safetensors")
+    for (name, a), (_, b) in zip(first.state_dict().items(), second.state_dict().items(), strict=True):
+        assert torch.equal(a, b), name
+    assert info["final_loss"] == facts["final_loss"] and info["tasks"] == [TINY_TASK]
+    assert "plate" in vocab.tokens and "ramekin" in vocab.tokens  # from the sentence and the entity names
+
+
+def test_policy_reads_the_instruction_and_is_deterministic(checkpoint, catalog):
+    from langgap.engine.context import task_context
+    from langgap.policies import make_policy
+    from langgap.sim.env import EnvOptions, TaskEnv
+
+    policy = make_policy("small-bc", {"checkpoint": str(checkpoint)})
+    assert policy.spec.privileged and policy.spec.chunk == 8 and policy.spec.replan == 4
+    task = catalog.get(TINY_TASK)
+    with TaskEnv(task, EnvOptions(privileged=True)) as env:
+        env.reset(0)
+        env.settle()
+        observation = env.observe()
+    outputs = []
+    for instruction in (None, None, "pick up the ramekin and place it on the stove"):
+        policy.reset(task_context(task, catalog, init_index=0, seed=0, instruction=instruction))
+        outputs.append(policy.act(observation))
+    assert outputs[0].shape == (8, 7) and np.all(np.abs(outputs[0]) <= 1) and set(outputs[0][:, 6]) <= {-1.0, 1.0}
+    np.testing.assert_array_equal(outputs[0], outputs[1])
+    assert not np.array_equal(outputs[0], outputs[2])  # another sentence, another action
+
+
+def test_eval_runs_small_bc_in_a_worker(checkpoint, tmp_path):
+    run = tmp_path / "run"
+    result = run_cli(
+        "eval", "--policy", "small-bc", "--policy-arg", f"checkpoint={checkpoint}", "--tasks", TINY_TASK,
+        "--episodes", "1", "--run", str(run), "--workers", "1", "--no-progress", "--quiet",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    (row,) = store_rows(run)
+    assert row["status"] == "done" and row["policy"] == "small-bc" and row["steps"] > 0
+
+
+def test_missing_checkpoint_is_one_line_error(tmp_path):
+    result = run_cli(
+        "eval", "--policy", "small-bc", "--policy-arg", f"checkpoint={tmp_path / 'none.safetensors'}",
+        "--tasks", TINY_TASK, "--episodes", "1", "--run", str(tmp_path / "r"), "--workers", "0",
+    )  # fmt: skip
+    assert result.returncode == 2 and "no small-bc checkpoint" in result.stderr
