@@ -7,6 +7,7 @@ seed and thread count.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -89,6 +90,15 @@ def select_demos(config: TrainConfig) -> list[Demo]:
     return demos
 
 
+def _lr_factor(step: int, total: int) -> float:
+    """Linear warm-up over the first 5 % of steps, then cosine decay to 10 % of the peak."""
+    warmup = max(1, total // 20)
+    if step < warmup:
+        return (step + 1) / warmup
+    progress = (step - warmup) / max(1, total - warmup)
+    return 0.1 + 0.45 * (1 + math.cos(math.pi * progress))
+
+
 def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=print) -> dict:
     """Train a small-bc model on `config`'s demonstrations and save it to `out`; returns training facts."""
     started = time.perf_counter()
@@ -101,9 +111,7 @@ def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=pri
     normalizer = Normalizer.fit(samples.proprio, samples.entities, samples.names[..., 0] > 0)
     model = SmallBC(config.model, len(vocab), normalizer)
     optimizer = torch.optim.AdamW(model.parameters(), lr=config.lr, weight_decay=1e-4)
-    schedule = torch.optim.lr_scheduler.OneCycleLR(
-        optimizer, max_lr=config.lr, total_steps=config.steps, pct_start=0.05
-    )
+    schedule = torch.optim.lr_scheduler.LambdaLR(optimizer, lambda step: _lr_factor(step, config.steps))
     generator = torch.Generator().manual_seed(config.seed)
     frames = len(samples.proprio)
     model.train()
@@ -123,7 +131,7 @@ def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=pri
         torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
         optimizer.step()
         schedule.step()
-        loss_value = float(loss)
+        loss_value = loss.detach().item()
         if log and (step % log_every == 0 or step == config.steps):
             log(f"step {step}/{config.steps}  loss {loss_value:.5f}  {time.perf_counter() - started:.0f}s")
     model.eval()
