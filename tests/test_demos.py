@@ -13,8 +13,10 @@ from langgap.sim.env import TaskEnv
 from tests.conftest import TINY_TASK, run_cli
 
 
-def test_sampled_start_is_none_of_the_fixed_init_states(catalog):
-    with TaskEnv(catalog.get(TINY_TASK)) as env:
+def test_sampled_start_is_none_of_the_fixed_init_states_and_only_the_seed_decides_it(catalog):
+    # In this scene LIBERO places the bowl on the cookie box where the box was before the reset, so a soft
+    # reset's placement would depend on the previous episode.
+    with TaskEnv(catalog.get("spatial/s3/black-bowl-1-on-plate")) as env:
         env.reset(3)
         assert env.nearest_init_distance() == 0.0  # the check sees a fixed init state for what it is
         starts = []
@@ -22,7 +24,9 @@ def test_sampled_start_is_none_of_the_fixed_init_states(catalog):
             env.reset(None, seed=seed)
             assert env.nearest_init_distance() > 1e-3
             starts.append(env.sim_state())
-    np.testing.assert_array_equal(starts[0], starts[1])  # the seed decides the placement
+            for _ in range(30):
+                env.step(np.array([0.8, -0.5, -0.6, 0, 0, 0.3, 1.0]))
+    np.testing.assert_array_equal(starts[0], starts[1])
     assert np.abs(starts[0] - starts[2]).max() > 1e-3
 
 

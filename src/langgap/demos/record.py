@@ -21,8 +21,6 @@ PRIVILEGED_PREFIXES = ("body/", "joint/")
 PRIVILEGED_KEYS = ("eef_pos", "eef_mat", "gripper_qpos")
 # A sampled start closer than this (max-abs qpos) to a fixed init state counts as that init state.
 SAME_STATE_TOLERANCE = 1e-6
-# How far (max-abs, sim state) a replayed start may be from the recorded one.
-REPLAY_TOLERANCE = 1e-3
 
 
 @dataclass
@@ -87,18 +85,15 @@ def record_attempt(
 
 
 def start_episode(env: TaskEnv, demo: Demo) -> None:
-    """Put `env` in the demonstration's first state: the scene of its seed (fixture placements are not part
-    of a sim state), reset and settled, must come within `REPLAY_TOLERANCE` of the recorded state, which
-    is then applied exactly. (Bitwise equality is not expected: MuJoCo's solver warm start, which soft
-    resets keep from the previous episode, shifts resting contacts by micrometres.)"""
+    """Put `env` in the demonstration's first state: reset with its seed (the placement, fixtures included,
+    is rebuilt from the seed alone) and settle, which must reproduce the recorded first state exactly."""
     env.reset(None, seed=demo.seed)
     env.settle()
     gap = float(np.abs(env.sim_state() - demo.states[0]).max())
-    if gap > REPLAY_TOLERANCE:
+    if gap > 0:
         raise SimulationError(
             f"{demo.task_id}: seed {demo.seed} does not reproduce the demonstration's first state (off by {gap:.3g})"
         )
-    env.set_sim_state(demo.states[0])
 
 
 def replay_states(env: TaskEnv, demo: Demo, read: Callable[[TaskEnv], object]) -> Iterator[object]:

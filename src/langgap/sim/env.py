@@ -176,7 +176,16 @@ class TaskEnv:
         # LIBERO samples object and fixture placements (fixtures are not part of an init state) from
         # NumPy's global RNG.
         np.random.seed(seed)
-        self._raw_obs = self._env.reset()
+        if init_index is None:
+            # A soft reset's placement depends on the state it starts from (LIBERO places an object on
+            # another where that one was), so a sampled start rebuilds the model: the seed alone decides it.
+            self._inner.hard_reset = True
+            try:
+                self._raw_obs = self._env.reset()
+            finally:
+                self._inner.hard_reset = self.options.hard_reset
+        else:
+            self._raw_obs = self._env.reset()
         # robosuite keeps the gripper's commanded opening across soft resets (only a new model zeroes it);
         # without this, an episode would start with the previous episode's gripper command.
         for robot in self._inner.robots:
