@@ -52,16 +52,3 @@ def test_unknown_experiment_is_an_error():
         load_experiment("exp9")
     result = run_cli("train", "lerobot", "exp9", "--dataset-root", "d", "--output-dir", "o", "--dry-run")
     assert result.returncode == 2 and result.stderr.startswith("error: unknown experiment")
-
-
-def test_train_command_parses_with_lerobots_own_config():
-    pytest.importorskip("lerobot", reason="LeRobot lives in .venv-lerobot")
-    import draccus
-    import lerobot.policies  # noqa: F401  (registers the policy types the parser chooses from)
-    from lerobot.configs.train import TrainPipelineConfig
-
-    command = train_command(load_experiment("exp4"), dataset_root="/d", repo_id="local/x", output_dir="/o")
-    config = draccus.parse(TrainPipelineConfig, args=command[1:])
-    assert config.peft.r == 64 and config.steps == 200_000 and config.batch_size == 8
-    assert config.policy.type == "pi05" and config.policy.optimizer_lr == 1e-4 and config.policy.dtype == "bfloat16"
-    assert config.dataset.root == "/d"

@@ -1,0 +1,74 @@
+"""Demonstrations as a LeRobot v3 dataset (schema and image orientation of `lerobot/libero`), and the paper's
+experiments as `lerobot-train` configurations. Runs in the LeRobot environment; skipped elsewhere."""
+
+from __future__ import annotations
+
+import shutil
+
+import numpy as np
+import pytest
+
+pytest.importorskip("lerobot", reason="LeRobot lives in .venv-lerobot (created by ./setup.sh)")
+
+from lerobot.datasets.lerobot_dataset import LeRobotDataset  # noqa: E402
+
+from langgap.demos.compact import demo_files, load_demo  # noqa: E402
+from langgap.demos.export import CAMERA_FEATURES, write_lerobot_dataset  # noqa: E402
+from langgap.demos.record import start_episode  # noqa: E402
+from langgap.sim.env import CAMERAS, EnvOptions, TaskEnv  # noqa: E402
+from langgap.training.lerobot_train import EXPERIMENTS, load_experiment, train_command  # noqa: E402
+from tests.conftest import TINY_TASK  # noqa: E402
+from tests.test_lerobot import lerobot_libero_batch  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def dataset(tiny_collection, tmp_path_factory):
+    root = tmp_path_factory.mktemp("export") / "tiny"
+    shutil.copytree(tiny_collection, root)
+    path = write_lerobot_dataset(root, workers=0, progress=False)
+    return root, LeRobotDataset("local/langgap_demos", root=path, video_backend="pyav")
+
+
+def test_dataset_has_the_lerobot_libero_schema(dataset, catalog):
+    root, ds = dataset
+    demos = [load_demo(p) for p in demo_files(root)]
+    assert ds.fps == 20 and ds.num_episodes == 2 and ds.num_frames == sum(d.length for d in demos)
+    features = ds.meta.features
+    for key in CAMERA_FEATURES.values():
+        assert features[key]["dtype"] == "video" and tuple(features[key]["shape"]) == (256, 256, 3)
+    assert tuple(features["observation.state"]["shape"]) == (8,) and tuple(features["action"]["shape"]) == (7,)
+    frame = ds[demos[0].length - 1]  # the last frame of the first episode
+    assert frame["task"] == catalog.get(TINY_TASK).instruction()
+    np.testing.assert_allclose(frame["action"].numpy(), demos[0].actions[-1], atol=1e-6)
+    np.testing.assert_allclose(frame["observation.state"].numpy(), demos[0].robot_states[-1], atol=1e-6)
+    assert int(ds[demos[0].length]["episode_index"]) == 1
+
+
+def test_frames_are_oriented_as_lerobots_libero_processor_makes_them(dataset, catalog):
+    root, ds = dataset
+    demo = load_demo(demo_files(root)[0])
+    with TaskEnv(catalog.get(TINY_TASK), EnvOptions(cameras=CAMERAS, image_size=256)) as env:
+        start_episode(env, demo)
+        expected = lerobot_libero_batch(env, demo.instruction)
+    frame = ds[0]
+    for key in CAMERA_FEATURES.values():
+        ours, theirs = frame[key], expected[key][0]
+        error = (ours - theirs).abs().mean().item()
+        assert error < 0.02, key  # video compression only
+        assert (ours - theirs.flip(-1)).abs().mean().item() > 3 * error  # a mirror image would be caught
+        assert (ours - theirs.flip(-2)).abs().mean().item() > 3 * error  # so would an upside-down one
+
+
+@pytest.mark.parametrize("name", EXPERIMENTS)
+def test_experiment_commands_parse_with_lerobots_own_config(name):
+    import draccus
+    import lerobot.policies  # noqa: F401  (registers the policy types the parser chooses from)
+    from lerobot.configs.train import TrainPipelineConfig
+
+    experiment = load_experiment(name)
+    command = train_command(experiment, dataset_root="/d", repo_id="local/x", output_dir="/o")
+    config = draccus.parse(TrainPipelineConfig, args=command[1:])
+    assert config.peft.method_type == "LORA" and config.peft.r == experiment.paper["lora_rank"]
+    assert config.steps == experiment.paper["steps"] and config.batch_size == 8
+    assert config.policy.type == "pi05" and config.policy.optimizer_lr == 1e-4 and config.policy.dtype == "bfloat16"
+    assert str(config.dataset.root) == "/d" and config.dataset.repo_id == "local/x"
