@@ -7,10 +7,13 @@ Layout of a collection directory::
     lerobot/                              the LeRobot v3 dataset (when LeRobot is installed)
 
 A demonstration NPZ holds `states` (T, D) flattened sim states (the layout of LIBERO's init states),
-`actions` (T, 7), `robot_states` (T, 8), `priv/<key>` (T, ...) the privileged observations
+`actions` (T, 7), `robot_states` (T, 8), `body_pos`/`body_quat` the model's
+body placements (fixtures are placed in the model, not the sim state), `priv/<key>` (T, ...) the privileged observations
 (`eef_pos`, `eef_mat`, `gripper_qpos`, `body/<entity>`, `joint/<name>`), and `meta` (JSON: task id,
-instruction, seed, distance of the start to the nearest fixed init state). Row t is the state before
-action t; the episode it replays starts from `reset` with that seed, then the 10 settle steps.
+instruction, seed, distance of the start to the nearest fixed init state, hash of the
+scene's fixture placements). Row t is the state before
+action t; the episode starts from `reset` with that seed (which rebuilds the scene) and the 10
+settle steps, which end in `states[0]`.
 """
 
 from __future__ import annotations
@@ -46,11 +49,14 @@ def save_demo(root: Path, demo: Demo) -> Path:
         "instruction": demo.instruction,
         "seed": demo.seed,
         "nearest_init_distance": demo.nearest_init_distance,
+        "scene_hash": demo.scene_hash,
     }
     arrays = {
         "states": demo.states,
         "actions": demo.actions,
         "robot_states": demo.robot_states,
+        "body_pos": demo.body_pos,
+        "body_quat": demo.body_quat,
         "meta": np.array(json.dumps(meta)),
         **{f"priv/{k}": v for k, v in demo.privileged.items()},
     }
@@ -73,6 +79,9 @@ def load_demo(path: Path) -> Demo:
                 actions=data["actions"],
                 robot_states=data["robot_states"],
                 nearest_init_distance=float(meta["nearest_init_distance"]),
+                scene_hash=meta["scene_hash"],
+                body_pos=data["body_pos"],
+                body_quat=data["body_quat"],
                 privileged={k[5:]: data[k] for k in data.files if k.startswith("priv/")},
             )
     except (OSError, KeyError, ValueError) as exc:

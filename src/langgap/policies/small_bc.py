@@ -16,7 +16,7 @@ from langgap.sim.env import Observation
 class SmallBCPolicy:
     """`--policy-arg checkpoint=PATH` (required); `replan=k` executes the first k actions of each chunk."""
 
-    def __init__(self, checkpoint: str = "", replan: int = 4):
+    def __init__(self, checkpoint: str = "", replan: int = 2):
         from langgap.training.small_bc import CheckpointError, load_checkpoint
 
         if not checkpoint:

@@ -2,8 +2,10 @@
 
 Proprioception (14): end-effector position (3), orientation matrix (9), gripper fingers (2).
 An entity is a `body/<name>` (object or fixture root body) or a `joint/<name>` (articulated fixture
-joint); its features (11) are position relative to the end effector (3), position (3), wxyz
-quaternion (4) and joint position (1), zeros where they do not apply. Entities are named, and the
+joint); its features (14) are its position relative to the end effector at three scales (9: `tanh`
+of it over 3 cm and 10 cm, for the centimetre precision a grasp needs, and over 30 cm, linear), its
+wxyz quaternion (4) and joint position (1), zeros where they do not apply. Absolute positions are
+left out: with few demonstrations a policy would latch on to them instead of relations. Entities are named, and the
 name is read as words (see `text`), never as an index: the model must match names to sentences.
 """
 
@@ -12,7 +14,10 @@ from __future__ import annotations
 import numpy as np
 
 PROPRIO_DIM = 14
-ENTITY_DIM = 11
+ENTITY_DIM = 14
+# Length scales (m) of the relative-position features: fine ones saturate, the coarse one is linear.
+_FINE_SCALES = (0.03, 0.1)
+_COARSE_SCALE = 0.3
 
 
 def entity_names(privileged: dict) -> list[str]:
@@ -29,16 +34,19 @@ def proprio(privileged: dict) -> np.ndarray:
 
 
 def entities(privileged: dict, names: list[str]) -> np.ndarray:
-    """(..., E, 11) entity features for `names` from (stacked) privileged arrays."""
+    """(..., E, 14) entity features for `names` from (stacked) privileged arrays."""
     eef = np.asarray(privileged["eef_pos"])
     out = np.zeros((*eef.shape[:-1], len(names), ENTITY_DIM), dtype=np.float32)
     for i, name in enumerate(names):
         value = np.asarray(privileged[name])
         if name.startswith("body/"):
-            out[..., i, 0:3] = value[..., :3] - eef
-            out[..., i, 3:10] = value[..., :7]
+            relative = value[..., :3] - eef
+            out[..., i, 0:3] = np.tanh(relative / _FINE_SCALES[0])
+            out[..., i, 3:6] = np.tanh(relative / _FINE_SCALES[1])
+            out[..., i, 6:9] = relative / _COARSE_SCALE
+            out[..., i, 9:13] = value[..., 3:7]
         else:
-            out[..., i, 10] = value[..., 0]
+            out[..., i, 13] = value[..., 0]
     return out
 
 

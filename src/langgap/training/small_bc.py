@@ -2,8 +2,8 @@
 Saved as one safetensors file (weights + JSON metadata: config, vocabulary, normalisation statistics).
 
 * Text: the instruction's words (learned embeddings + positions) through a small transformer encoder.
-* Scene: one token per entity (its name's mean word embedding + an MLP of its features); each entity
-  token attends to the encoded instruction (cross-attention), which is where a word like "ramekin"
+* Scene: one token per entity (its name through the same text encoder + an MLP of its features); each
+  entity token attends to the encoded instruction (cross-attention), which is where a word like "ramekin"
   meets the entity `glazed_rim_porcelain_ramekin_1` (sentences and names share word embeddings).
 * A transformer over [action query, proprioception, pooled instruction, entities]; the query's output
   is decoded into `chunk` 7-D actions.
@@ -99,15 +99,17 @@ class SmallBC(nn.Module):
     def forward(
         self, proprio: torch.Tensor, entities: torch.Tensor, names: torch.Tensor, instruction: torch.Tensor
     ) -> torch.Tensor:
-        """proprio (B, 14), entities (B, E, 11), names (B, E, W) word ids (0 = no entity), instruction (B, L) ids
+        """proprio (B, 14), entities (B, E, 14), names (B, E, W) word ids (0 = no entity), instruction (B, L) ids
         -> actions (B, chunk, 7)."""
         batch = proprio.shape[0]
         sentences, which = torch.unique(instruction, dim=0, return_inverse=True)
         words, pooled = self.encode_text(sentences)
         words, pooled, word_pad = words[which], pooled[which], (sentences == 0)[which]
         entity_mask = names[..., 0] > 0
-        name_keep = (names > 0).unsqueeze(-1).float()
-        name_vec = (self.words(names) * name_keep).sum(-2) / name_keep.sum(-2).clamp(min=1.0)
+        # Names through the text encoder (once per distinct name): word order tells bowl 1 from bowl 2.
+        flat = names.reshape(-1, names.shape[-1])
+        distinct, where = torch.unique(flat, dim=0, return_inverse=True)
+        name_vec = self.encode_text(distinct)[1][where].view(*names.shape[:2], -1)
         entity_tok = self.entity((entities - self.entity_mean) / self.entity_std) + name_vec
         grounded, _ = self.ground(entity_tok, words, words, key_padding_mask=word_pad, need_weights=False)
         entity_tok = entity_tok + grounded + self.kind.weight[3]
