@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from langgap.catalog.catalog import load_catalog
+from langgap.demos.collect import CollectConfig, collect
 
 REPO = Path(__file__).resolve().parents[1]
 SHORT_STEPS = 15
@@ -67,13 +68,12 @@ def short_catalog(tmp_path_factory):
 
 
 TINY_TASK = "spatial/s0/black-bowl-1-on-plate"
+TINY_CONFIG = CollectConfig(catalog="langgap99", tasks=(TINY_TASK,), demos=2, seed=7, noise=0.2)
 
 
 @pytest.fixture(scope="session")
 def tiny_collection(tmp_path_factory) -> Path:
-    """Two oracle demonstrations of one spatial task (compact form), collected once per session."""
-    from langgap.demos.collect import CollectConfig, collect
-
+    """Two oracle demonstrations of one spatial task (compact form, with execution noise), collected once."""
     out = tmp_path_factory.mktemp("demos") / "tiny"
-    collect(CollectConfig(catalog="langgap99", tasks=(TINY_TASK,), demos=2, seed=7), out, workers=0, progress=False)
+    collect(TINY_CONFIG, out, workers=0, progress=False)
     return out

@@ -6,11 +6,11 @@ import shutil
 
 import numpy as np
 
-from langgap.demos.collect import CollectConfig, collect
+from langgap.demos.collect import collect
 from langgap.demos.compact import demo_files, load_demo, read_manifest, save_demo
 from langgap.demos.record import SAME_STATE_TOLERANCE
 from langgap.sim.env import TaskEnv
-from tests.conftest import TINY_TASK, run_cli
+from tests.conftest import TINY_CONFIG, TINY_TASK, run_cli
 
 
 def test_sampled_start_is_none_of_the_fixed_init_states_and_only_the_seed_decides_it(catalog):
@@ -44,14 +44,17 @@ def test_collection_keeps_successes_from_fresh_starts(tiny_collection, catalog):
         assert demo.robot_states.shape[1] == 8 and demo.actions.shape[1] == 7
         assert set(demo.privileged) >= {"eef_pos", "eef_mat", "gripper_qpos", "body/akita_black_bowl_1"}
         assert demo.privileged["body/plate_1"].shape == (demo.length, 7)
+        # Execution noise on the motion commands only; the labels are the oracle's clean commands.
+        assert np.abs(demo.actions[:, :6] - demo.labels[:, :6]).max() > 0.05
+        np.testing.assert_array_equal(demo.actions[:, 6], demo.labels[:, 6])
 
 
 def test_collection_is_deterministic_across_worker_counts(tiny_collection, tmp_path):
-    config = CollectConfig(catalog="langgap99", tasks=(TINY_TASK,), demos=2, seed=7)
-    collect(config, tmp_path / "again", workers=1, progress=False)
+    collect(TINY_CONFIG, tmp_path / "again", workers=1, progress=False)
     for a, b in zip(demo_files(tiny_collection), demo_files(tmp_path / "again"), strict=True):
         first, second = load_demo(a), load_demo(b)
         np.testing.assert_array_equal(first.actions, second.actions)
+        np.testing.assert_array_equal(first.labels, second.labels)
         np.testing.assert_array_equal(first.states, second.states)
     for key in ("attempts", "kept", "failed", "steps"):
         assert (

@@ -39,7 +39,7 @@ def test_dataset_has_the_lerobot_libero_schema(dataset, catalog):
     assert tuple(features["observation.state"]["shape"]) == (8,) and tuple(features["action"]["shape"]) == (7,)
     frame = ds[demos[0].length - 1]  # the last frame of the first episode
     assert frame["task"] == catalog.get(TINY_TASK).instruction()
-    np.testing.assert_allclose(frame["action"].numpy(), demos[0].actions[-1], atol=1e-6)
+    np.testing.assert_allclose(frame["action"].numpy(), demos[0].labels[-1], atol=1e-6)
     np.testing.assert_allclose(frame["observation.state"].numpy(), demos[0].robot_states[-1], atol=1e-6)
     assert int(ds[demos[0].length]["episode_index"]) == 1
 

@@ -16,7 +16,13 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--out", required=True, metavar="DIR", help="new collection directory")
     parser.add_argument("--workers", type=int, default=1, help="worker processes, one task at a time each (0: here)")
     parser.add_argument("--seed", type=int, default=0, help="attempt j of every task uses env seed SEED+j")
-    parser.add_argument("--noise", type=float, default=0.0, metavar="SIGMA", help="oracle action noise (std)")
+    parser.add_argument(
+        "--noise",
+        type=float,
+        default=0.0,
+        metavar="SIGMA",
+        help="execution noise on the oracle's motion commands (std); labels stay the clean commands (DART)",
+    )
     parser.add_argument("--max-attempts", type=int, default=0, help="attempts per task before giving up (3N+10)")
     parser.add_argument(
         "--format",

@@ -22,6 +22,7 @@ def add_parser(subparsers) -> None:
     bc.add_argument("--lr", type=float, help="peak learning rate (default: 1e-3)")
     bc.add_argument("--seed", type=int, help="training seed (default: 0)")
     bc.add_argument("--threads", type=int, help="torch CPU threads (default: 2)")
+    bc.add_argument("--loss", choices=("l1", "mse"), help="regression loss on the action chunk (default: l1)")
     bc.set_defaults(handler=run_small_bc)
 
     lr = kinds.add_parser(
@@ -50,10 +51,11 @@ def _small_bc_config(args):
         values = yaml.safe_load(Path(args.config).read_text()) or {}
         if not isinstance(values, dict):
             raise LangGapError(f"{args.config}: expected a mapping of options")
-    for key in ("data", "catalog", "tasks", "out", "steps", "batch_size", "lr", "seed", "threads"):
+    options = ("data", "catalog", "tasks", "out", "steps", "batch_size", "lr", "seed", "threads", "loss")
+    for key in options:
         if getattr(args, key) is not None:
             values[key] = getattr(args, key)
-    unknown = set(values) - {"data", "catalog", "tasks", "out", "steps", "batch_size", "lr", "seed", "threads", "model"}
+    unknown = set(values) - {*options, "model"}
     if unknown:
         raise LangGapError(f"unknown small-bc option(s): {', '.join(sorted(unknown))}")
     for key in ("data", "out"):

@@ -26,7 +26,8 @@ from langgap.version import code_version
 
 @dataclass(frozen=True)
 class CollectConfig:
-    """What to collect. `policy` is the scripted demonstrator (`oracle`), `noise` its action noise."""
+    """What to collect. `policy` is the scripted demonstrator (`oracle`); `noise` is the standard deviation of
+    the execution noise on its motion commands (see `ExecutionNoise`)."""
 
     catalog: str
     tasks: tuple[str, ...]
@@ -62,7 +63,7 @@ def collect_task(config: CollectConfig, task_id: str, out: str) -> TaskCollectio
     """Collect one task's demonstrations into `out` (runs in a worker process)."""
     catalog = load_catalog(config.catalog)
     task = catalog.get(task_id)
-    policy = make_policy(config.policy, {"noise": str(config.noise)})
+    policy = make_policy(config.policy)
     stats = TaskCollection(task_id)
     started = time.perf_counter()
     with TaskEnv(task, EnvOptions(privileged=True)) as env:
@@ -70,7 +71,9 @@ def collect_task(config: CollectConfig, task_id: str, out: str) -> TaskCollectio
             if len(stats.kept) == config.demos:
                 break
             seed = config.seed + attempt
-            success, demo = record_attempt(env, policy, task, catalog, seed=seed, style=config.style)
+            success, demo = record_attempt(
+                env, policy, task, catalog, seed=seed, style=config.style, noise=config.noise
+            )
             stats.attempts += 1
             stats.steps += demo.length
             if not success:

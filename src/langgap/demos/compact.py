@@ -7,7 +7,8 @@ Layout of a collection directory::
     lerobot/                              the LeRobot v3 dataset (when LeRobot is installed)
 
 A demonstration NPZ holds `states` (T, D) flattened sim states (the layout of LIBERO's init states),
-`actions` (T, 7), `robot_states` (T, 8), `body_pos`/`body_quat` the model's
+`actions` (T, 7) executed, `labels` (T, 7) the oracle's commands (the
+actions without `--noise`: the training targets), `robot_states` (T, 8), `body_pos`/`body_quat` the model's
 body placements (fixtures are placed in the model, not the sim state), `priv/<key>` (T, ...) the privileged observations
 (`eef_pos`, `eef_mat`, `gripper_qpos`, `body/<entity>`, `joint/<name>`), and `meta` (JSON: task id,
 instruction, seed, distance of the start to the nearest fixed init state, hash of the
@@ -54,6 +55,7 @@ def save_demo(root: Path, demo: Demo) -> Path:
     arrays = {
         "states": demo.states,
         "actions": demo.actions,
+        "labels": demo.labels,
         "robot_states": demo.robot_states,
         "body_pos": demo.body_pos,
         "body_quat": demo.body_quat,
@@ -77,6 +79,7 @@ def load_demo(path: Path) -> Demo:
                 seed=int(meta["seed"]),
                 states=data["states"],
                 actions=data["actions"],
+                labels=data["labels"],
                 robot_states=data["robot_states"],
                 nearest_init_distance=float(meta["nearest_init_distance"]),
                 scene_hash=meta["scene_hash"],

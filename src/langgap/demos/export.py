@@ -2,7 +2,8 @@
 
 Schema of `lerobot/libero`: `observation.images.image` (agentview) and `observation.images.image2`
 (wrist), 256x256 upright (LangGap's images: the raw render rotated 180 degrees, what LeRobot's
-`LiberoProcessorStep` makes of the raw render), `observation.state` 8-D, `action` 7-D, the task
+`LiberoProcessorStep` makes of the raw render), `observation.state` 8-D, `action` 7-D (the oracle's command: without the execution noise of
+`collect --noise`), the task
 string (the exact catalog instruction in the collection's style), fps 20 (the control rate: one
 frame per action). Frames are rendered by replaying the recorded states of kept demonstrations.
 """
@@ -69,7 +70,7 @@ def render_demo(catalog: str, path: str) -> tuple[str, np.ndarray, np.ndarray, n
     frames = list(replay_states(env, demo, lambda e: [e.render(c) for c in CAMERAS]))
     agentview = np.stack([f[0] for f in frames])
     wrist = np.stack([f[1] for f in frames])
-    return demo.instruction, agentview, wrist, demo.robot_states, demo.actions.astype(np.float32)
+    return demo.instruction, agentview, wrist, demo.robot_states, demo.labels.astype(np.float32)
 
 
 def _render_star(args):

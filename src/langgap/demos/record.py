@@ -13,7 +13,7 @@ from langgap.catalog.task import Task
 from langgap.engine.context import task_context
 from langgap.engine.rollout import run_episode
 from langgap.errors import SimulationError
-from langgap.policies.base import Policy
+from langgap.policies.base import Policy, as_action_chunk
 from langgap.sim.env import TaskEnv, state_from_robosuite
 from langgap.sim.privileged import privileged_state
 
@@ -32,7 +32,8 @@ class Demo:
     instruction: str
     seed: int
     states: np.ndarray  # (T, D) flattened sim states
-    actions: np.ndarray  # (T, 7)
+    actions: np.ndarray  # (T, 7) the actions executed (what a replay applies)
+    labels: np.ndarray  # (T, 7) the demonstrator's commands (= actions without execution noise): training targets
     robot_states: np.ndarray  # (T, 8) LangGap/LeRobot 8-D state
     nearest_init_distance: float
     scene_hash: str  # the fixture placements of the seed's scene (see `scene_hash`)
@@ -59,14 +60,43 @@ def privileged_subset(env: TaskEnv) -> dict[str, np.ndarray]:
     return {k: v for k, v in full.items() if k in PRIVILEGED_KEYS or k.startswith(PRIVILEGED_PREFIXES)}
 
 
+class ExecutionNoise:
+    """Wraps a demonstrator: the environment receives its commands plus Gaussian noise on the six motion
+    components (seeded per episode), while its clean commands are kept as the labels (DART): the data
+    then covers the states a learner drifts into, each labelled with the correction."""
+
+    def __init__(self, policy: Policy, noise: float):
+        self.policy = policy
+        self.spec = policy.spec
+        self.noise = noise
+        self.labels: list[np.ndarray] = []  # clean commands not yet executed, in execution order
+        self._rng = np.random.default_rng(0)
+
+    def reset(self, context) -> None:
+        self.policy.reset(context)
+        self.labels = []
+        self._rng = np.random.default_rng([context.seed, 0xDA27])
+
+    def act(self, observation) -> np.ndarray:
+        clean = as_action_chunk(self.policy.act(observation), self.spec)
+        self.labels = list(clean[: self.spec.replan])
+        noisy = clean.copy()
+        if self.noise > 0:
+            noisy[:, :6] = np.clip(noisy[:, :6] + self._rng.normal(0.0, self.noise, (len(noisy), 6)), -1.0, 1.0)
+        return noisy
+
+
 def record_attempt(
-    env: TaskEnv, policy: Policy, task: Task, catalog: Catalog, *, seed: int, style: str
+    env: TaskEnv, policy: Policy, task: Task, catalog: Catalog, *, seed: int, style: str, noise: float = 0.0
 ) -> tuple[bool, Demo]:
-    """Run `policy` once on `task` from the placement sampled with `seed`; returns (success, recording)."""
+    """Run `policy` once on `task` from the placement sampled with `seed` (with execution noise `noise`, see
+    `ExecutionNoise`); returns (success, recording)."""
     states: list[np.ndarray] = []
     robot: list[np.ndarray] = []
     actions: list[np.ndarray] = []
+    labels: list[np.ndarray] = []
     start: dict = {}
+    demonstrator = ExecutionNoise(policy, noise)
 
     def on_start(e: TaskEnv) -> None:
         start["distance"] = e.nearest_init_distance()
@@ -78,12 +108,13 @@ def record_attempt(
 
     def on_step(e: TaskEnv, _step: int, action: np.ndarray) -> None:
         actions.append(np.asarray(action, dtype=np.float64).copy())
+        labels.append(demonstrator.labels.pop(0))
         states.append(e.sim_state().copy())
         robot.append(state_from_robosuite(e.robosuite_observation))
 
     # init_index 0 only names the attempt for the policy's own RNG; the start is the sampled placement.
     context = task_context(task, catalog, init_index=0, seed=seed, style=style)
-    result = run_episode(env, policy, context, on_step=on_step, on_start=on_start, sampled_start=True)
+    result = run_episode(env, demonstrator, context, on_step=on_step, on_start=on_start, sampled_start=True)
     if start["distance"] < SAME_STATE_TOLERANCE:
         raise SimulationError(f"{task.id}: the start sampled with seed {seed} is one of the fixed init states")
     # The last recorded state follows the last action; a demonstration keeps pre-action states only.
@@ -93,6 +124,7 @@ def record_attempt(
         seed=seed,
         states=np.array(states[:-1]),
         actions=np.array(actions).reshape(-1, 7),
+        labels=np.array(labels).reshape(-1, 7),
         robot_states=np.array(robot[:-1], dtype=np.float32),
         nearest_init_distance=start["distance"],
         scene_hash=start["scene"],

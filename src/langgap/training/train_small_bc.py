@@ -34,6 +34,7 @@ class TrainConfig:
     lr: float = 1e-3
     seed: int = 0
     threads: int = 2
+    loss: str = "l1"  # l1 or mse, on the action chunk
     model: ModelConfig = field(default_factory=ModelConfig)
 
 
@@ -72,7 +73,7 @@ def build_samples(demos: list[Demo], vocab: Vocabulary, config: ModelConfig) -> 
         parts["entities"].append(ents)
         parts["names"].append(np.broadcast_to(name_ids, (n, *name_ids.shape)))
         parts["instruction"].append(np.tile(vocab.encode(demo.instruction, config.max_words), (n, 1)))
-        parts["actions"].append(demo.actions[np.minimum(index, n - 1)].astype(np.float32))
+        parts["actions"].append(demo.labels[np.minimum(index, n - 1)].astype(np.float32))
         parts["action_mask"].append(index < n)
     return Samples(**{k: np.concatenate(v) for k, v in parts.items()})
 
@@ -101,6 +102,8 @@ def _lr_factor(step: int, total: int) -> float:
 
 def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=print) -> dict:
     """Train a small-bc model on `config`'s demonstrations and save it to `out`; returns training facts."""
+    if config.loss not in ("l1", "mse"):
+        raise LangGapError(f"unknown loss {config.loss!r} (l1 or mse)")
     started = time.perf_counter()
     torch.set_num_threads(config.threads)
     torch.manual_seed(config.seed)
@@ -125,7 +128,9 @@ def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=pri
             tensors["instruction"][batch],
         )
         mask = tensors["action_mask"][batch].unsqueeze(-1).float()
-        loss = (((pred - tensors["actions"][batch]) ** 2) * mask).sum() / (mask.sum() * 7)
+        error = pred - tensors["actions"][batch]
+        error = error.abs() if config.loss == "l1" else error**2
+        loss = (error * mask).sum() / (mask.sum() * 7)
         optimizer.zero_grad(set_to_none=True)
         loss.backward()
         torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
@@ -143,6 +148,7 @@ def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=pri
         "steps": config.steps,
         "batch_size": config.batch_size,
         "lr": config.lr,
+        "loss": config.loss,
         "seed": config.seed,
         "final_loss": loss_value,
         "train_time_s": round(time.perf_counter() - started, 1),
