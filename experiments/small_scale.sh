@@ -12,19 +12,20 @@
 # oracle doing the scene's original task whatever the instruction says: a policy that ignores language).
 #
 #   experiments/small_scale.sh [OUT]        (default OUT: runs/small_scale; re-running skips finished steps)
-# Environment: DEMOS (per task, default 12), STEPS (training steps, default 3000), EPISODES (per task,
-# default 10), WORKERS (default 2). Needs `langgap` with the train extra on PATH (source .venv/bin/activate).
+# Environment: DEMOS (per task, default 12), NOISE (execution noise of the demonstrations, default 0.3),
+# STEPS (training steps, default 4000), EPISODES (per task, default 10), WORKERS (default 2). Needs `langgap` with the train extra on PATH (source .venv/bin/activate).
 set -euo pipefail
 OUT="${1:-runs/small_scale}"
 DEMOS="${DEMOS:-12}"
-STEPS="${STEPS:-3000}"
+NOISE="${NOISE:-0.3}"
+STEPS="${STEPS:-4000}"
 EPISODES="${EPISODES:-10}"
 WORKERS="${WORKERS:-2}"
 SCENE="spatial/s0/*"
 mkdir -p "$OUT"
 
 [ -f "$OUT/demos/collection.json" ] || langgap collect --tasks "$SCENE&original,$SCENE&train" --demos "$DEMOS" \
-    --out "$OUT/demos" --workers "$WORKERS" --seed 1000 --format compact --no-progress
+    --noise "$NOISE" --out "$OUT/demos" --workers "$WORKERS" --seed 1000 --format compact --no-progress
 
 declare -A TRAIN=([original]="$SCENE&original" [extended]="$SCENE&train" [mixed]="$SCENE&original,$SCENE&train")
 for name in original extended mixed; do
