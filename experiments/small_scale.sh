@@ -13,7 +13,8 @@
 #
 #   experiments/small_scale.sh [OUT]        (default OUT: runs/small_scale; re-running skips finished steps)
 # Environment: DEMOS (per task, default 12), NOISE (execution noise of the demonstrations, default 0.3),
-# STEPS (training steps, default 4000), EPISODES (per task, default 10), WORKERS (default 2). Needs `langgap` with the train extra on PATH (source .venv/bin/activate).
+# STEPS (training steps, default 4000), EPISODES (per task, default 10), WORKERS (default 2).
+# Needs `langgap` with the train extra on PATH (source .venv/bin/activate).
 set -euo pipefail
 OUT="${1:-runs/small_scale}"
 DEMOS="${DEMOS:-12}"
