@@ -147,3 +147,26 @@ def test_hard_reset_applies_init_state_after_reset(catalog):
         for index in (0, 4):
             env.reset(index, seed=0)
             assert np.array_equal(env.sim_state(), env.init_states[index])
+
+
+def test_switching_task_within_a_scene_equals_a_fresh_env(catalog):
+    """Sibling tasks share the simulator: an env built for one runs another exactly like its own env."""
+    rng = np.random.default_rng(5)
+    actions = rng.uniform(-0.5, 0.5, size=(25, 7))
+    target = catalog.get("spatial/s2/black-bowl-1-on-stove")
+
+    def episode(env: TaskEnv) -> tuple[str, bool, int]:
+        env.reset(3, seed=3)
+        env.settle()
+        success = any(env.step(a) for a in actions)
+        return env.state_hash(), success, env.task.max_steps
+
+    with TaskEnv(target) as fresh:
+        expected = episode(fresh)
+    with TaskEnv(catalog.get("spatial/s2/black-bowl-1-on-plate")) as shared:
+        assert shared.can_switch_to(target)
+        assert not shared.can_switch_to(catalog.get("spatial/s0/black-bowl-1-on-stove"))
+        with pytest.raises(SimulationError, match="not the same scene"):
+            shared.switch_task(catalog.get("goal/s1/black-bowl-on-stove"))
+        shared.switch_task(target)
+        assert episode(shared) == expected

@@ -68,7 +68,9 @@ class EpisodeRunner:
             else:
                 self._policy = make_policy(self.setup.policy, self.setup.policy_args)
             self._policy_hash = config_hash(policy_config(self._policy))
-        if self._env is None or self._env.task.id != task.id:
+        if self._env is not None and self._env.can_switch_to(task):
+            self._env.switch_task(task)
+        else:
             self._close_env()
             self._env = TaskEnv(task, self._env_options())
         frames: list = []

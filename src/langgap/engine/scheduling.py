@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 from langgap.catalog.catalog import load_catalog
 from langgap.engine.episode import gap_record
@@ -12,11 +12,14 @@ from langgap.engine.runner import RunnerSetup
 from langgap.store import EpisodeRecord
 
 
-def make_units(plan: list[PlannedEpisode], workers: int) -> deque[deque[PlannedEpisode]]:
+def make_units(
+    plan: list[PlannedEpisode], workers: int, scene_of: Callable[[str], str] = str
+) -> deque[deque[PlannedEpisode]]:
     """Consecutive episodes of one task (so a worker reuses its environment), split when there are too few
-    tasks to keep every worker busy."""
+    tasks to keep every worker busy; tasks of one scene come one after another (`scene_of(task_id)`), so a
+    worker's environment also serves the next task of the same scene."""
     by_task: dict[str, list[PlannedEpisode]] = {}
-    for planned in plan:
+    for planned in sorted(plan, key=lambda p: scene_of(p.key.task_id)):
         by_task.setdefault(planned.key.task_id, []).append(planned)
     pieces_per_task = max(1, -(-2 * workers // max(1, len(by_task))))
     units: deque[deque[PlannedEpisode]] = deque()
@@ -35,7 +38,10 @@ class Ledger:
     """
 
     def __init__(self, plan: list[PlannedEpisode], workers: int, setup: RunnerSetup, max_attempts: int):
-        self.units = make_units(plan, workers)
+        catalog = load_catalog(setup.catalog)
+        self.units = make_units(
+            plan, workers, lambda task_id: f"{catalog.get(task_id).suite}/{catalog.get(task_id).scene_task}"
+        )
         self.setup = setup
         self.max_attempts = max_attempts
         self._count: dict[EpisodeKey, int] = {}

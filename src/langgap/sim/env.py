@@ -130,6 +130,20 @@ class TaskEnv:
 
     # -- lifecycle ---------------------------------------------------------------------------
 
+    def can_switch_to(self, task: Task) -> bool:
+        """Whether `task` is set in this env's scene with the same init states, so the simulator can be kept."""
+        return (task.suite, task.scene_task) == (self.task.suite, self.task.scene_task) and files.scene_key(
+            task
+        ) == files.scene_key(self.task)
+
+    def switch_task(self, task: Task) -> None:
+        """Evaluate `task` from now on. Same-scene tasks differ only in goal and instruction, which LangGap
+        evaluates itself, so the simulator (seconds to build) is reused as it is."""
+        if not self.can_switch_to(task):
+            raise SimulationError(f"cannot switch {self.task.id} to {task.id}: not the same scene and init states")
+        self.task = task
+        self._goal = tuple(p.as_libero() for p in task.goal)
+
     def __enter__(self) -> TaskEnv:
         return self
 
