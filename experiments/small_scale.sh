@@ -31,7 +31,7 @@ mkdir -p "$OUT"
 declare -A TRAIN=([original]="$SCENE&original" [extended]="$SCENE&train" [mixed]="$SCENE&original,$SCENE&train")
 for name in original extended mixed; do
     [ -f "$OUT/$name.safetensors" ] || langgap train small-bc --data "$OUT/demos" --tasks "${TRAIN[$name]}" \
-        --steps "$STEPS" --seed 0 --out "$OUT/$name.safetensors"
+        --steps "$STEPS" --threads 1 --seed 0 --out "$OUT/$name.safetensors"
 done
 
 for name in original extended mixed; do
