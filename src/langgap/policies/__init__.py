@@ -18,6 +18,8 @@ REGISTRY: dict[str, str] = {
     "delay": "langgap.policies.simple:DelayPolicy",
     "openpi": "langgap.policies.openpi:OpenpiPolicy",
     "lerobot": "langgap.policies.lerobot:LeRobotPolicy",
+    "oracle": "langgap.policies.oracle:OraclePolicy",
+    "blind": "langgap.policies.oracle:BlindPolicy",
 }
 
 

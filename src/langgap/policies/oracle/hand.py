@@ -1,0 +1,43 @@
+"""The Panda hand's geometry around its grip site, measured from robosuite's collision meshes.
+
+All offsets are in the grip-site frame: x is the finger-closing axis, z the approach axis (pointing
+out of the fingers), y the third axis. A top-down grasp has z pointing down.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+PAD_GAP_OPEN = 0.076  # distance between the finger pads, fully open
+MAX_GRASP_WIDTH = 0.068  # widest material the pads close on with room to spare
+FINGER_THICKNESS = 0.018  # pad face to the finger's outer face, near the tip
+FINGER_DEPTH = 0.013  # half-extent of a finger along y
+TIP = 0.010  # finger tips, ahead of the grip site along z
+PAD_CENTRE = -0.004  # centre of the pads along z (behind the grip site)
+PAD_HALF_HEIGHT = 0.008
+PALM = -0.030  # the palm's lower face starts this far behind the grip site
+PALM_TOP = -0.115
+PALM_HALF_LENGTH = 0.102  # along x
+PALM_HALF_DEPTH = 0.026  # along y
+WRIST_TOP = -0.20  # the wrist (the arm's last links), a narrower block above the palm
+WRIST_HALF_WIDTH = 0.05
+
+
+def finger_boxes(width: float) -> np.ndarray:
+    """The two fingers (2, 6) as boxes in the grip-site frame, pads `width` apart."""
+    half = width / 2.0
+    boxes = []
+    for side in (-1.0, 1.0):
+        inner, outer = side * half, side * (half + FINGER_THICKNESS)
+        boxes.append([min(inner, outer), -FINGER_DEPTH, PALM, max(inner, outer), FINGER_DEPTH, TIP])
+    return np.array(boxes)
+
+
+def palm_boxes() -> np.ndarray:
+    """The palm and the wrist above it (2, 6) as boxes in the grip-site frame."""
+    return np.array(
+        [
+            [-PALM_HALF_LENGTH, -PALM_HALF_DEPTH, PALM_TOP, PALM_HALF_LENGTH, PALM_HALF_DEPTH, PALM],
+            [-WRIST_HALF_WIDTH, -WRIST_HALF_WIDTH, WRIST_TOP, WRIST_HALF_WIDTH, WRIST_HALF_WIDTH, PALM_TOP],
+        ]
+    )

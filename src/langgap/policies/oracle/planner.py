@@ -1,0 +1,123 @@
+"""From goal predicates to one program of skills: order the sub-goals, then achieve each in turn.
+
+Sub-goals that change a fixture's state come first (turn a knob, open a drawer — also when a goal
+puts something into a closed drawer), then the pick-and-place ones in goal order, then closing
+(put things in before shutting them). Each round skips what already holds; a second round retries
+what did not stick.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from langgap.bddl import Predicate
+from langgap.errors import LangGapError
+from langgap.policies.oracle import skills
+from langgap.policies.oracle.grasps import has_grasp
+from langgap.policies.oracle.motion import Agent, Program, hold
+from langgap.policies.oracle.placement import spot_aside, spot_on_object, spots_in_region
+from langgap.policies.oracle.predicates import holds, region_box
+from langgap.policies.oracle.scene import Scene
+
+ROUNDS = 3
+_FIRST = ("Turnon", "Turnoff", "Open")
+_LAST = ("Close",)
+_STATE = {"Open": "open", "Close": "close", "Turnon": "on", "Turnoff": "off"}
+
+
+class OracleError(LangGapError):
+    """The oracle cannot act on this goal in this scene."""
+
+
+def parse_goal(goal: tuple[str, ...] | list[str]) -> tuple[Predicate, ...]:
+    """Parse goal strings such as `(On bowl_1 plate_1)`; an empty or malformed goal is an OracleError."""
+    if not goal:
+        raise OracleError("the oracle needs a goal, got none")
+    try:
+        return tuple(Predicate.parse(text) for text in goal)
+    except LangGapError as exc:
+        raise OracleError(f"the oracle cannot read goal {list(goal)}: {exc}") from None
+
+
+def check_goal(scene: Scene, goal: tuple[Predicate, ...]) -> None:
+    """Raise OracleError unless every predicate names things this scene has, in a role the oracle handles."""
+    for predicate in goal:
+        if predicate.name in ("On", "In"):
+            obj, target = predicate.args
+            if not scene.has_entity(obj):
+                raise OracleError(f"goal {predicate}: no object {obj!r} in this scene")
+            if not (scene.has_entity(target) or scene.has_region(target)):
+                raise OracleError(f"goal {predicate}: no object or region {target!r} in this scene")
+            if predicate.name == "In" and not scene.has_region(target):
+                raise OracleError(f"goal {predicate}: `In` needs a region, {target!r} is an object")
+        else:
+            (name,) = predicate.args
+            if name not in scene.articulated:
+                raise OracleError(f"goal {predicate}: {name!r} is not an articulated part of this scene")
+            if _STATE[predicate.name] not in scene.articulation(name).intervals:
+                raise OracleError(f"goal {predicate}: {name!r} has no {_STATE[predicate.name]!r} state")
+
+
+def order_goal(scene: Scene, goal: tuple[Predicate, ...]) -> list[Predicate]:
+    """Sub-goals in the order to pursue them, with implied drawer openings inserted."""
+    first = [p for p in goal if p.name in _FIRST]
+    last = [p for p in goal if p.name in _LAST]
+    middle = [p for p in goal if p.name not in _FIRST + _LAST]
+    for p in middle:
+        container = p.args[1]
+        if container in scene.articulated and "open" in scene.articulation(container).intervals:
+            opening = Predicate("Open", (container,))
+            if opening not in first:
+                first.append(opening)
+    return first + middle + last
+
+
+def _achieve(agent: Agent, predicate: Predicate) -> Program:
+    scene = agent.scene
+    name, args = predicate.name, predicate.args
+    if name in ("On", "In"):
+        obj, target = args
+        if scene.has_entity(target):
+            spots = [spot_on_object(scene, obj, target)]
+        else:
+            spots = spots_in_region(scene, obj, target, inside=name == "In")
+            if spots[0].blockers and name == "On":
+                # `On` a region needs contact with its surface: clear the way first.
+                keep_clear = np.concatenate(region_box(scene.region(target), inside=False))
+                for blocker in spots[0].blockers:
+                    aside = spot_aside(agent.scene, blocker, keep_clear)
+                    if aside is not None and (yield from skills.pick(agent, blocker, [aside])):
+                        yield from skills.place(agent, blocker, aside)
+                scene = agent.scene
+                spots = spots_in_region(scene, obj, target, inside=False)
+        if not has_grasp(scene, obj):
+            return (yield from skills.push_to(agent, obj, spots[0]))
+        spot = yield from skills.pick(agent, obj, spots)
+        if spot is None:
+            return False
+        return (yield from skills.place(agent, obj, spot))
+    (part,) = args
+    art = scene.articulation(part)
+    if name in ("Turnon", "Turnoff"):
+        return (yield from skills.turn(agent, part, _STATE[name]))
+    if art.slide:
+        if name == "Open":
+            return (yield from skills.pull_open(agent, part))
+        return (yield from skills.push_closed(agent, part))
+    if name == "Close":
+        return (yield from skills.close_door(agent, part))
+    raise OracleError(f"the oracle cannot {name.lower()} {part!r} (a hinged door)")
+
+
+def program(agent: Agent, goal: tuple[Predicate, ...]) -> Program:
+    """The whole episode: pursue the ordered sub-goals for a few rounds, then hold still."""
+    check_goal(agent.scene, goal)
+    steps = order_goal(agent.scene, goal)
+    for _ in range(ROUNDS):
+        pending = [p for p in steps if not holds(agent.scene, p)]
+        if not pending:
+            break
+        for predicate in pending:
+            if not holds(agent.scene, predicate):
+                yield from _achieve(agent, predicate)
+    return (yield from hold(agent))

@@ -1,0 +1,64 @@
+"""The `oracle` and `blind` policies: a scripted planner over privileged state, through the normal action interface."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from langgap.policies.base import PolicySpec, TaskContext
+from langgap.policies.oracle.motion import Agent, Program
+from langgap.policies.oracle.planner import OracleError, parse_goal, program
+from langgap.policies.oracle.scene import Scene
+from langgap.sim.env import Observation
+
+
+class OraclePolicy:
+    """Solves a task from its goal predicates and the privileged simulator state.
+
+    It reads the world only from `observation.privileged` and the goal only from the context, and
+    answers with the 7-D OSC_POSE delta + gripper action at 20 Hz like any policy. `noise` adds
+    Gaussian noise (that standard deviation, in action units) to the six motion components, seeded
+    from the episode's seed and init index, for diverse demonstrations.
+    """
+
+    spec = PolicySpec(state=False, privileged=True)
+
+    def __init__(self, noise: float = 0.0):
+        if noise < 0:
+            raise OracleError(f"noise must be >= 0, got {noise}")
+        self.noise = noise
+        self._goal: tuple = ()
+        self._agent = Agent()
+        self._program: Program | None = None
+        self._rng = np.random.default_rng(0)
+
+    def config(self) -> dict:
+        return {"noise": self.noise}
+
+    def goal_of(self, context: TaskContext) -> tuple[str, ...]:
+        """The goal this policy pursues: the task's own."""
+        return context.goal
+
+    def reset(self, context: TaskContext) -> None:
+        self._goal = parse_goal(self.goal_of(context))
+        self._agent = Agent()
+        self._program = None
+        self._rng = np.random.default_rng([context.seed, context.init_index])
+
+    def act(self, observation: Observation) -> np.ndarray:
+        if observation.privileged is None:
+            raise OracleError("the oracle needs privileged observations (PolicySpec.privileged=True)")
+        self._agent.scene = Scene(observation.privileged)
+        if self._program is None:
+            self._program = program(self._agent, self._goal)
+        action = next(self._program)
+        if self.noise > 0:
+            action = action.copy()
+            action[:6] = np.clip(action[:6] + self._rng.normal(0.0, self.noise, size=6), -1.0, 1.0)
+        return action
+
+
+class BlindPolicy(OraclePolicy):
+    """The oracle run on the source task's goal whatever the instruction says: a policy that memorised the scene."""
+
+    def goal_of(self, context: TaskContext) -> tuple[str, ...]:
+        return context.source_goal

@@ -1,0 +1,164 @@
+"""A read-only view of one privileged observation (see `langgap.sim.privileged`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from langgap.policies.oracle.geometry import Boxes, quat_to_mat
+
+INTERVAL_MARGIN = 0.15
+
+
+@dataclass(frozen=True)
+class Articulation:
+    """One articulated part (a drawer, a door, a knob) as the privileged state describes it."""
+
+    qpos: float
+    anchor: np.ndarray
+    axis: np.ndarray
+    slide: bool
+    limits: np.ndarray
+    bbox: np.ndarray
+    handle: np.ndarray
+    intervals: dict[str, np.ndarray]
+    boxes: Boxes  # collision boxes of the moving part
+
+    def target(self, state: str) -> float:
+        """A qpos safely inside the interval where `state` (open, close, on, off) holds.
+
+        It is the interval's boundary nearest the other states, moved 15 % into the interval: far
+        enough to hold after release, no further than needed (an opened drawer sticks out less).
+        """
+        lo, hi = self.intervals[state]
+        others = [v.mean() for k, v in self.intervals.items() if k != state]
+        if not others:
+            return float((lo + hi) / 2.0)
+        reference = float(np.mean(others))
+        inner = lo if abs(lo - reference) < abs(hi - reference) else hi
+        return float(inner + (hi + lo - 2 * inner) * INTERVAL_MARGIN)
+
+    def reached(self, state: str) -> bool:
+        """Whether the joint is at or beyond `target(state)`, well inside the interval of `state`."""
+        lo, hi = self.intervals[state]
+        target = self.target(state)
+        inward = np.sign((lo + hi) / 2.0 - target) or 1.0
+        return bool(self.holds(state) and (self.qpos - target) * inward >= 0.0)
+
+    def holds(self, state: str) -> bool:
+        """Whether the joint is in the interval of `state` (open-ended where it reaches a joint limit,
+        since a joint pressed against its limit may overshoot it slightly)."""
+        lo, hi = self.intervals[state]
+        lo = -np.inf if lo <= self.limits[0] + 1e-9 else lo
+        hi = np.inf if hi >= self.limits[1] - 1e-9 else hi
+        return bool(lo <= self.qpos <= hi)
+
+
+@dataclass(frozen=True)
+class Region:
+    """A region site: frame and the half-sizes LIBERO's `In`/`On` checks use."""
+
+    name: str
+    pos: np.ndarray
+    mat: np.ndarray
+    size: np.ndarray
+
+
+class Scene:
+    """Typed accessors over a privileged dict; raises KeyError for names the scene lacks."""
+
+    def __init__(self, privileged: dict[str, np.ndarray]):
+        self.raw = privileged
+        self.eef_pos = np.asarray(privileged["eef_pos"], dtype=np.float64)
+        self.eef_mat = np.asarray(privileged["eef_mat"], dtype=np.float64)
+        self.gripper_width = float(np.sum(np.abs(privileged["gripper_qpos"])))
+        self.base_pos = np.asarray(privileged["base_pos"], dtype=np.float64)
+        self.entities = tuple(k.split("/", 1)[1] for k in privileged if k.startswith("body/"))
+        self.regions = tuple(k.split("/", 1)[1] for k in privileged if k.startswith("site/"))
+        self.articulated = tuple(k.split("/")[1] for k in privileged if k.startswith("art/") and k.endswith("/qpos"))
+
+    def reach(self, point: np.ndarray) -> float:
+        """Horizontal distance from the robot's base to `point`."""
+        return float(np.linalg.norm(np.asarray(point)[:2] - self.base_pos[:2]))
+
+    def has_entity(self, name: str) -> bool:
+        return f"body/{name}" in self.raw
+
+    def has_region(self, name: str) -> bool:
+        return f"site/{name}" in self.raw
+
+    def pos(self, name: str) -> np.ndarray:
+        return np.asarray(self.raw[f"body/{name}"][:3], dtype=np.float64)
+
+    def rot(self, name: str) -> np.ndarray:
+        return quat_to_mat(self.raw[f"body/{name}"][3:7])
+
+    def bbox(self, name: str) -> np.ndarray:
+        return np.asarray(self.raw[f"bbox/{name}"], dtype=np.float64)
+
+    def shape(self, name: str) -> np.ndarray:
+        """Collision boxes of `name` in its body frame (n, 6)."""
+        return np.asarray(self.raw[f"shape/{name}"], dtype=np.float64).reshape(-1, 6)
+
+    def boxes(self, name: str) -> Boxes:
+        """Collision boxes of `name` at its current pose."""
+        return Boxes.from_local(self.shape(name), self.rot(name), self.pos(name))
+
+    def world_shape(self, name: str) -> np.ndarray:
+        """Collision boxes of `name` as world axis-aligned bounds (n, 6)."""
+        return self.boxes(name).aabb()
+
+    def movable(self, name: str) -> bool:
+        """A loose object (True) or a fixture (False)."""
+        return bool(self.raw[f"movable/{name}"][0] > 0.5)
+
+    def touches_other(self, name: str) -> bool:
+        """Whether `name` touches anything except itself and the robot."""
+        return bool(self.raw[f"contact/{name}"][0] > 0.5)
+
+    def touches_gripper(self, name: str) -> bool:
+        return bool(self.raw[f"contact/{name}"][1] > 0.5)
+
+    def region(self, name: str) -> Region:
+        return Region(
+            name=name,
+            pos=np.asarray(self.raw[f"site/{name}"], dtype=np.float64),
+            mat=np.asarray(self.raw[f"site_mat/{name}"], dtype=np.float64).reshape(3, 3),
+            size=np.asarray(self.raw[f"site_size/{name}"], dtype=np.float64),
+        )
+
+    def articulation(self, name: str) -> Articulation:
+        prefix = f"art/{name}/"
+        body = self.raw[prefix + "body"]
+        shape = np.asarray(self.raw[prefix + "shape"], dtype=np.float64).reshape(-1, 6)
+        return Articulation(
+            qpos=float(self.raw[prefix + "qpos"][0]),
+            anchor=np.asarray(self.raw[prefix + "anchor"], dtype=np.float64),
+            axis=np.asarray(self.raw[prefix + "axis"], dtype=np.float64),
+            slide=bool(self.raw[prefix + "slide"][0] > 0.5),
+            limits=np.asarray(self.raw[prefix + "limits"], dtype=np.float64),
+            bbox=np.asarray(self.raw[prefix + "bbox"], dtype=np.float64),
+            handle=np.asarray(self.raw[prefix + "handle"], dtype=np.float64),
+            intervals={
+                key: np.asarray(self.raw[prefix + key], dtype=np.float64)
+                for key in ("open", "close", "on", "off")
+                if prefix + key in self.raw
+            },
+            boxes=Boxes.from_local(shape, quat_to_mat(body[3:7]), np.asarray(body[:3], dtype=np.float64)),
+        )
+
+    def obstacles(self, exclude: tuple[str, ...] = (), *, fixtures_only: bool = False) -> Boxes:
+        """Collision boxes of every entity and moving part except those of `exclude` (names or their parts)."""
+        parts = [self.boxes(e) for e in self.entities if e not in exclude and not (fixtures_only and self.movable(e))]
+        # Every articulated part once: a fixture's first joint is also listed under the fixture's name.
+        seen: dict[bytes, Boxes] = {}
+        excluded: set[bytes] = set()
+        for name in self.articulated:
+            boxes = self.articulation(name).boxes
+            key = boxes.centre.tobytes()
+            seen[key] = boxes
+            if any(name == e or name.startswith(e + "_") for e in exclude):
+                excluded.add(key)
+        parts += [boxes for key, boxes in seen.items() if key not in excluded]
+        return Boxes.concat(parts)
