@@ -169,6 +169,13 @@ def penetration(centre: np.ndarray, half: np.ndarray, rot: np.ndarray, others: B
     return result
 
 
+def depth(boxes: Boxes, others: Boxes) -> float:
+    """How deep the deepest of `boxes` penetrates any of `others` (<= 0 when apart)."""
+    parts = zip(boxes.centre, boxes.half, boxes.rot, strict=True)
+    deepest = [penetration(centre, half, rot, others).max(initial=-np.inf) for centre, half, rot in parts]
+    return float(max(deepest, default=-np.inf))
+
+
 def boxes_hit(boxes: Boxes, others: Boxes, tolerance: float) -> bool:
     """Whether any of `boxes` penetrates any of `others` deeper than `tolerance`."""
     parts = zip(boxes.centre, boxes.half, boxes.rot, strict=True)

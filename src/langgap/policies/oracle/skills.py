@@ -14,8 +14,16 @@ import numpy as np
 from langgap.policies.oracle import hand
 from langgap.policies.oracle.carry import release_route
 from langgap.policies.oracle.control import CLOSE, OPEN
-from langgap.policies.oracle.geometry import closing_yaw, rotation_about, top_down, wrap_half_turn
-from langgap.policies.oracle.grasps import hand_hits, plan_grasp
+from langgap.policies.oracle.geometry import (
+    Boxes,
+    boxes_hit,
+    closing_yaw,
+    depth,
+    rotation_about,
+    top_down,
+    wrap_half_turn,
+)
+from langgap.policies.oracle.grasps import PENETRATION_TOLERANCE, REACH_WEIGHT, hand_hits, plan_grasp
 from langgap.policies.oracle.motion import Agent, Program, actuate, move, reorient, travel
 from langgap.policies.oracle.placement import Spot, flight_path, footprint_at
 
@@ -37,6 +45,12 @@ HAND_REACH = 0.07  # how far the open fingers reach sideways from the grip site
 PUSH_BESIDE = 0.03  # a drawer is pushed this far beside its handle
 HANDLE_HALF_HEIGHT = 0.008
 PUSH_LEAN = 0.6  # radians
+HANDLE_APPROACH = 0.07  # the hand slides this far onto a drawer's handle
+WRIST_OFFSET = 0.15  # the wrist is this far behind the grip site
+SIDE_ANGLES = (0.0, math.radians(15), math.radians(30))
+LOOSE_WEIGHT = 300.0  # cost per metre the hand would push into a loose object
+LOOSE_ALLOWANCE = 0.006
+WRIST_REACH = 0.6  # horizontal distance from the base beyond which the wrist nears the arm's reach
 DOOR_PUSH_AT = 0.75  # fraction of a door's width from its hinge where it is pushed
 
 
@@ -136,47 +150,78 @@ def _opening_direction(art) -> np.ndarray:
     return direction / np.linalg.norm(direction)
 
 
-def _facing(direction: np.ndarray, reference: np.ndarray) -> np.ndarray:
-    """A gripper frame pointing against `direction` (horizontal) with its fingers closing vertically.
+def _pointing(approach: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """A gripper frame pointing along `approach` (horizontal) with its fingers closing vertically.
 
     Of the two such frames (a parallel gripper is symmetric) the one nearer `reference` is used,
     which keeps the wrist within its joint limits when turning from a top-down pose.
     """
-    approach = -direction
     candidates = []
     for up in (1.0, -1.0):
         x = np.array([0.0, 0.0, up])
-        y = np.cross(approach, x)
-        candidates.append(np.stack([x, y, approach], axis=1))
+        candidates.append(np.stack([x, np.cross(approach, x), approach], axis=1))
     return min(candidates, key=lambda rot: np.linalg.norm(rot - reference))
 
 
+def _handle_grasp(agent: Agent, art, direction: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """How to take a drawer's handle bar with the fingers closing across it vertically: (rot, grasp, approach).
+
+    From the front, or along the bar from either end (the hand then stays beside the drawer, and
+    the wrist nearer the robot when the cabinet faces sideways). The clear option that least
+    stretches the arm wins.
+    """
+    _, axis, half_length = _front(art, direction)
+    options = [(-direction, art.handle + hand.PAD_CENTRE * direction)]
+    for side in (1.0, -1.0):
+        along = side * axis  # the fingers slide onto the bar from its end
+        grasp = art.handle - along * (half_length + hand.PAD_CENTRE - hand.PAD_HALF_HEIGHT)
+        for angle in SIDE_ANGLES:  # turned away from the drawer's face, to keep the hand clear of the cabinet
+            options.append((np.cos(angle) * along - np.sin(angle) * direction, grasp))
+    fixed = agent.scene.obstacles(fixtures_only=True)
+    loose = Boxes.concat([agent.scene.boxes(e) for e in agent.scene.entities if agent.scene.movable(e)])
+    local = np.concatenate([hand.finger_boxes(hand.PAD_GAP_OPEN), hand.palm_boxes()])
+    best, best_cost = None, np.inf
+    for approach, grasp in options:
+        rot = _pointing(approach, agent.scene.eef_mat)
+        ready = grasp - HANDLE_APPROACH * approach
+        # The hand at the grasp, where it starts sliding onto the bar, and on its way down there.
+        poses = [grasp, ready] + [ready + np.array([0.0, 0.0, lift]) for lift in (0.05, 0.1, 0.15)]
+        hands = Boxes.concat([Boxes.from_local(local, rot, pose) for pose in poses])
+        cost = REACH_WEIGHT * max(0.0, agent.scene.reach(grasp - approach * WRIST_OFFSET) - WRIST_REACH)
+        cost += 10.0 * boxes_hit(hands, fixed, PENETRATION_TOLERANCE)
+        # Brushing a loose object is acceptable; ramming one (a bottle beside the cabinet) is not.
+        cost += LOOSE_WEIGHT * max(0.0, depth(hands, loose) - LOOSE_ALLOWANCE)
+        if cost < best_cost:
+            best, best_cost = (rot, grasp, approach), cost
+    return best
+
+
 def pull_open(agent: Agent, region: str) -> Program:
-    """Open a drawer: grasp its handle from the front with the fingers closing vertically, pull."""
+    """Open a drawer: take its handle bar with the fingers closing vertically, pull it out."""
     art = agent.scene.articulation(region)
     direction = _opening_direction(art)
-    rot = _facing(direction, agent.scene.eef_mat)
-    grasp = art.handle + hand.PAD_CENTRE * direction
-    front = grasp + 0.10 * direction
+    rot, grasp, approach = _handle_grasp(agent, art, direction)
+    ready = grasp - HANDLE_APPROACH * approach
     yield from reorient(agent, rot)
-    path = flight_path(agent.scene, agent.scene.eef_pos, front, hang=hand.PALM_HALF_LENGTH, reach=HAND_REACH)
-    yield from travel(agent, front, path=path, rot=rot, grip=OPEN, tol=0.01)
+    path = flight_path(agent.scene, agent.scene.eef_pos, ready, hang=hand.PALM_HALF_LENGTH, reach=HAND_REACH)
+    yield from travel(agent, ready, path=path, rot=rot, grip=OPEN, tol=0.01)
     yield from move(agent, grasp, tol=0.006, steps=40, speed=0.5)
     yield from actuate(agent, CLOSE)
     goal = art.target("open")
     start = art.qpos
+    held = agent.scene.eef_pos - art.handle
     for _ in range(80):
         art = agent.scene.articulation(region)
         left = (goal - art.qpos) / (goal - start)
         if left <= 0.03:
             break
-        target = art.handle + (goal - art.qpos) * art.axis + hand.PAD_CENTRE * direction
+        target = art.handle + (goal - art.qpos) * art.axis + held
         # Slow down near the goal so the drawer does not slide on past it.
         speed = float(np.clip(abs(goal - art.qpos) / 0.03, 0.15, 0.6))
         yield agent.command(target, speed=speed)
     yield from move(agent, agent.scene.eef_pos, tol=0.002, steps=3)  # let the drawer stop with the hand
     yield from actuate(agent, OPEN)
-    yield from move(agent, agent.scene.eef_pos + 0.08 * direction, tol=0.02, steps=20)
+    yield from move(agent, agent.scene.eef_pos - 0.06 * approach + 0.03 * direction, tol=0.02, steps=20)
     return agent.scene.articulation(region).holds("open")
 
 
