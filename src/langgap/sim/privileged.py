@@ -53,6 +53,7 @@ class _Articulation:
     geoms: np.ndarray  # collision geoms of that body and its subtree
     shape: np.ndarray  # those geoms as boxes in the body's frame
     intervals: dict[str, np.ndarray] = field(default_factory=dict)
+    handle: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))  # geoms forming its handle
 
 
 @dataclass
@@ -69,6 +70,8 @@ class _Layout:
     joints: dict[str, int]
     articulations: dict[str, _Articulation]
     robot_base: int
+    box_geoms: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    box_spans: dict[str, tuple[int, int]] = field(default_factory=dict)  # name -> slice of box_geoms
 
 
 def _subtree_bodies(model, root: int) -> np.ndarray:
@@ -159,6 +162,10 @@ def _articulation(env, model, fixture, joint_name: str) -> _Articulation:
         interval = _interval(fixture, method, limits)
         if interval is not None:
             art.intervals[key] = interval
+    if geoms.size:
+        # Rigidly attached to the moving body: which geoms form the handle never changes.
+        data = env.sim.data._data
+        art.handle = _handle_geoms(raw, data, geoms, _opening_direction(art, data))
     return art
 
 
@@ -223,6 +230,17 @@ def _layout(env) -> _Layout:
         articulations=articulations,
         robot_base=model.body_name2id(inner.robots[0].robot_model.root_body),
     )
+    # Every world box a step reports, computed in one vectorised pass over these geoms.
+    groups = {f"bbox/{n}": g for n, g in geoms_of.items() if g.size}
+    for name, art in articulations.items():
+        if art.geoms.size:
+            groups[f"art/{name}/bbox"] = art.geoms
+            groups[f"art/{name}/handle"] = art.handle
+    start = 0
+    for key, geoms in groups.items():
+        layout.box_spans[key] = (start, start + len(geoms))
+        start += len(geoms)
+    layout.box_geoms = np.concatenate(list(groups.values())) if groups else np.zeros(0, dtype=np.int64)
     env._privileged_layout = layout
     return layout
 
@@ -272,11 +290,12 @@ def privileged_state(env) -> dict[str, np.ndarray]:
         "gripper_qpos": np.array([data.qpos[i] for i in robot._ref_gripper_joint_pos_indexes]),
         "base_pos": np.array(data.xpos[layout.robot_base]),
     }
+    boxes = _geom_boxes(model, data, layout.box_geoms)
+    for key, (start, end) in layout.box_spans.items():
+        union = _union(boxes[start:end])
+        out[key] = union.reshape(2, 3).mean(axis=0) if key.endswith("/handle") else union
     for name, root in layout.entity_roots.items():
         out[f"body/{name}"] = np.concatenate([data.xpos[root], data.xquat[root]])
-        geoms = layout.entity_geoms[name]
-        if geoms.size:
-            out[f"bbox/{name}"] = _union(_geom_boxes(model, data, geoms))
         out[f"shape/{name}"] = layout.shapes[name]
         out[f"movable/{name}"] = layout.movable[name]
     for name, touch in _contacts(layout, data).items():
@@ -297,11 +316,6 @@ def privileged_state(env) -> dict[str, np.ndarray]:
         out.update({prefix + key: interval for key, interval in art.intervals.items()})
         out[prefix + "body"] = np.concatenate([data.xpos[art.body], data.xquat[art.body]])
         out[prefix + "shape"] = art.shape
-        if art.geoms.size:
-            out[prefix + "bbox"] = _union(_geom_boxes(model, data, art.geoms))
-            direction = _opening_direction(art, data)
-            handle = _handle_geoms(model, data, art.geoms, direction)
-            out[prefix + "handle"] = _union(_geom_boxes(model, data, handle)).reshape(2, 3).mean(axis=0)
     return out
 
 

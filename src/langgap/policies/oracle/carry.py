@@ -26,7 +26,7 @@ def load_boxes(scene: Scene, obj: str, eef: np.ndarray, rot: np.ndarray) -> Boxe
     bounds = scene.bbox(obj)
     shift = eef - scene.eef_pos
     load = Boxes.from_local((bounds + np.tile(shift, 2))[None, :], np.eye(3), np.zeros(3))
-    local = np.concatenate([hand.finger_boxes(max(scene.gripper_width, 0.0)), hand.palm_boxes()])
+    local = hand.local_boxes(max(scene.gripper_width, 0.0))
     return Boxes.concat([load, Boxes.from_local(local, rot, eef)])
 
 

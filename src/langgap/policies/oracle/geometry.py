@@ -65,6 +65,18 @@ def closing_yaw(rot: np.ndarray) -> float:
     return math.atan2(rot[1, 0], rot[0, 0])
 
 
+def leaning(rot: np.ndarray, toward: np.ndarray, angle: float) -> np.ndarray:
+    """Gripper frame `rot` turned about its closing axis so its fingers point `angle` radians toward `toward`."""
+    axis = rot[:, 0]
+    turned = rotation_about(axis, angle) @ rot
+    return turned if np.dot(turned[:, 2], toward) > 0 else rotation_about(axis, -angle) @ rot
+
+
+def bounds_corners_xy(bounds: np.ndarray) -> np.ndarray:
+    """The four horizontal corners (4, 2) of axis-aligned bounds (min xyz, max xyz)."""
+    return np.array([[x, y] for x in (bounds[0], bounds[3]) for y in (bounds[1], bounds[4])])
+
+
 def wrap_half_turn(yaw: float, reference: float) -> float:
     """`yaw` or `yaw + pi` (a parallel gripper is symmetric), whichever is nearer `reference`."""
     best = yaw
@@ -72,17 +84,6 @@ def wrap_half_turn(yaw: float, reference: float) -> float:
         if abs(candidate - reference) < abs(best - reference):
             best = candidate
     return best
-
-
-def transform_boxes(boxes: np.ndarray, rot: np.ndarray, pos: np.ndarray) -> np.ndarray:
-    """World AABBs (n, 6) of body-frame boxes (n, 6) of a body at pose (rot, pos)."""
-    if len(boxes) == 0:
-        return np.zeros((0, 6))
-    centre = (boxes[:, :3] + boxes[:, 3:]) / 2.0
-    half = (boxes[:, 3:] - boxes[:, :3]) / 2.0
-    world_centre = centre @ rot.T + pos
-    world_half = half @ np.abs(rot).T
-    return np.concatenate([world_centre - world_half, world_centre + world_half], axis=1)
 
 
 @dataclass(frozen=True)
@@ -180,8 +181,3 @@ def boxes_hit(boxes: Boxes, others: Boxes, tolerance: float) -> bool:
     """Whether any of `boxes` penetrates any of `others` deeper than `tolerance`."""
     parts = zip(boxes.centre, boxes.half, boxes.rot, strict=True)
     return any(np.any(penetration(centre, half, rot, others) > tolerance) for centre, half, rot in parts)
-
-
-def top_down_yaw_only(yaw: float) -> np.ndarray:
-    c, s = math.cos(yaw), math.sin(yaw)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])

@@ -103,7 +103,7 @@ def pad_span(z: float) -> tuple[float, float]:
 
 def hand_boxes(point: np.ndarray, yaw: float, *, width: float = hand.PAD_GAP_OPEN, sweep: float = 0.0) -> Boxes:
     """The fingers and the palm of a top-down gripper at `point`, swept up by `sweep` (its approach)."""
-    local = np.concatenate([hand.finger_boxes(width), hand.palm_boxes()])
+    local = hand.local_boxes(width)
     local[:, 2] -= sweep  # the site frame's z points down: sweeping up extends the boxes to lower z
     return Boxes.from_local(local, top_down(yaw), point)
 

@@ -23,6 +23,7 @@ PALM_HALF_DEPTH_LOW = 0.021  # along y, next to the fingers
 PALM_HALF_DEPTH_HIGH = 0.032
 WRIST_TOP = -0.20  # the wrist (the arm's last links), a narrower block above the palm
 WRIST_HALF_WIDTH = 0.05
+REACH = 0.07  # how far the open fingers reach sideways from the grip site
 
 
 def finger_boxes(width: float) -> np.ndarray:
@@ -44,3 +45,8 @@ def palm_boxes() -> np.ndarray:
             [-WRIST_HALF_WIDTH, -WRIST_HALF_WIDTH, WRIST_TOP, WRIST_HALF_WIDTH, WRIST_HALF_WIDTH, PALM_TOP],
         ]
     )
+
+
+def local_boxes(width: float) -> np.ndarray:
+    """The fingers (pads `width` apart), the palm and the wrist (5, 6) as boxes in the grip-site frame."""
+    return np.concatenate([finger_boxes(width), palm_boxes()])

@@ -28,6 +28,7 @@ INTEGRAL_GAIN = 0.3
 MAX_BIAS = 0.03
 STALL_STEPS = 10
 STALL_PROGRESS = 0.002
+RETREAT = 0.08  # how far the hand lifts after letting go
 LARGE_TURN = 0.8  # radians; larger reorientations are done near the base
 TURNING_REACH = 0.55  # horizontal distance from the base where the arm turns freely
 
@@ -142,6 +143,12 @@ def reorient(agent: Agent, rot: np.ndarray) -> Program:
         staging = np.array([*(agent.scene.base_pos[:2] + outward / distance * TURNING_REACH), here[2] + 0.03])
         yield from move(agent, staging, rot=agent.scene.eef_mat.copy(), tol=PASS_TOLERANCE, steps=30, through=True)
     return (yield from move(agent, agent.scene.eef_pos.copy(), rot=rot, tol=0.03, steps=30))
+
+
+def back_off(agent: Agent, away: np.ndarray | None = None) -> Program:
+    """Lift the hand clear (and move it by `away`) after letting go of something."""
+    lift = np.array([0.0, 0.0, RETREAT]) + (np.zeros(3) if away is None else away)
+    return (yield from move(agent, agent.scene.eef_pos + lift, tol=0.02, steps=20))
 
 
 def hold(agent: Agent) -> Program:

@@ -105,10 +105,6 @@ class Scene:
         """Collision boxes of `name` at its current pose."""
         return Boxes.from_local(self.shape(name), self.rot(name), self.pos(name))
 
-    def world_shape(self, name: str) -> np.ndarray:
-        """Collision boxes of `name` as world axis-aligned bounds (n, 6)."""
-        return self.boxes(name).aabb()
-
     def movable(self, name: str) -> bool:
         """A loose object (True) or a fixture (False)."""
         return bool(self.raw[f"movable/{name}"][0] > 0.5)
