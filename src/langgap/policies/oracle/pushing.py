@@ -10,7 +10,6 @@ from langgap.policies.oracle import hand
 from langgap.policies.oracle.control import CLOSE
 from langgap.policies.oracle.geometry import (
     Boxes,
-    bounds_corners_xy,
     boxes_hit,
     closing_yaw,
     depth,
@@ -26,7 +25,12 @@ PUSH_LEANS = (0.0, 0.35, 0.6)  # radians the fingers may lean back when pushing 
 PUSH_TURNS = (0.0, math.pi / 4, -math.pi / 4)
 PUSH_TOLERANCE = 0.004
 LOOSE_ALLOWANCE = 0.018  # how far the hand may push into another loose object on its way
-PUSH_DETOURS = (0.08, 0.14)  # how far a first stroke may take an object before it is pushed toward its goal
+FINAL_STROKES = 3
+PRESS = 0.012
+PUSH_GAP = 0.005  # between the fingers and the object before a stroke
+PUSH_HEIGHT = 0.004  # of the hand's lowest point above the table  # metres below the fingers' height the push is aimed
+PUSH_DETOURS = (0.08, 0.14)
+STROKE_COST = 0.05  # metres of detour worth saving a stroke  # how far a first stroke may take an object before it is pushed toward its goal
 
 
 def _push_pose(
@@ -34,54 +38,79 @@ def _push_pose(
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """How to push `obj`, with its origin at `origin`, along `direction`: (grip-site start, rot), or None.
 
-    The closed fingers touch the object's trailing side, tips just above the table, closing across
-    the push. When the upright hand would hit something (a cabinet's handles behind the object),
-    the fingers lean back so the palm rides forward over the object.
+    The closed fingers stand just behind the object's trailing side, tips just above the table,
+    closing across the push. When the upright hand would hit something (a cabinet's handles behind
+    the object), the fingers lean back so the palm rides forward over the object.
     """
-    shift = np.array([*(origin - scene.pos(obj)[:2]), 0.0])
-    box = scene.bbox(obj) + np.tile(shift, 2)
-    corners = bounds_corners_xy(box) - origin
-    behind = float(np.max(-(corners @ direction)))
-    start = np.array([*(origin - direction * (behind + hand.FINGER_DEPTH + 0.008)), box[2] + hand.TIP + 0.006])
+    target = footprint_at(scene, obj, origin, scene.bbox(obj)[2])
+    table = float(scene.bbox(obj)[2])
     across = math.atan2(direction[1], direction[0]) + math.pi / 2
     fixed = scene.obstacles(exclude=(obj,), fixtures_only=True)
     loose = Boxes.concat([scene.boxes(e) for e in scene.entities if e != obj and scene.movable(e)])
-    local = hand.local_boxes(0.0)
     push = np.array([*direction, 0.0])
     for lean in PUSH_LEANS:
         for turn in PUSH_TURNS:  # a turned hand reaches less far sideways
             yaw = wrap_half_turn(across + turn, closing_yaw(scene.eef_mat))
             rot = leaning(top_down(yaw), -push, lean) if lean else top_down(yaw)
+            start = _behind(target, table, origin, direction, rot)
             poses = [start + np.array([0.0, 0.0, lift]) for lift in (0.0, 0.05, 0.1)]
-            poses += [start + push * distance * t for t in (0.5, 1.0)]
-            hands = Boxes.concat([Boxes.from_local(local, rot, p) for p in poses])
-            if not boxes_hit(hands, fixed, PUSH_TOLERANCE) and depth(hands, loose) < LOOSE_ALLOWANCE:
+            before = Boxes.concat([hands_at(rot, p) for p in poses])
+            during = Boxes.concat([hands_at(rot, start + push * distance * t) for t in (0.5, 1.0)])
+            hands = Boxes.concat([before, during])
+            if (
+                not boxes_hit(hands, fixed, PUSH_TOLERANCE)
+                and depth(hands, loose) < LOOSE_ALLOWANCE
+                and not boxes_hit(before, target, PUSH_TOLERANCE)
+            ):
                 return start, rot
     return None
+
+
+def hands_at(rot: np.ndarray, point: np.ndarray) -> Boxes:
+    """The closed hand with its grip site at `point`."""
+    return Boxes.from_local(hand.local_boxes(0.0), rot, point)
+
+
+def _behind(target: Boxes, table: float, origin: np.ndarray, direction: np.ndarray, rot: np.ndarray) -> np.ndarray:
+    """The grip site that puts the hand's lowest point just above the table, `PUSH_GAP` behind `target`."""
+    lowest = float(hands_at(rot, np.zeros(3)).aabb()[:, 2].min())
+    z = table + PUSH_HEIGHT - lowest
+    near, far = 0.0, 0.3  # distances back from the origin: touching at `near`, clear at `far`
+    for _ in range(16):
+        middle = (near + far) / 2.0
+        point = np.array([*(origin - direction * middle), z])
+        if depth(hands_at(rot, point), target) > -PUSH_GAP:
+            near = middle
+        else:
+            far = middle
+    return np.array([*(origin - direction * far), z])
 
 
 def _push_plan(scene: Scene, obj: str, goal: np.ndarray) -> list[np.ndarray]:
     """Stops (ending with `goal`) for pushing `obj` there in at most three straight strokes.
 
-    Each stroke needs a clear pushing pose and a clear path for the object past the fixtures;
-    the shortest such plan wins (a direct push when it is clear).
+    Each stroke needs a clear pushing pose and a path for the object clear of the fixtures; the
+    shortest plan wins (a direct push when it is clear).
     """
     here = scene.pos(obj)[:2]
     fixed = scene.obstacles(exclude=(obj,), fixtures_only=True)
-    cache: dict[tuple, bool] = {}
+    table = float(scene.bbox(obj)[2]) + 0.003
+    cache: dict[tuple, float] = {}
 
-    def clear(a: np.ndarray, b: np.ndarray) -> bool:
+    def cost(a: np.ndarray, b: np.ndarray) -> float:
+        """The stroke's length, or infinity if it cannot be made."""
         key = (*np.round(a, 4), *np.round(b, 4))
         if key not in cache:
             step = b - a
             length = float(np.linalg.norm(step))
-            cache[key] = length < 1e-3 or (
-                _push_pose(scene, obj, a, step / length, length) is not None
-                and not any(
-                    boxes_hit(footprint_at(scene, obj, a + t * step, scene.bbox(obj)[2] + 0.003), fixed, PUSH_TOLERANCE)
-                    for t in (0.5, 1.0)
-                )
-            )
+            if length < 1e-3:
+                cache[key] = 0.0
+            elif _push_pose(scene, obj, a, step / length, length) is None:
+                cache[key] = np.inf
+            else:
+                swept = [footprint_at(scene, obj, a + t * step, table) for t in (0.25, 0.5, 0.75, 1.0)]
+                blocked = any(boxes_hit(boxes, fixed, PUSH_TOLERANCE) for boxes in swept)
+                cache[key] = np.inf if blocked else length
         return cache[key]
 
     stops = [here + d * np.array([math.cos(a), math.sin(a)]) for d in PUSH_DETOURS for a in np.arange(8) * math.pi / 4]
@@ -89,12 +118,15 @@ def _push_plan(scene: Scene, obj: str, goal: np.ndarray) -> list[np.ndarray]:
     for stop in stops + [np.array([goal[0], here[1]]), np.array([here[0], goal[1]])]:
         plans.append([stop, goal])
         plans += [[stop, np.array([goal[0], stop[1]]), goal], [stop, np.array([stop[0], goal[1]]), goal]]
-    best, best_length = [goal], np.inf
+    best, best_cost = [goal], np.inf
     for plan in plans:
         points = [here, *plan]
-        length = sum(float(np.linalg.norm(b - a)) for a, b in zip(points, points[1:], strict=False)) + 0.05 * len(plan)
-        if length < best_length and all(clear(a, b) for a, b in zip(points, points[1:], strict=False)):
-            best, best_length = plan, length
+        lower = sum(float(np.linalg.norm(b - a)) for a, b in zip(points, points[1:], strict=False))
+        if lower + STROKE_COST * len(plan) >= best_cost:
+            continue
+        total = sum(cost(a, b) for a, b in zip(points, points[1:], strict=False)) + STROKE_COST * len(plan)
+        if total < best_cost:
+            best, best_cost = plan, total
     return best
 
 
@@ -103,7 +135,8 @@ def push_to(agent: Agent, obj: str, spot: Spot, *, tolerance: float = 0.01) -> P
     stops = _push_plan(agent.scene, obj, spot.xy)
     for stop in stops:
         final = stop is stops[-1]
-        for _ in range(3):
+        # A stop on the way needs one stroke toward it; only the goal is worth correcting strokes.
+        for _ in range(FINAL_STROKES if final else 1):
             scene = agent.scene
             to_go = stop - scene.pos(obj)[:2]
             if np.linalg.norm(to_go) < (tolerance if final else 0.02):
@@ -126,16 +159,15 @@ def push_to(agent: Agent, obj: str, spot: Spot, *, tolerance: float = 0.01) -> P
                 if abs(lateral) > 0.03 or np.dot(to_go, direction) < 0:
                     break
                 step = direction * min(0.03, np.linalg.norm(to_go) + 0.005)
-                yield agent.command(np.array([*(scene.eef_pos[:2] + step), start[2]]), speed=0.5)
+                # Aimed a little into the table: the hand presses down instead of riding up over the object.
+                yield agent.command(np.array([*(scene.eef_pos[:2] + step), start[2] - PRESS]), speed=0.5)
             yield from move(agent, agent.scene.eef_pos + np.array([0.0, 0.0, 0.06]), tol=0.02, steps=15)
     return bool(np.linalg.norm(spot.xy - agent.scene.pos(obj)[:2]) < tolerance)
 
 
 def _push_pose_upright(scene: Scene, obj: str, direction: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The upright pushing pose, used when no pose is clear (the best that can be done)."""
-    box = scene.bbox(obj)
-    corners = bounds_corners_xy(box) - scene.pos(obj)[:2]
-    behind = float(np.max(-(corners @ direction)))
-    start = scene.pos(obj)[:2] - direction * (behind + hand.FINGER_DEPTH + 0.008)
     yaw = wrap_half_turn(math.atan2(direction[1], direction[0]) + math.pi / 2, closing_yaw(scene.eef_mat))
-    return np.array([*start, box[2] + hand.TIP + 0.006]), top_down(yaw)
+    origin = scene.pos(obj)[:2]
+    table = float(scene.bbox(obj)[2])
+    return _behind(scene.boxes(obj), table, origin, direction, top_down(yaw)), top_down(yaw)
