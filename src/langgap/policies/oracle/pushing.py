@@ -25,12 +25,12 @@ PUSH_LEANS = (0.0, 0.35, 0.6)  # radians the fingers may lean back when pushing 
 PUSH_TURNS = (0.0, math.pi / 4, -math.pi / 4)
 PUSH_TOLERANCE = 0.004
 LOOSE_ALLOWANCE = 0.018  # how far the hand may push into another loose object on its way
-FINAL_STROKES = 3
-PRESS = 0.012
+FINAL_STROKES = 3  # strokes toward the goal (a stop on the way gets one)
+PRESS = 0.012  # metres below the fingers' height the push is aimed
 PUSH_GAP = 0.005  # between the fingers and the object before a stroke
-PUSH_HEIGHT = 0.004  # of the hand's lowest point above the table  # metres below the fingers' height the push is aimed
-PUSH_DETOURS = (0.08, 0.14)
-STROKE_COST = 0.05  # metres of detour worth saving a stroke  # how far a first stroke may take an object before it is pushed toward its goal
+PUSH_HEIGHT = 0.004  # of the hand's lowest point above the table
+PUSH_DETOURS = (0.08, 0.14)  # how far a first stroke may take an object before it is pushed toward its goal
+STROKE_COST = 0.05  # metres of detour worth saving a stroke
 
 
 def _push_pose(
