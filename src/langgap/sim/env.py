@@ -52,6 +52,7 @@ class EnvOptions:
     reflection: bool = True
     hard_reset: bool = False
     privileged: bool = False
+    fast_stepping: bool = True  # bit-identical to robosuite's stepping (sim/stepping.py); off for benchmarks
 
     def __post_init__(self) -> None:
         unknown = [c for c in self.cameras if c not in CAMERAS]
@@ -109,6 +110,7 @@ class TaskEnv:
         from libero.libero.envs.env_wrapper import ControlEnv
 
         from langgap.sim.contacts import ContactIndex
+        from langgap.sim.stepping import FastStepping
 
         kwargs = dict(
             bddl_file_name=str(bddl),
@@ -127,6 +129,8 @@ class TaskEnv:
             raise SimulationError(f"cannot build env for {task.id}: {type(exc).__name__}: {exc}") from exc
         self._inner = self._env.env
         ContactIndex.install(self._inner)
+        if self.options.fast_stepping:
+            FastStepping.install(self._inner)
 
     # -- lifecycle ---------------------------------------------------------------------------
 

@@ -21,8 +21,8 @@ also be served remotely. Keys (`<e>` = an object or fixture of the scene, `<s>` 
   joint moves; `art/<a>/shape` (n, 6): its collision geoms as boxes in that body's frame (static);
   `art/<a>/bbox` (6): their world box; `art/<a>/handle` (3): centre of the moving part that reaches
   furthest along the opening direction (a drawer's handle; a hinge's highest part, e.g. a knob's
-  grip); `art/<a>/open|close|on|off` (2): the qpos interval, within the joint limits, where LIBERO's predicate of that name holds (present only
-  where the fixture defines it).
+  grip); `art/<a>/open|close|on|off` (2): the qpos interval, within the joint limits, where
+  LIBERO's predicate of that name holds (present only where the fixture defines it).
 
 Static parts are computed once per simulator model and cached on the environment; a step's
 extraction is vectorised numpy (well under a millisecond).
@@ -53,6 +53,7 @@ class _Articulation:
     geoms: np.ndarray  # collision geoms of that body and its subtree
     shape: np.ndarray  # those geoms as boxes in the body's frame
     intervals: dict[str, np.ndarray] = field(default_factory=dict)
+    handle: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))  # geoms forming its handle
 
 
 @dataclass
@@ -69,6 +70,8 @@ class _Layout:
     joints: dict[str, int]
     articulations: dict[str, _Articulation]
     robot_base: int
+    box_geoms: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    box_spans: dict[str, tuple[int, int]] = field(default_factory=dict)  # name -> slice of box_geoms
 
 
 def _subtree_bodies(model, root: int) -> np.ndarray:
@@ -98,7 +101,11 @@ def _union(boxes: np.ndarray) -> np.ndarray:
 
 
 def _interval(fixture, method: str, limits: np.ndarray) -> np.ndarray | None:
-    """The qpos interval (within `limits`) where `fixture.<method>(qpos)` holds, or None."""
+    """The qpos interval (within `limits`) where `fixture.<method>(qpos)` holds, or None.
+
+    Found on a grid, then each inner boundary is refined by bisection (LIBERO's tests are strict
+    inequalities, some intervals are only millimetres wide).
+    """
     test = getattr(fixture, method, None)
     if test is None:
         return None
@@ -109,7 +116,21 @@ def _interval(fixture, method: str, limits: np.ndarray) -> np.ndarray | None:
         return None
     if not holds.any():
         return None
-    return np.array([grid[holds].min(), grid[holds].max()])
+    first, last = np.flatnonzero(holds)[[0, -1]]
+    lo = grid[first] if first == 0 else _boundary(test, grid[first - 1], grid[first])
+    hi = grid[last] if last == len(grid) - 1 else _boundary(test, grid[last + 1], grid[last])
+    return np.array([lo, hi])
+
+
+def _boundary(test, outside: float, inside: float) -> float:
+    """The point nearest `outside` where `test` still holds, between a failing and a holding qpos."""
+    for _ in range(30):
+        middle = (outside + inside) / 2.0
+        if test(middle):
+            inside = middle
+        else:
+            outside = middle
+    return inside
 
 
 def _handle_geoms(model, data, geoms: np.ndarray, direction: np.ndarray) -> np.ndarray:
@@ -141,6 +162,10 @@ def _articulation(env, model, fixture, joint_name: str) -> _Articulation:
         interval = _interval(fixture, method, limits)
         if interval is not None:
             art.intervals[key] = interval
+    if geoms.size:
+        # Rigidly attached to the moving body: which geoms form the handle never changes.
+        data = env.sim.data._data
+        art.handle = _handle_geoms(raw, data, geoms, _opening_direction(art, data))
     return art
 
 
@@ -205,6 +230,17 @@ def _layout(env) -> _Layout:
         articulations=articulations,
         robot_base=model.body_name2id(inner.robots[0].robot_model.root_body),
     )
+    # Every world box a step reports, computed in one vectorised pass over these geoms.
+    groups = {f"bbox/{n}": g for n, g in geoms_of.items() if g.size}
+    for name, art in articulations.items():
+        if art.geoms.size:
+            groups[f"art/{name}/bbox"] = art.geoms
+            groups[f"art/{name}/handle"] = art.handle
+    start = 0
+    for key, geoms in groups.items():
+        layout.box_spans[key] = (start, start + len(geoms))
+        start += len(geoms)
+    layout.box_geoms = np.concatenate(list(groups.values())) if groups else np.zeros(0, dtype=np.int64)
     env._privileged_layout = layout
     return layout
 
@@ -254,11 +290,12 @@ def privileged_state(env) -> dict[str, np.ndarray]:
         "gripper_qpos": np.array([data.qpos[i] for i in robot._ref_gripper_joint_pos_indexes]),
         "base_pos": np.array(data.xpos[layout.robot_base]),
     }
+    boxes = _geom_boxes(model, data, layout.box_geoms)
+    for key, (start, end) in layout.box_spans.items():
+        union = _union(boxes[start:end])
+        out[key] = union.reshape(2, 3).mean(axis=0) if key.endswith("/handle") else union
     for name, root in layout.entity_roots.items():
         out[f"body/{name}"] = np.concatenate([data.xpos[root], data.xquat[root]])
-        geoms = layout.entity_geoms[name]
-        if geoms.size:
-            out[f"bbox/{name}"] = _union(_geom_boxes(model, data, geoms))
         out[f"shape/{name}"] = layout.shapes[name]
         out[f"movable/{name}"] = layout.movable[name]
     for name, touch in _contacts(layout, data).items():
@@ -279,11 +316,6 @@ def privileged_state(env) -> dict[str, np.ndarray]:
         out.update({prefix + key: interval for key, interval in art.intervals.items()})
         out[prefix + "body"] = np.concatenate([data.xpos[art.body], data.xquat[art.body]])
         out[prefix + "shape"] = art.shape
-        if art.geoms.size:
-            out[prefix + "bbox"] = _union(_geom_boxes(model, data, art.geoms))
-            direction = _opening_direction(art, data)
-            handle = _handle_geoms(model, data, art.geoms, direction)
-            out[prefix + "handle"] = _union(_geom_boxes(model, data, handle)).reshape(2, 3).mean(axis=0)
     return out
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -64,6 +65,18 @@ def closing_yaw(rot: np.ndarray) -> float:
     return math.atan2(rot[1, 0], rot[0, 0])
 
 
+def leaning(rot: np.ndarray, toward: np.ndarray, angle: float) -> np.ndarray:
+    """Gripper frame `rot` turned about its closing axis so its fingers point `angle` radians toward `toward`."""
+    axis = rot[:, 0]
+    turned = rotation_about(axis, angle) @ rot
+    return turned if np.dot(turned[:, 2], toward) > 0 else rotation_about(axis, -angle) @ rot
+
+
+def bounds_corners_xy(bounds: np.ndarray) -> np.ndarray:
+    """The four horizontal corners (4, 2) of axis-aligned bounds (min xyz, max xyz)."""
+    return np.array([[x, y] for x in (bounds[0], bounds[3]) for y in (bounds[1], bounds[4])])
+
+
 def wrap_half_turn(yaw: float, reference: float) -> float:
     """`yaw` or `yaw + pi` (a parallel gripper is symmetric), whichever is nearer `reference`."""
     best = yaw
@@ -71,17 +84,6 @@ def wrap_half_turn(yaw: float, reference: float) -> float:
         if abs(candidate - reference) < abs(best - reference):
             best = candidate
     return best
-
-
-def transform_boxes(boxes: np.ndarray, rot: np.ndarray, pos: np.ndarray) -> np.ndarray:
-    """World AABBs (n, 6) of body-frame boxes (n, 6) of a body at pose (rot, pos)."""
-    if len(boxes) == 0:
-        return np.zeros((0, 6))
-    centre = (boxes[:, :3] + boxes[:, 3:]) / 2.0
-    half = (boxes[:, 3:] - boxes[:, :3]) / 2.0
-    world_centre = centre @ rot.T + pos
-    world_half = half @ np.abs(rot).T
-    return np.concatenate([world_centre - world_half, world_centre + world_half], axis=1)
 
 
 @dataclass(frozen=True)
@@ -122,6 +124,10 @@ class Boxes:
 
     def aabb(self) -> np.ndarray:
         """World axis-aligned bounds (n, 6)."""
+        return self._bounds
+
+    @cached_property
+    def _bounds(self) -> np.ndarray:
         extent = np.einsum("nij,nj->ni", np.abs(self.rot), self.half)
         return np.concatenate([self.centre - extent, self.centre + extent], axis=1)
 
@@ -134,31 +140,44 @@ class Boxes:
 
 
 def penetration(centre: np.ndarray, half: np.ndarray, rot: np.ndarray, others: Boxes) -> np.ndarray:
-    """How deep one oriented box overlaps each of `others` (separating-axis test); <= 0 means apart."""
+    """How deep one oriented box overlaps each of `others` (separating-axis test); <= 0 means apart.
+
+    Boxes whose axis-aligned bounds do not meet get a (negative) bound gap instead of the full test.
+    """
     if len(others) == 0:
         return np.zeros(0)
-    n = len(others)
+    extent = np.abs(rot) @ half
+    bounds = others.aabb()
+    gaps = np.maximum(bounds[:, :3] - (centre + extent), (centre - extent) - bounds[:, 3:]).max(axis=1)
+    result = -np.maximum(gaps, 1e-9)
+    close = np.flatnonzero(gaps < 0.0)
+    if len(close) == 0:
+        return result
+    near = others.select(close)
+    n = len(near)
     axes_a = np.repeat(rot.T[None, :, :], n, axis=0)  # (n, 3, 3): rows are A's axes
-    axes_b = np.transpose(others.rot, (0, 2, 1))  # rows are B's axes
+    axes_b = np.transpose(near.rot, (0, 2, 1))  # rows are B's axes
     cross = np.cross(axes_a[:, :, None, :], axes_b[:, None, :, :]).reshape(n, 9, 3)
     axes = np.concatenate([axes_a, axes_b, cross], axis=1)  # (n, 15, 3)
     norm = np.linalg.norm(axes, axis=2)
     valid = norm > 1e-6
     axes = axes / np.where(valid, norm, 1.0)[:, :, None]
     radius_a = np.abs(np.einsum("nkj,ji->nki", axes, rot)) @ half
-    radius_b = np.einsum("nki,ni->nk", np.abs(np.einsum("nkj,nji->nki", axes, others.rot)), others.half)
-    distance = np.abs(np.einsum("nkj,nj->nk", axes, others.centre - centre[None, :]))
+    radius_b = np.einsum("nki,ni->nk", np.abs(np.einsum("nkj,nji->nki", axes, near.rot)), near.half)
+    distance = np.abs(np.einsum("nkj,nj->nk", axes, near.centre - centre[None, :]))
     overlap = np.where(valid, radius_a + radius_b - distance, np.inf)
-    return overlap.min(axis=1)
+    result[close] = overlap.min(axis=1)
+    return result
+
+
+def depth(boxes: Boxes, others: Boxes) -> float:
+    """How deep the deepest of `boxes` penetrates any of `others` (<= 0 when apart)."""
+    parts = zip(boxes.centre, boxes.half, boxes.rot, strict=True)
+    deepest = [penetration(centre, half, rot, others).max(initial=-np.inf) for centre, half, rot in parts]
+    return float(max(deepest, default=-np.inf))
 
 
 def boxes_hit(boxes: Boxes, others: Boxes, tolerance: float) -> bool:
     """Whether any of `boxes` penetrates any of `others` deeper than `tolerance`."""
-    return any(
-        np.any(penetration(c, h, r, others) > tolerance) for c, h, r in zip(boxes.centre, boxes.half, boxes.rot, strict=True)
-    )
-
-
-def top_down_yaw_only(yaw: float) -> np.ndarray:
-    c, s = math.cos(yaw), math.sin(yaw)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    parts = zip(boxes.centre, boxes.half, boxes.rot, strict=True)
+    return any(np.any(penetration(centre, half, rot, others) > tolerance) for centre, half, rot in parts)

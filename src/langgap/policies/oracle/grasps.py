@@ -28,15 +28,17 @@ MIN_TIP_CLEARANCE = 0.002  # finger tips above the object's bottom (the table)
 PENETRATION_TOLERANCE = 0.0015  # metres of overlap ignored (collision boxes are conservative)
 NUDGE_LIMIT = 0.012  # the palm may brush a loose object this deep (it gets nudged), at a cost
 NUDGE_WEIGHT = 150.0  # cost per metre of such overlap
+UNPLACEABLE_COST = 10.0  # a grasp whose hand would collide where the object is released
 OFF_CENTRE_WEIGHT = 13.0  # cost per metre between the grasp and the middle of the object (radians of wrist turn)
 LINE_SPACING = 0.01  # between parallel grasp lines
+OFFSET_WEIGHT = 40.0  # cost per metre a grasp line passes beside the object's middle (an oblique cut of a wall)
 CLEARANCE_WEIGHT = 20.0  # cost per metre of missing clearance around the fingers
 WANTED_CLEARANCE = 0.02
 COMFORTABLE_REACH = 0.62  # horizontal distance from the robot's base beyond which the arm nears full stretch
 REACH_WEIGHT = 25.0  # cost per metre beyond the comfortable reach
 
 
-APPROACHES = (0.08, 0.05, 0.03, 0.015)  # pre-grasp heights above the grasp, highest first
+APPROACHES = (0.05, 0.035, 0.025, 0.015)  # pre-grasp heights above the grasp, highest first
 SIDE_STEP = 0.07  # a low approach enters sideways from this far
 SIDE_DIRECTIONS = 8
 SIDE_COST = 0.5
@@ -53,6 +55,7 @@ class Grasp:
     rim: bool
     cost: float
     entry: tuple[np.ndarray, ...] = ()
+    placeable: bool = True  # the hand fits where the object will be released
 
     @property
     def rot(self) -> np.ndarray:
@@ -100,7 +103,7 @@ def pad_span(z: float) -> tuple[float, float]:
 
 def hand_boxes(point: np.ndarray, yaw: float, *, width: float = hand.PAD_GAP_OPEN, sweep: float = 0.0) -> Boxes:
     """The fingers and the palm of a top-down gripper at `point`, swept up by `sweep` (its approach)."""
-    local = np.concatenate([hand.finger_boxes(width), hand.palm_boxes()])
+    local = hand.local_boxes(width)
     local[:, 2] -= sweep  # the site frame's z points down: sweeping up extends the boxes to lower z
     return Boxes.from_local(local, top_down(yaw), point)
 
@@ -168,13 +171,19 @@ class _Candidate:
     own: Boxes  # the object's own parts the hand must not touch
 
 
+def has_grasp(scene: Scene, obj: str) -> bool:
+    """Whether `obj` has any part narrow enough to grasp at all (before checking for collisions)."""
+    bounds = scene.boxes(obj).aabb()
+    return any(True for _ in _candidates(scene, scene.boxes(obj), bounds))
+
+
 def plan_grasp(
     scene: Scene,
     obj: str,
     *,
     place_shift: np.ndarray | None = None,
     place_obstacles: Boxes | None = None,
-    approach: float = 0.08,
+    approach: float = APPROACHES[0],
 ) -> Grasp | None:
     """The best top-down grasp of `obj`, or None if none fits.
 
@@ -199,14 +208,14 @@ def plan_grasp(
         grasp = _evaluate(scene, candidate, fixed, loose, approach, lowest[z])
         if grasp is None:
             continue
-        cost = grasp.cost
+        cost, placeable = grasp.cost, True
         if place_shift is not None and place_obstacles is not None:
             at_place = grasp.point + place_shift
-            if hand_hits(at_place, grasp.yaw, place_obstacles, sweep=approach):
-                cost += 10.0  # still possible, but only if nothing else is
+            placeable = not hand_hits(at_place, grasp.yaw, place_obstacles)
+            cost += 0.0 if placeable else UNPLACEABLE_COST  # still possible, but only if nothing else is
             cost += REACH_WEIGHT * max(0.0, scene.reach(at_place) - COMFORTABLE_REACH)
         if best is None or cost < best.cost:
-            best = Grasp(grasp.point, grasp.yaw, grasp.width, grasp.rim, cost, grasp.entry)
+            best = Grasp(grasp.point, grasp.yaw, grasp.width, grasp.rim, cost, grasp.entry, placeable)
     return best
 
 
@@ -256,7 +265,8 @@ def _candidates(scene: Scene, boxes: Boxes, bounds: np.ndarray):
                     off_centre = float(np.linalg.norm(point[:2] - centre))
                     centred = lo - 1e-3 <= float(np.dot(centre - origin, direction)) <= hi + 1e-3
                     rim = not centred or abs(offset) > STRIP
-                    cost = abs(yaw - current) + OFF_CENTRE_WEIGHT * off_centre + SHALLOW_COST * (GRASP_DEPTHS[0] - depth)
+                    cost = abs(yaw - current) + OFF_CENTRE_WEIGHT * off_centre + OFFSET_WEIGHT * abs(offset)
+                    cost += SHALLOW_COST * (GRASP_DEPTHS[0] - depth)
                     cost += REACH_WEIGHT * max(0.0, scene.reach(point) - COMFORTABLE_REACH)
                     yield _Candidate(point=point, yaw=yaw, width=width, rim=rim, cost=cost, own=own)
 

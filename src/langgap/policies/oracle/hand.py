@@ -16,11 +16,14 @@ TIP = 0.010  # finger tips, ahead of the grip site along z
 PAD_CENTRE = -0.004  # centre of the pads along z (behind the grip site)
 PAD_HALF_HEIGHT = 0.008
 PALM = -0.030  # the palm's lower face starts this far behind the grip site
+PALM_STEP = -0.088  # the palm is slimmer below this height than above it
 PALM_TOP = -0.115
 PALM_HALF_LENGTH = 0.102  # along x
-PALM_HALF_DEPTH = 0.026  # along y
+PALM_HALF_DEPTH_LOW = 0.021  # along y, next to the fingers
+PALM_HALF_DEPTH_HIGH = 0.032
 WRIST_TOP = -0.20  # the wrist (the arm's last links), a narrower block above the palm
 WRIST_HALF_WIDTH = 0.05
+REACH = 0.07  # how far the open fingers reach sideways from the grip site
 
 
 def finger_boxes(width: float) -> np.ndarray:
@@ -34,10 +37,16 @@ def finger_boxes(width: float) -> np.ndarray:
 
 
 def palm_boxes() -> np.ndarray:
-    """The palm and the wrist above it (2, 6) as boxes in the grip-site frame."""
+    """The palm (two slabs) and the wrist above it (3, 6) as boxes in the grip-site frame."""
     return np.array(
         [
-            [-PALM_HALF_LENGTH, -PALM_HALF_DEPTH, PALM_TOP, PALM_HALF_LENGTH, PALM_HALF_DEPTH, PALM],
+            [-PALM_HALF_LENGTH, -PALM_HALF_DEPTH_LOW, PALM_STEP, PALM_HALF_LENGTH, PALM_HALF_DEPTH_LOW, PALM],
+            [-PALM_HALF_LENGTH, -PALM_HALF_DEPTH_HIGH, PALM_TOP, PALM_HALF_LENGTH, PALM_HALF_DEPTH_HIGH, PALM_STEP],
             [-WRIST_HALF_WIDTH, -WRIST_HALF_WIDTH, WRIST_TOP, WRIST_HALF_WIDTH, WRIST_HALF_WIDTH, PALM_TOP],
         ]
     )
+
+
+def local_boxes(width: float) -> np.ndarray:
+    """The fingers (pads `width` apart), the palm and the wrist (5, 6) as boxes in the grip-site frame."""
+    return np.concatenate([finger_boxes(width), palm_boxes()])

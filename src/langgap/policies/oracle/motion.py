@@ -20,13 +20,15 @@ Program = Generator[np.ndarray, None, bool]
 POSITION_TOLERANCE = 0.008
 ROTATION_TOLERANCE = 0.08  # radians
 PASS_TOLERANCE = 0.025  # for waypoints the hand only passes through
-GRIPPER_STILL = 2e-4  # finger travel per step below which the gripper has finished moving
+GRIPPER_STILL = 5e-4  # finger travel per step below which the gripper has finished moving
 MAX_STEP = 0.05  # the controller's largest position step (one unit of action)
+GAIN = 1.5  # the controller covers about 2/3 of a commanded step: aiming further settles sooner
 INTEGRAL_ZONE = 0.02
 INTEGRAL_GAIN = 0.3
 MAX_BIAS = 0.03
 STALL_STEPS = 10
 STALL_PROGRESS = 0.002
+RETREAT = 0.08  # how far the hand lifts after letting go
 LARGE_TURN = 0.8  # radians; larger reorientations are done near the base
 TURNING_REACH = 0.55  # horizontal distance from the base where the arm turns freely
 
@@ -65,7 +67,8 @@ def move(
 ) -> Program:
     """Servo to `pos` until within `tol` (and the orientation within ROTATION_TOLERANCE).
 
-    `through` marks a waypoint the hand only passes: it keeps full speed instead of slowing down.
+    `through` marks a waypoint the hand only passes: it keeps full speed instead of slowing down,
+    and does not wait there for the hand to finish turning.
     Near the target an integral term removes the controller's steady-state offset (a few mm when
     the arm is stretched).
     """
@@ -77,7 +80,7 @@ def move(
     for _ in range(steps):
         error = target - agent.scene.eef_pos
         distance = float(np.linalg.norm(error))
-        if distance < tol and agent.rotation_error() < ROTATION_TOLERANCE:
+        if distance < tol and (through or agent.rotation_error() < ROTATION_TOLERANCE):
             return True
         history.append(distance + agent.rotation_error() * 0.05)
         if len(history) > STALL_STEPS and history[-STALL_STEPS - 1] - history[-1] < STALL_PROGRESS:
@@ -87,12 +90,12 @@ def move(
         else:
             if distance < INTEGRAL_ZONE:
                 bias = np.clip(bias + INTEGRAL_GAIN * error, -MAX_BIAS, MAX_BIAS)
-            aim = target + bias
+            aim = agent.scene.eef_pos + GAIN * error + bias
         yield agent.command(aim, grip=grip, speed=speed)
     return False
 
 
-def actuate(agent: Agent, grip: float, *, min_steps: int = 4, max_steps: int = 14) -> Program:
+def actuate(agent: Agent, grip: float, *, min_steps: int = 5, max_steps: int = 11) -> Program:
     """Open or close the gripper in place until the fingers stop moving."""
     hold = agent.scene.eef_pos.copy()
     last = None
@@ -115,9 +118,12 @@ def travel(
     tol: float = POSITION_TOLERANCE,
     speed: float = 1.0,
 ) -> Program:
-    """Go to `pos` through the waypoints `path` (n, 3) without stopping at them, then settle on `pos`."""
+    """Go to `pos` through the waypoints `path` (n, 3) without stopping at them, then settle on `pos`.
+
+    `speed` (0..1] caps every step, e.g. to carry a load gently.
+    """
     for waypoint in [] if path is None else path:
-        yield from move(agent, waypoint, rot=rot, grip=grip, tol=PASS_TOLERANCE, steps=60, through=True)
+        yield from move(agent, waypoint, rot=rot, grip=grip, tol=PASS_TOLERANCE, steps=60, speed=speed, through=True)
     return (yield from move(agent, pos, rot=rot, grip=grip, tol=tol, speed=speed))
 
 
@@ -137,6 +143,12 @@ def reorient(agent: Agent, rot: np.ndarray) -> Program:
         staging = np.array([*(agent.scene.base_pos[:2] + outward / distance * TURNING_REACH), here[2] + 0.03])
         yield from move(agent, staging, rot=agent.scene.eef_mat.copy(), tol=PASS_TOLERANCE, steps=30, through=True)
     return (yield from move(agent, agent.scene.eef_pos.copy(), rot=rot, tol=0.03, steps=30))
+
+
+def back_off(agent: Agent, away: np.ndarray | None = None) -> Program:
+    """Lift the hand clear (and move it by `away`) after letting go of something."""
+    lift = np.array([0.0, 0.0, RETREAT]) + (np.zeros(3) if away is None else away)
+    return (yield from move(agent, agent.scene.eef_pos + lift, tol=0.02, steps=20))
 
 
 def hold(agent: Agent) -> Program:

@@ -15,6 +15,10 @@ EDGE_MARGIN = 0.012  # keep the object's origin this far inside a region
 GRID = 9  # candidate spots per region side
 LIFT_GAP = 0.004  # a candidate footprint is tested this far above the support
 PATH_SPACING = 0.05
+BLOCKED_COST = 10.0  # per loose object in the way of a spot
+ASIDE_DISTANCES = (0.12, 0.16, 0.2, 0.25)
+ASIDE_DIRECTIONS = 12
+ASIDE_MAX_REACH = 0.72
 WRIST_HEIGHT = 0.2  # the hand and wrist rise this far above the grip site
 ESCAPE_DISTANCES = (0.05, 0.08, 0.12)
 HAND_HALF_WIDTH = 0.03
@@ -50,23 +54,67 @@ def spot_on_object(scene: Scene, obj: str, target: str) -> Spot:
     return Spot(xy=xy, support=float(boxes.aabb()[:, 5].max()) if support is None else support)
 
 
-def spot_in_region(scene: Scene, obj: str, region_name: str, *, inside: bool) -> Spot:
-    """A free spot for `obj` inside region `region_name` (`inside`: LIBERO's `In`, else `On`/under)."""
+@dataclass(frozen=True)
+class RegionSpot(Spot):
+    """A spot in a region, and the loose objects in its way (empty when it is free)."""
+
+    blockers: tuple[str, ...] = ()
+
+
+def spots_in_region(scene: Scene, obj: str, region_name: str, *, inside: bool) -> list[RegionSpot]:
+    """Spots for `obj` inside region `region_name` (`inside`: LIBERO's `In`, else `On`/under), best first.
+
+    The object rests on the region's own surface (a fixture's, not another object's: `On` needs
+    the contact). The best spot is clear of everything and central; its `blockers` name the loose
+    objects in the way when no spot is clear. After the best come the others nearest the robot
+    first (easiest to reach into, e.g. the front of a microwave).
+    """
     region = scene.region(region_name)
-    obstacles = scene.obstacles(exclude=(obj,))
+    fixed = scene.obstacles(exclude=(obj,), fixtures_only=True)
+    loose = [e for e in scene.entities if e != obj and scene.movable(e)]
+    everything = scene.obstacles(exclude=(obj,))
     lo, hi = region_box(region, inside=inside)
-    candidates = region_frame_points(region, inside=inside, margin=EDGE_MARGIN, steps=GRID)
-    best, best_cost = None, np.inf
-    for point in candidates:
-        support = support_height(obstacles, point[:2], hi[2])
+    scored = []
+    for point in region_frame_points(region, inside=inside, margin=EDGE_MARGIN, steps=GRID):
+        support = support_height(fixed, point[:2], hi[2])
         support = max(lo[2] + 0.01, region.pos[2]) if support is None else support
         placed = footprint_at(scene, obj, point[:2], support + LIFT_GAP)
+        if boxes_hit(placed, fixed, 0.001):
+            continue
+        blockers = tuple(e for e in loose if boxes_hit(placed, scene.boxes(e), 0.001))
         spread = float(np.linalg.norm(point[:2] - region.pos[:2]))
-        cost = (100.0 if boxes_hit(placed, obstacles, 0.001) else 0.0) + spread
-        cost -= 0.5 * _nearest_free_distance(placed.aabb(), obstacles.aabb(), support)
-        if cost < best_cost:
-            best, best_cost = Spot(xy=point[:2], support=support), cost
-    return best
+        cost = BLOCKED_COST * len(blockers) + spread
+        cost -= 0.5 * _nearest_free_distance(placed.aabb(), everything.aabb(), support)
+        scored.append((cost, RegionSpot(xy=point[:2], support=support, blockers=blockers)))
+    if not scored:
+        return [RegionSpot(xy=region.pos[:2], support=float(region.pos[2]))]
+    scored.sort(key=lambda item: item[0])
+    best = scored[0][1]
+    free = [spot for cost, spot in scored[1:] if len(spot.blockers) <= len(best.blockers)]
+    return [best] + sorted(free, key=lambda spot: scene.reach(spot.xy))
+
+
+def spot_aside(scene: Scene, obj: str, keep_clear: np.ndarray) -> Spot | None:
+    """A free spot on the table near `obj` but outside the box `keep_clear` (lo xyz, hi xyz)."""
+    everything = scene.obstacles(exclude=(obj,))
+    table = min(scene.bbox(e)[2] for e in scene.entities if scene.movable(e))
+    here = scene.pos(obj)[:2]
+    for distance in ASIDE_DISTANCES:
+        best, best_reach = None, np.inf
+        for k in range(ASIDE_DIRECTIONS):
+            angle = 2 * np.pi * k / ASIDE_DIRECTIONS
+            xy = here + distance * np.array([np.cos(angle), np.sin(angle)])
+            placed = footprint_at(scene, obj, xy, table + LIFT_GAP)
+            bounds = placed.aabb()
+            low, high = bounds[:, :2].min(axis=0), bounds[:, 3:5].max(axis=0)
+            inside = bool(np.all(high > keep_clear[:2]) and np.all(low < keep_clear[3:5]))
+            if inside or boxes_hit(placed, everything, 0.001) or scene.reach(xy) > ASIDE_MAX_REACH:
+                continue
+            if scene.reach(xy) < best_reach:
+                best, best_reach = Spot(xy=xy, support=table), scene.reach(xy)
+        if best is not None:
+            return best
+    return None
 
 
 def _nearest_free_distance(placed: np.ndarray, obstacles: np.ndarray, support: float, cap: float = 0.05) -> float:
@@ -105,7 +153,15 @@ def flight_path(
     )
     near = np.linalg.norm(gap, axis=2) <= reach
     tops = np.where(near, obstacles[None, :, 5], -np.inf).max(axis=1)
-    heights = np.maximum(tops + hang + CLEARANCE, end[2])
+    # Between two samples the load passes near what either sample is near: take the larger need.
+    own = tops + hang + CLEARANCE
+    needed = own.copy()
+    needed[1:] = np.maximum(needed[1:], own[:-1])
+    needed[:-1] = np.maximum(needed[:-1], own[1:])
+    needed[0] = own[0]  # where the load already is
+    # In free space the height changes linearly from the start's to the end's.
+    base = start[2] + np.linspace(0.0, 1.0, count) * (end[2] - start[2])
+    heights = np.maximum(needed, base)
     heights[0] = max(heights[0], start[2])
     # No dips between two higher stretches: rise once, cross, descend once.
     heights = np.minimum(np.maximum.accumulate(heights), np.maximum.accumulate(heights[::-1])[::-1])

@@ -8,13 +8,15 @@ what did not stick.
 
 from __future__ import annotations
 
+import numpy as np
+
 from langgap.bddl import Predicate
 from langgap.errors import LangGapError
-from langgap.policies.oracle import skills
-from langgap.policies.oracle.grasps import plan_grasp
+from langgap.policies.oracle import drawers, hinges, pick_place, pushing
+from langgap.policies.oracle.grasps import has_grasp
 from langgap.policies.oracle.motion import Agent, Program, hold
-from langgap.policies.oracle.placement import spot_in_region, spot_on_object
-from langgap.policies.oracle.predicates import holds
+from langgap.policies.oracle.placement import spot_aside, spot_on_object, spots_in_region
+from langgap.policies.oracle.predicates import holds, region_box
 from langgap.policies.oracle.scene import Scene
 
 ROUNDS = 3
@@ -76,24 +78,34 @@ def _achieve(agent: Agent, predicate: Predicate) -> Program:
     if name in ("On", "In"):
         obj, target = args
         if scene.has_entity(target):
-            spot = spot_on_object(scene, obj, target)
+            spots = [spot_on_object(scene, obj, target)]
         else:
-            spot = spot_in_region(scene, obj, target, inside=name == "In")
-        if plan_grasp(scene, obj) is None:
-            return (yield from skills.push_to(agent, obj, spot))
-        if not (yield from skills.pick(agent, obj, spot)):
+            spots = spots_in_region(scene, obj, target, inside=name == "In")
+            if spots[0].blockers and name == "On":
+                # `On` a region needs contact with its surface: clear the way first.
+                keep_clear = np.concatenate(region_box(scene.region(target), inside=False))
+                for blocker in spots[0].blockers:
+                    aside = spot_aside(agent.scene, blocker, keep_clear)
+                    if aside is not None and (yield from pick_place.pick(agent, blocker, [aside])):
+                        yield from pick_place.place(agent, blocker, aside)
+                scene = agent.scene
+                spots = spots_in_region(scene, obj, target, inside=False)
+        if not has_grasp(scene, obj):
+            return (yield from pushing.push_to(agent, obj, spots[0]))
+        spot = yield from pick_place.pick(agent, obj, spots)
+        if spot is None:
             return False
-        return (yield from skills.place(agent, obj, spot))
+        return (yield from pick_place.place(agent, obj, spot))
     (part,) = args
     art = scene.articulation(part)
     if name in ("Turnon", "Turnoff"):
-        return (yield from skills.turn(agent, part, _STATE[name]))
+        return (yield from hinges.turn(agent, part, _STATE[name]))
     if art.slide:
         if name == "Open":
-            return (yield from skills.pull_open(agent, part))
-        return (yield from skills.push_closed(agent, part))
+            return (yield from drawers.pull_open(agent, part))
+        return (yield from drawers.push_closed(agent, part))
     if name == "Close":
-        return (yield from skills.close_door(agent, part))
+        return (yield from hinges.close_door(agent, part))
     raise OracleError(f"the oracle cannot {name.lower()} {part!r} (a hinged door)")
 
 

@@ -8,7 +8,6 @@ import numpy as np
 
 from langgap.policies.oracle.geometry import Boxes, quat_to_mat
 
-
 INTERVAL_MARGIN = 0.15
 
 
@@ -40,8 +39,19 @@ class Articulation:
         inner = lo if abs(lo - reference) < abs(hi - reference) else hi
         return float(inner + (hi + lo - 2 * inner) * INTERVAL_MARGIN)
 
-    def holds(self, state: str) -> bool:
+    def reached(self, state: str) -> bool:
+        """Whether the joint is at or beyond `target(state)`, well inside the interval of `state`."""
         lo, hi = self.intervals[state]
+        target = self.target(state)
+        inward = np.sign((lo + hi) / 2.0 - target) or 1.0
+        return bool(self.holds(state) and (self.qpos - target) * inward >= 0.0)
+
+    def holds(self, state: str) -> bool:
+        """Whether the joint is in the interval of `state` (open-ended where it reaches a joint limit,
+        since a joint pressed against its limit may overshoot it slightly)."""
+        lo, hi = self.intervals[state]
+        lo = -np.inf if lo <= self.limits[0] + 1e-9 else lo
+        hi = np.inf if hi >= self.limits[1] - 1e-9 else hi
         return bool(lo <= self.qpos <= hi)
 
 
@@ -94,10 +104,6 @@ class Scene:
     def boxes(self, name: str) -> Boxes:
         """Collision boxes of `name` at its current pose."""
         return Boxes.from_local(self.shape(name), self.rot(name), self.pos(name))
-
-    def world_shape(self, name: str) -> np.ndarray:
-        """Collision boxes of `name` as world axis-aligned bounds (n, 6)."""
-        return self.boxes(name).aabb()
 
     def movable(self, name: str) -> bool:
         """A loose object (True) or a fixture (False)."""
