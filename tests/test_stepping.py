@@ -41,3 +41,23 @@ def test_fast_stepping_is_bit_identical(catalog, task_id, hard_reset):
     plain = _states(catalog, task_id, fast=False, hard_reset=hard_reset)
     assert len(fast) > 100 and fast.shape == plain.shape
     assert np.array_equal(fast, plain), f"first differing step {np.argmax(np.any(fast != plain, axis=1))}"
+
+
+def test_an_episode_does_not_depend_on_what_ran_before(catalog):
+    """Same init state and seed: the same trajectory in a fresh simulator and in one used for other episodes."""
+    task = catalog.get("spatial/s0/black-bowl-1-on-plate")
+    policy = make_policy("oracle", {})
+
+    def trajectory(env: TaskEnv, init: int) -> np.ndarray:
+        states: list[np.ndarray] = []
+        context = task_context(task, catalog, init_index=init, seed=0)
+        run_episode(env, policy, context, on_step=lambda env_, _s, _a: states.append(env_.sim_state().copy()))
+        return np.array(states)
+
+    with TaskEnv(task, env_options_for(policy)) as env:
+        fresh = trajectory(env, 1)
+    with TaskEnv(task, env_options_for(policy)) as env:
+        trajectory(env, 0)
+        trajectory(env, 2)
+        after_others = trajectory(env, 1)
+    assert fresh.shape == after_others.shape and np.array_equal(fresh, after_others)

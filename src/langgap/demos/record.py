@@ -147,6 +147,9 @@ def start_episode(env: TaskEnv, demo: Demo) -> None:
         raise SimulationError(f"{demo.task_id}: the demonstration was recorded in another scene")
     model.body_pos[:] = demo.body_pos
     model.body_quat[:] = demo.body_quat
+    # Settling leaves the controller as it was when the demonstration started (gripper command
+    # saturated open); the recorded first state then replaces the settled one.
+    env.settle()
     env.set_sim_state(demo.states[0])
     if scene_hash(env) != demo.scene_hash:
         raise SimulationError(f"{demo.task_id}: cannot rebuild the scene of the demonstration with seed {demo.seed}")

@@ -210,6 +210,7 @@ class TaskEnv:
             robot.gripper.current_action = np.zeros(robot.gripper.dof)
         if init_index is not None:
             self._apply_init_state(init_index)
+        self._forget_solver_history()
         self.t0_hash = self.state_hash()
         self.steps = 0
         self._reapply_render_flags()
@@ -232,9 +233,20 @@ class TaskEnv:
         return float(np.abs(self.init_states[:, 1 : 1 + nq] - qpos).max(axis=1).min())
 
     def settle(self, steps: int = SETTLE_STEPS) -> None:
-        """The no-op steps (gripper open) that let objects come to rest; not counted, not shown to policies."""
+        """The no-op steps (gripper open) that let objects come to rest; not counted, not shown to policies.
+
+        Afterwards the gripper command is saturated open and the solver history cleared, so an episode
+        started from the settled state (or from a copy of it, see `set_sim_state`) runs the same way.
+        """
         for _ in range(steps):
             self._raw_obs, _, _, _ = self._env.step(SETTLE_ACTION)
+        self._forget_solver_history()
+
+    def _forget_solver_history(self) -> None:
+        # MuJoCo warm-starts its constraint solver from the previous step's accelerations, which are not
+        # part of the state LIBERO saves or restores. Left alone, an episode would depend (at the solver's
+        # tolerance, enough to flip a grasp) on whatever ran before it in the same process.
+        self.sim.data.qacc_warmstart[:] = 0.0
 
     def step(self, action: np.ndarray) -> bool:
         """Apply one 7-D action (OSC_POSE delta + gripper); returns whether the task goal holds now."""
@@ -314,6 +326,7 @@ class TaskEnv:
     def set_sim_state(self, state: np.ndarray) -> None:
         """Restore a flattened state recorded from this scene (e.g. to replay a demonstration)."""
         self._raw_obs = self._env.set_init_state(np.asarray(state, dtype=np.float64))
+        self._forget_solver_history()
 
     def state_hash(self) -> str:
         """SHA-256 over the flattened state and the fixture placements (model body poses)."""

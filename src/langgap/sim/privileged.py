@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import mujoco
 import numpy as np
 
 _ROBOT_PREFIXES = ("robot0_", "gripper0_", "mount0_")
@@ -142,7 +143,7 @@ def _handle_geoms(model, data, geoms: np.ndarray, direction: np.ndarray) -> np.n
     return geoms[reach >= reach.max() - _HANDLE_TOLERANCE]
 
 
-def _articulation(env, model, fixture, joint_name: str) -> _Articulation:
+def _articulation(model, fixture, joint_name: str, data) -> _Articulation:
     joint = model.joint_name2id(joint_name)
     raw = model._model
     slide = int(raw.jnt_type[joint]) == 2  # mjJNT_SLIDE
@@ -156,7 +157,7 @@ def _articulation(env, model, fixture, joint_name: str) -> _Articulation:
         limits=limits,
         body=body,
         geoms=geoms,
-        shape=_local_boxes(env.sim.data._data, raw, body, geoms),
+        shape=_local_boxes(data, raw, body, geoms),
     )
     for key, method in _ARTICULATION_TESTS.items():
         interval = _interval(fixture, method, limits)
@@ -164,7 +165,6 @@ def _articulation(env, model, fixture, joint_name: str) -> _Articulation:
             art.intervals[key] = interval
     if geoms.size:
         # Rigidly attached to the moving body: which geoms form the handle never changes.
-        data = env.sim.data._data
         art.handle = _handle_geoms(raw, data, geoms, _opening_direction(art, data))
     return art
 
@@ -177,7 +177,11 @@ def _layout(env) -> _Layout:
     if cached is not None and cached.model_id == id(raw):
         return cached
     inner = env.robosuite_env
-    data = sim.data._data
+    # The static parts are read from the model's reference pose, never from the current state: computed
+    # from whichever state came first, they would differ in the last bits from one episode order to the
+    # next, and so would every action an oracle derives from them.
+    data = mujoco.MjData(raw)
+    mujoco.mj_kinematics(raw, data)
     entities = {**inner.objects_dict, **inner.fixtures_dict}
     names = list(entities)
     geom_entity = np.full(raw.ngeom, -2, dtype=np.int64)
@@ -200,7 +204,7 @@ def _layout(env) -> _Layout:
             for joint_name in joint_names:
                 moved.update(_subtree_bodies(raw, int(raw.jnt_bodyid[model.joint_name2id(joint_name)])).tolist())
             if joint_names:
-                articulations[name] = _articulation(env, model, obj, joint_names[0])
+                articulations[name] = _articulation(model, obj, joint_names[0], data)
         static = np.array([g for g in geoms if raw.geom_bodyid[g] not in moved], dtype=np.int64)
         shapes[name] = _local_boxes(data, raw, root, static)
     sites = {}
@@ -210,7 +214,7 @@ def _layout(env) -> _Layout:
         joint_names = [j for j in site.joints or [] if j in model.joint_names]
         parent = inner.fixtures_dict.get(site.parent_name)
         if joint_names and parent is not None:
-            articulations[site_name] = _articulation(env, model, parent, joint_names[0])
+            articulations[site_name] = _articulation(model, parent, joint_names[0], data)
     joints = {
         j: raw.jnt_qposadr[model.joint_name2id(j)]
         for j in model.joint_names
