@@ -65,7 +65,7 @@ def test_policy_reads_the_instruction_and_is_deterministic(checkpoint, catalog):
     from langgap.sim.env import EnvOptions, TaskEnv
 
     policy = make_policy("small-bc", {"checkpoint": str(checkpoint)})
-    assert policy.spec.privileged and policy.spec.chunk == 8 and policy.spec.replan == 4
+    assert policy.spec.privileged and policy.spec.chunk == 8 and policy.spec.replan == 2
     task = catalog.get(TINY_TASK)
     with TaskEnv(task, EnvOptions(privileged=True)) as env:
         env.reset(0)
