@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
 import time
 
 import numpy as np
@@ -114,16 +113,7 @@ def test_plain_openpi_server_receives_openpi_libero_observations(catalog, tmp_pa
 PLAN = [(0, 0), (2, 5)]
 
 
-ORACLE = pytest.param(
-    "oracle",
-    (),
-    marks=pytest.mark.skipif(
-        importlib.util.find_spec("langgap.policies.oracle") is None, reason="the oracle policy is not in this tree"
-    ),
-)
-
-
-@pytest.mark.parametrize("name,pairs", [("random", ("chunk=3",)), ("noop", ()), ORACLE])
+@pytest.mark.parametrize("name,pairs", [("random", ("chunk=3",)), ("noop", ()), ("oracle", ())])
 def test_openpi_server_package_hosts_langgap_policy(catalog, name, pairs):
     port = free_port()
     with running(helper_server("openpi-langgap", port, name, *pairs), port):

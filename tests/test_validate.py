@@ -34,6 +34,23 @@ def probe_registry(tmp_path_factory):
     return path
 
 
+def test_gate_with_the_oracle_passes_doable_tasks_and_rejects_a_goal_true_at_t0(tmp_path):
+    source = yaml.safe_load((REPO / "src/langgap/catalog/registry/langgap99.yaml").read_text())
+    wanted = {"spatial/s0/black-bowl-1-on-plate", "spatial/s0/ramekin-on-plate"}
+    keep = [t for t in source["tasks"] if t["id"] in wanted]
+    already = dict(keep[1], id="spatial/s0/plate-on-plate-spot", goal=["(On plate_1 main_table_plate_region)"])
+    path = tmp_path / "probe.yaml"
+    path.write_text(yaml.safe_dump({"catalog": "probe", "max_steps": source["max_steps"], "tasks": [*keep, already]}))
+    selection = "spatial/s0/ramekin-on-plate,spatial/s0/plate-on-plate-spot"
+    rows = {r.id: r for r in validate(str(path), selection, inits=2, workers=0, progress=False)}
+    doable = rows["spatial/s0/ramekin-on-plate"]
+    assert doable.feasible and doable.successes == 2 and doable.rate == 1.0, doable.reason
+    # Where the goals exclude each other, the source task's goal must be false after the oracle's success.
+    assert doable.checks["source goal false at end"]
+    rejected = rows["spatial/s0/plate-on-plate-spot"]
+    assert not rejected.feasible and not rejected.checks["goal false at t0"]
+
+
 def test_gate_rows_and_checks(probe_registry):
     rows = {r.id: r for r in validate(str(probe_registry), "all", inits=2, workers=0, policy="noop", progress=False)}
     assert set(rows) == {

@@ -2,10 +2,10 @@
 
 Schema of `lerobot/libero`: `observation.images.image` (agentview) and `observation.images.image2`
 (wrist), 256x256 upright (LangGap's images: the raw render rotated 180 degrees, what LeRobot's
-`LiberoProcessorStep` makes of the raw render), `observation.state` 8-D, `action` 7-D (the oracle's command: without the execution noise of
-`collect --noise`), the task
-string (the exact catalog instruction in the collection's style), fps 20 (the control rate: one
-frame per action). Frames are rendered by replaying the recorded states of kept demonstrations.
+`LiberoProcessorStep` makes of the raw render), `observation.state` 8-D, `action` 7-D (the oracle's
+command, without the execution noise of `collect --noise`), the task string (the exact catalog
+instruction in the collection's style), fps 20 (the control rate: one frame per action). Frames are
+rendered by replaying the recorded states of kept demonstrations.
 """
 
 from __future__ import annotations
