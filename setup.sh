@@ -59,6 +59,14 @@ fi
 if [ "${LANGGAP_SETUP_ONLY:-0}" = "1" ]; then
     exit 0
 fi
-# The main job on the embedded default.
+# The main job on the embedded default: check the stack, then the diagnosis on one scene. The scripted
+# oracle (reads the instruction's goal) and `blind` (does the scene's original task whatever the
+# instruction says) run 3 episodes of 5 tasks that share the identical libero_spatial scene.
 .venv/bin/langgap doctor
-.venv/bin/langgap tasks list
+QUICK_TASKS="spatial/s0/black-bowl-1-on-plate,spatial/s0/black-bowl-2-on-plate,spatial/s0/black-bowl-1-on-stove"
+QUICK_TASKS="$QUICK_TASKS,spatial/s0/ramekin-on-plate,spatial/s0/open-cabinet-top-drawer"
+for policy in oracle blind; do
+    .venv/bin/langgap eval --policy "$policy" --tasks "$QUICK_TASKS" --episodes 3 --workers 2 \
+        --run "runs/quickstart/$policy" --resume --quiet
+done
+.venv/bin/langgap report runs/quickstart/oracle --compare runs/quickstart/blind --summary
