@@ -33,7 +33,9 @@ def add_parser(subparsers) -> None:
     listing.add_argument("--kind", choices=KINDS)
     listing.add_argument("--dimension", choices=DIMENSIONS)
     listing.add_argument("--split", choices=[s for s in SPLITS if s != "original"] + ["original"])
-    listing.add_argument("--tasks", metavar="SELECTION", help="selection expression (ids, globs, keywords)")
+    listing.add_argument(
+        "--tasks", metavar="SELECTION", default="all", help="selection expression (default: every task, gated or not)"
+    )
     listing.add_argument("--json", action="store_true", help="print a JSON array of task objects")
     listing.set_defaults(handler=run_list)
 
@@ -59,15 +61,17 @@ def run_list(args) -> int:
         print(json.dumps([t.to_dict(args.style) for t in tasks], indent=1))
         return 0
     width = max((len(t.id) for t in tasks), default=2)
-    print(f"{'id':<{width}}  {'paper':>5}  {'dimension':<19}  {'split':<8}  instruction ({args.style})")
+    print(f"{'id':<{width}}  {'paper':>5}  {'dimension':<19}  {'split':<8}  gate  instruction ({args.style})")
     for t in tasks:
         paper = "-" if t.paper_id is None else str(t.paper_id)
-        print(f"{t.id:<{width}}  {paper:>5}  {t.dimension:<19}  {t.split:<8}  {t.instruction(args.style)}")
+        gate = "-" if t.gate is None else ("ok" if t.feasible else "no")
+        print(f"{t.id:<{width}}  {paper:>5}  {t.dimension:<19}  {t.split:<8}  {gate:<4}  {t.instruction(args.style)}")
     by_kind = Counter(t.kind for t in tasks)
     by_dim = Counter(t.dimension for t in tasks if t.kind == "extended")
     print(
         f"\n{len(tasks)} tasks: {by_kind['original']} original, {by_kind['extended']} extended"
         + (" (" + ", ".join(f"{d} {n}" for d, n in sorted(by_dim.items())) + ")" if by_dim else "")
+        + f"; {sum(not t.feasible for t in tasks)} rejected by the feasibility gate (gate: no)"
     )
     return 0
 
