@@ -1,7 +1,7 @@
 """Scale-out: the Ray backend's overhead and the shared policy's batching gain, side by side in one run.
 
     .venv/bin/python bench/bench_scaleout.py ray-overhead [--workers 2] [--policy noop]
-    .venv/bin/python bench/bench_scaleout.py batching [--workers 4] [--delay-ms 100]
+    .venv/bin/python bench/bench_scaleout.py batching [--workers 2] [--delay-ms 100] [--episodes 2]
 
 Run Ray benchmarks inside a loopback-only network namespace on shared machines, e.g.
 `unshare -n sh -c 'ip link set lo up; .venv/bin/python bench/bench_scaleout.py batching'`.
