@@ -137,11 +137,11 @@ def record_attempt(
 def start_episode(env: TaskEnv, demo: Demo) -> None:
     """Put `env` in the demonstration's first state: its scene and its recorded first state.
 
-    The reset with the demonstration's seed rebuilds the scene, and the recorded fixture placements
-    are then written into the model: in some scenes (e.g. libero_spatial task 4, whose cabinet starts
-    open) LIBERO's fixture placement on a rebuilt model does not follow from the seed alone.
+    A soft reset is enough: the recorded body placements (fixtures are placed in the model, and in some
+    scenes, e.g. libero_spatial task 4 whose cabinet starts open, LIBERO's placement on a rebuilt model
+    does not follow from the seed alone) are written into the model, then the recorded state.
     """
-    env.reset(None, seed=demo.seed)
+    env.reset(0)
     model = env.sim.model
     if model.body_pos.shape != demo.body_pos.shape:
         raise SimulationError(f"{demo.task_id}: the demonstration was recorded in another scene")
