@@ -7,9 +7,11 @@
 # small-bc policies, each trained for the same number of steps:
 #   original   the original task only                    (the LIBERO situation: one task per scene)
 #   extended   the 6 extended training tasks only         (targeted same-scene data; the paper's exp 2 / exp 4)
-#   mixed      the same extended data + the original      (the data mix of the paper's exp 3 / exp 5)
+#   mixed      the same extended data + the original      (the data mix of the paper's exp 5)
+#   diluted    the same extended data + all 40 originals  (the paper's exp 3: dilution by the LIBERO mix)
 # Each is evaluated on all 13 tasks of the scene on the fixed init states 0..EPISODES-1, beside `blind` (the
-# oracle doing the scene's original task whatever the instruction says: a policy that ignores language).
+# oracle doing the scene's original task whatever the instruction says: a policy that ignores language);
+# `diluted` also on all 40 original tasks, to show it learned the data it was diluted with.
 #
 #   experiments/small_scale.sh [OUT]        (default OUT: runs/small_scale; re-running skips finished steps)
 # Environment: DEMOS (per task, default 12), NOISE (execution noise of the demonstrations, default 0.3),
@@ -25,22 +27,31 @@ WORKERS="${WORKERS:-2}"
 SCENE="spatial/s0/*"
 mkdir -p "$OUT"
 
-[ -f "$OUT/demos/collection.json" ] || langgap collect --tasks "$SCENE&original,$SCENE&train" --demos "$DEMOS" \
-    --noise "$NOISE" --out "$OUT/demos" --workers "$WORKERS" --seed 1000 --format compact --no-progress
+collect() {  # collect DIR SELECTION
+    [ -f "$1/collection.json" ] || langgap collect --tasks "$2" --demos "$DEMOS" --noise "$NOISE" --out "$1" \
+        --workers "$WORKERS" --seed 1000 --format compact --no-progress
+}
+collect "$OUT/demos" "$SCENE&original,$SCENE&train"
+collect "$OUT/demos-originals" "original&!$SCENE"  # the other 39 scenes' original tasks, for `diluted`
 
-declare -A TRAIN=([original]="$SCENE&original" [extended]="$SCENE&train" [mixed]="$SCENE&original,$SCENE&train")
-for name in original extended mixed; do
-    [ -f "$OUT/$name.safetensors" ] || langgap train small-bc --data "$OUT/demos" --tasks "${TRAIN[$name]}" \
-        --steps "$STEPS" --threads 1 --seed 0 --out "$OUT/$name.safetensors"
+declare -A TRAIN=([original]="$SCENE&original" [extended]="$SCENE&train" [mixed]="$SCENE&original,$SCENE&train"
+    [diluted]="original,$SCENE&train")
+for name in original extended mixed diluted; do
+    [ -f "$OUT/$name.safetensors" ] || langgap train small-bc --data "$OUT/demos" --data "$OUT/demos-originals" \
+        --tasks "${TRAIN[$name]}" --steps "$STEPS" --threads 1 --seed 0 --out "$OUT/$name.safetensors"
 done
 
-for name in original extended mixed; do
-    langgap eval --policy small-bc --policy-arg "checkpoint=$OUT/$name.safetensors" --tasks "$SCENE" \
-        --episodes "$EPISODES" --run "$OUT/runs/$name" --workers "$WORKERS" --resume --no-progress --quiet
+evaluate() {  # evaluate RUN TASKS POLICY [POLICY-ARG]
+    langgap eval --policy "$3" ${4:+--policy-arg "$4"} --tasks "$2" --episodes "$EPISODES" --run "$OUT/runs/$1" \
+        --workers "$WORKERS" --resume --no-progress --quiet
+}
+for name in original extended mixed diluted; do
+    evaluate "$name" "$SCENE" small-bc "checkpoint=$OUT/$name.safetensors"
 done
-langgap eval --policy blind --tasks "$SCENE" --episodes "$EPISODES" --run "$OUT/runs/blind" --workers "$WORKERS" \
-    --resume --no-progress --quiet
+evaluate blind "$SCENE" blind
+evaluate diluted-originals original small-bc "checkpoint=$OUT/diluted.safetensors"
 
-langgap report "$OUT/runs/original" --compare "$OUT/runs/extended" "$OUT/runs/mixed" "$OUT/runs/blind" \
-    > "$OUT/report.md"
-echo "wrote $OUT/report.md"
+langgap report "$OUT/runs/original" --compare "$OUT/runs/extended" "$OUT/runs/mixed" "$OUT/runs/diluted" \
+    "$OUT/runs/blind" > "$OUT/report.md"
+langgap report "$OUT/runs/diluted-originals" > "$OUT/report-diluted-originals.md"
+echo "wrote $OUT/report.md $OUT/report-diluted-originals.md"

@@ -115,13 +115,19 @@ def test_instruction_styles(catalog):
         ("paper:0", 1),
         ("spatial&train", 9),
         ("goal/s1/*,object/s0/*", 6),
+        ("original&!spatial/s0/*", 39),
+        ("spatial&!train&!heldout", 10),
+        ("!extended", 40),
     ],
 )
 def test_selection(catalog, expression, count):
     assert len(catalog.select(expression)) == count
 
 
-@pytest.mark.parametrize("expression", ["spatial/s0/nothing", "nosuch/*", "paper:999", "paper:x", "train&libero_10"])
+@pytest.mark.parametrize(
+    "expression",
+    ["spatial/s0/nothing", "nosuch/*", "paper:999", "paper:x", "train&libero_10", "spatial&!spatial", "!nosuch"],
+)
 def test_selection_errors(catalog, expression):
     with pytest.raises(UnknownTaskError):
         catalog.select(expression)

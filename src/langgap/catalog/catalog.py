@@ -25,7 +25,7 @@ from langgap.errors import BddlError, CatalogError, UnknownTaskError
 DEFAULT_CATALOG = "langgap99"
 _KEYWORDS_HELP = (
     "an id, a glob (spatial/*), paper:N, all, feasible, infeasible, langgap99, a suite, kind, dimension or split; "
-    "'&' intersects"
+    "'&' intersects, '!' excludes"
 )
 
 
@@ -80,7 +80,8 @@ class Catalog:
         The expression is a comma-separated union of terms; a term is an id, a glob over ids,
         `paper:N`, `all`, `feasible` / `infeasible` (a feasibility gate's verdict), `langgap99`
         (the paper's tasks), a suite (`libero_spatial` or `spatial`), a kind, a dimension or a
-        split. Terms joined with `&` intersect (`spatial&heldout`). A term matching nothing is an
+        split. Terms joined with `&` intersect (`spatial&heldout`); `!` before a term excludes its
+        tasks (`original&!spatial/s0/*`; alone, from all tasks). A term matching nothing is an
         error. No expression selects every task a feasibility gate did not reject.
         """
         if expression is None or not expression.strip():
@@ -92,8 +93,13 @@ class Catalog:
                 continue
             matched: set[str] | None = None
             for term in union_term.split("&"):
-                ids = self._match_term(term.strip())
-                matched = ids if matched is None else matched & ids
+                term = term.strip()
+                if term.startswith("!"):
+                    excluded = self._match_term(term[1:].strip())
+                    matched = (set(self._by_id) if matched is None else matched) - excluded
+                else:
+                    ids = self._match_term(term)
+                    matched = ids if matched is None else matched & ids
             if not matched:
                 raise UnknownTaskError(f"selection {union_term!r} matches no task in catalog {self.name}")
             chosen |= matched
