@@ -17,7 +17,8 @@ import time
 from langgap.catalog.catalog import load_catalog
 from langgap.demos.collect import CollectConfig, collect
 from langgap.demos.compact import demo_files
-from langgap.demos.export import lerobot_available, render_demo
+from langgap.demos.export import lerobot_available
+from langgap.demos.render import render_demo
 
 PAPER_DEMOS = 16 * 150
 
@@ -40,7 +41,7 @@ def main() -> None:
         print(f"  {rate:.0f} demos/hour/core, {steps / simulate:.0f} steps/s")
         if lerobot_available():
             start = time.perf_counter()
-            frames = sum(len(render_demo("langgap99", str(p))[1]) for p in demo_files(tmp))
+            frames = sum(render_demo("langgap99", str(p))[0].length for p in demo_files(tmp))
             render = time.perf_counter() - start
             print(
                 f"render (LeRobot form): {frames} frames x 2 cameras in {render:.1f}s, {frames / render:.1f} frames/s"

@@ -10,6 +10,7 @@ from langgap.cli import (
     collect_cmd,
     doctor_cmd,
     eval_cmd,
+    export_hdf5_cmd,
     export_lerobot_cmd,
     generate_cmd,
     report_cmd,
@@ -33,6 +34,7 @@ VERBS = (
     collect_cmd,
     verify_demos_cmd,
     export_lerobot_cmd,
+    export_hdf5_cmd,
     train_cmd,
 )
 

@@ -1,4 +1,4 @@
-"""Scripted demonstrations: collected with the oracle from fresh placements, stored compactly, exported to LeRobot.
+"""Scripted demonstrations: collected with the oracle from fresh placements, stored compactly, exported (LeRobot, HDF5).
 
 A demonstration never starts from an evaluation init state: each attempt resets with LIBERO's own
 placement samplers (objects and fixtures drawn from the BDDL regions) seeded with `seed + attempt`,

@@ -5,6 +5,7 @@ Layout of a collection directory::
     collection.json                       what was asked, per-task attempts/kept/success rate, versions
     demos/<task id>/<seed>.npz            one demonstration (arrays below)
     lerobot/                              the LeRobot v3 dataset (when LeRobot is installed)
+    hdf5/                                 the robomimic/LIBERO HDF5 files (`langgap export-hdf5`)
 
 A demonstration NPZ holds `states` (T, D) flattened sim states (the layout of LIBERO's init states),
 `actions` (T, 7) executed, `labels` (T, 7) the oracle's commands (the
@@ -30,6 +31,7 @@ from langgap.errors import LangGapError
 MANIFEST = "collection.json"
 DEMOS_DIR = "demos"
 LEROBOT_DIR = "lerobot"
+HDF5_DIR = "hdf5"
 FORMAT_VERSION = 1
 
 
@@ -97,7 +99,10 @@ def read_manifest(root: Path) -> dict:
         raise DemoFileError(
             f"{root} is not a demonstration collection (no {MANIFEST}); make one with `langgap collect`"
         )
-    return json.loads(path.read_text())
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise DemoFileError(f"cannot read {path}: {exc}") from None
 
 
 def write_manifest(root: Path, manifest: dict) -> None:

@@ -11,18 +11,15 @@ rendered by replaying the recorded states of kept demonstrations.
 from __future__ import annotations
 
 import importlib.util
-import multiprocessing
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 
-from langgap.demos.compact import LEROBOT_DIR, demo_files, load_demo, read_manifest
-from langgap.demos.record import replay_states
+from langgap.demos.compact import LEROBOT_DIR, demo_files, read_manifest
+from langgap.demos.render import IMAGE_SIZE, iter_demos
 from langgap.errors import DependencyNotInstalled, LangGapError
 
 FPS = 20
-IMAGE_SIZE = 256
 # LangGap camera -> LeRobot feature (the `lerobot/libero` names).
 CAMERA_FEATURES = {"agentview": "observation.images.image", "robot0_eye_in_hand": "observation.images.image2"}
 
@@ -50,43 +47,6 @@ def features() -> dict:
     }
 
 
-_ENVS: dict = {}
-
-
-def render_demo(catalog: str, path: str) -> tuple[str, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Replay one stored demonstration and render both cameras at every step (runs in a worker)."""
-    from langgap.catalog.catalog import load_catalog
-    from langgap.sim.env import CAMERAS, EnvOptions, TaskEnv
-
-    demo = load_demo(Path(path))
-    env = _ENVS.get(demo.task_id)
-    if env is None:
-        for old in _ENVS.values():
-            old.close()
-        _ENVS.clear()
-        env = _ENVS[demo.task_id] = TaskEnv(
-            load_catalog(catalog).get(demo.task_id), EnvOptions(cameras=CAMERAS, image_size=IMAGE_SIZE)
-        )
-    frames = list(replay_states(env, demo, lambda e: [e.render(c) for c in CAMERAS]))
-    agentview = np.stack([f[0] for f in frames])
-    wrist = np.stack([f[1] for f in frames])
-    return demo.instruction, agentview, wrist, demo.robot_states, demo.labels.astype(np.float32)
-
-
-def _render_star(args):
-    return render_demo(*args)
-
-
-def _rendered(catalog: str, paths: list[Path], workers: int) -> Iterator[tuple]:
-    jobs = [(catalog, str(p)) for p in paths]
-    if workers <= 0:
-        yield from map(_render_star, jobs)
-        return
-    with multiprocessing.get_context("spawn").Pool(min(workers, len(jobs))) as pool:
-        # Ordered: the dataset's episode order is the collection's, whatever the number of workers.
-        yield from pool.imap(_render_star, jobs)
-
-
 def write_lerobot_dataset(
     root: str | Path, *, repo_id: str = "local/langgap_demos", workers: int = 1, progress: bool = True
 ) -> Path:
@@ -106,20 +66,15 @@ def write_lerobot_dataset(
     dataset = LeRobotDataset.create(
         repo_id=repo_id, fps=FPS, features=features(), root=out, robot_type="panda", use_videos=True
     )
-    rendered = _rendered(manifest["catalog"], paths, workers)
-    if progress:
-        from tqdm import tqdm
-
-        rendered = tqdm(rendered, total=len(paths), unit="demo", desc="render")
-    for instruction, agentview, wrist, states, actions in rendered:
-        for t in range(len(actions)):
+    for demo, frames in iter_demos(manifest["catalog"], paths, render=True, workers=workers, progress=progress):
+        actions = demo.labels.astype(np.float32)
+        for t in range(demo.length):
             dataset.add_frame(
                 {
-                    CAMERA_FEATURES["agentview"]: agentview[t],
-                    CAMERA_FEATURES["robot0_eye_in_hand"]: wrist[t],
-                    "observation.state": states[t],
+                    **{feature: frames[camera][t] for camera, feature in CAMERA_FEATURES.items()},
+                    "observation.state": demo.robot_states[t],
                     "action": actions[t],
-                    "task": instruction,
+                    "task": demo.instruction,
                 }
             )
         dataset.save_episode()

@@ -9,7 +9,7 @@ import numpy as np
 
 from langgap.catalog.catalog import load_catalog
 from langgap.demos.compact import demo_files, load_demo, read_manifest
-from langgap.demos.record import start_episode
+from langgap.demos.record import Demo, start_episode
 from langgap.errors import LangGapError, SimulationError
 from langgap.sim.env import TaskEnv
 
@@ -36,7 +36,16 @@ def verify_demo(env: TaskEnv, path: Path) -> Verdict:
         demo = load_demo(path)
     except LangGapError as exc:
         return Verdict(str(path), "?", -1, 0, None, str(exc))
-    common = dict(path=str(path), task_id=demo.task_id, seed=demo.seed, steps=demo.length)
+    return replay_demo(env, demo, path=str(path))
+
+
+def replay_demo(env: TaskEnv, demo: Demo, *, path: str = "") -> Verdict:
+    """Replay `demo`'s actions open-loop on `env` (built for its task) from its recorded start and scene.
+
+    Only what a replay needs is read (`actions`, `states[0]`, `body_pos`/`body_quat`, `scene_hash`), so a
+    `Demo` rebuilt from another form of the demonstration (e.g. an exported HDF5 file) is checked the same way.
+    """
+    common = dict(path=path, task_id=demo.task_id, seed=demo.seed, steps=demo.length)
     try:
         start_episode(env, demo)
     except SimulationError as exc:

@@ -1,0 +1,31 @@
+"""`langgap export-hdf5`: write a collection in the robomimic/LIBERO HDF5 form (one file per task)."""
+
+from __future__ import annotations
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "export-hdf5", help="write a collection's demonstrations as robomimic/LIBERO HDF5 files (DIR/hdf5)"
+    )
+    parser.add_argument("collection", metavar="DIR", help="a directory written by `langgap collect`")
+    parser.add_argument("--out", metavar="OUT", help="output directory (default DIR/hdf5)")
+    parser.add_argument("--images", action="store_true", help="also render both cameras by replaying the states (slow)")
+    parser.add_argument("--workers", type=int, default=1, help="rendering processes (0: here)")
+    parser.add_argument("--force", action="store_true", help="replace existing HDF5 files")
+    parser.add_argument("--no-progress", action="store_true")
+    parser.set_defaults(handler=run)
+
+
+def run(args) -> int:
+    from langgap.demos.hdf5 import write_hdf5
+
+    paths = write_hdf5(
+        args.collection,
+        out=args.out,
+        images=args.images,
+        workers=args.workers,
+        progress=not args.no_progress,
+        force=args.force,
+    )
+    print(f"wrote {len(paths)} HDF5 file(s) to {paths[0].parent}")
+    return 0
