@@ -15,7 +15,9 @@
 #
 #   experiments/small_scale.sh [OUT]        (default OUT: runs/small_scale; re-running skips finished steps)
 # Environment: DEMOS (per task, default 12), NOISE (execution noise of the demonstrations, default 0.3),
-# STEPS (training steps, default 4000), EPISODES (per task, default 10), WORKERS (default 2).
+# STEPS (training steps, default 4000), EPISODES (per task, default 10), WORKERS (default 2), SEEDS (training
+# seeds, default 0; seed 0 writes <name>.safetensors and runs/<name>, seed N <name>-seedN.*: the spread over
+# seeds is the training noise the episode intervals do not cover).
 # Needs `langgap` with the train extra on PATH (source .venv/bin/activate).
 set -euo pipefail
 OUT="${1:-runs/small_scale}"
@@ -24,6 +26,7 @@ NOISE="${NOISE:-0.3}"
 STEPS="${STEPS:-4000}"
 EPISODES="${EPISODES:-10}"
 WORKERS="${WORKERS:-2}"
+SEEDS="${SEEDS:-0}"
 SCENE="spatial/s0/*"
 mkdir -p "$OUT"
 
@@ -39,22 +42,29 @@ collect "$OUT/demos-originals" "original&!$SCENE"  # the other 39 scenes' origin
 
 declare -A TRAIN=([original]="$SCENE&original" [extended]="$SCENE&train" [mixed]="$SCENE&original,$SCENE&train"
     [diluted]="original,$SCENE&train")
-for name in original extended mixed diluted; do
-    [ -f "$OUT/$name.safetensors" ] || langgap train small-bc --data "$OUT/demos" --data "$OUT/demos-originals" \
-        --tasks "${TRAIN[$name]}" --steps "$STEPS" --threads 1 --seed 0 --out "$OUT/$name.safetensors"
+for seed in $SEEDS; do
+    suffix=$([ "$seed" = 0 ] || echo "-seed$seed")
+    for name in original extended mixed diluted; do
+        [ -f "$OUT/$name$suffix.safetensors" ] || langgap train small-bc --data "$OUT/demos" \
+            --data "$OUT/demos-originals" --tasks "${TRAIN[$name]}" --steps "$STEPS" --threads 1 --seed "$seed" \
+            --out "$OUT/$name$suffix.safetensors"
+    done
 done
 
 evaluate() {  # evaluate RUN TASKS POLICY [POLICY-ARG]
     langgap eval --policy "$3" ${4:+--policy-arg "$4"} --tasks "$2" --episodes "$EPISODES" --run "$OUT/runs/$1" \
         --workers "$WORKERS" --resume --no-progress --quiet
 }
-for name in original extended mixed diluted; do
-    evaluate "$name" "$SCENE" small-bc "checkpoint=$OUT/$name.safetensors"
-done
 evaluate blind "$SCENE" blind
 evaluate diluted-originals original small-bc "checkpoint=$OUT/diluted.safetensors"
-
-langgap report "$OUT/runs/original" --compare "$OUT/runs/extended" "$OUT/runs/mixed" "$OUT/runs/diluted" \
-    "$OUT/runs/blind" > "$OUT/report.md"
+for seed in $SEEDS; do
+    suffix=$([ "$seed" = 0 ] || echo "-seed$seed")
+    for name in original extended mixed diluted; do
+        evaluate "$name$suffix" "$SCENE" small-bc "checkpoint=$OUT/$name$suffix.safetensors"
+    done
+    langgap report "$OUT/runs/original$suffix" --compare "$OUT/runs/extended$suffix" "$OUT/runs/mixed$suffix" \
+        "$OUT/runs/diluted$suffix" "$OUT/runs/blind" > "$OUT/report$suffix.md"
+    echo "wrote $OUT/report$suffix.md"
+done
 langgap report "$OUT/runs/diluted-originals" > "$OUT/report-diluted-originals.md"
-echo "wrote $OUT/report.md $OUT/report-diluted-originals.md"
+echo "wrote $OUT/report-diluted-originals.md"

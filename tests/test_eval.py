@@ -226,6 +226,26 @@ def test_existing_foreign_or_corrupt_stores_are_never_overwritten(short_catalog,
         RunStore.open(corrupt)
 
 
+def test_one_writer_per_run(short_catalog, tmp_path):
+    run = tmp_path / "run"
+    _eval(short_catalog, run, episodes=1)
+    before = (run / "episodes.sqlite").read_bytes()
+    with RunStore.open(run, write=True):  # another process is appending to this run
+        result = run_cli(
+            "eval", "--policy", "noop", "--catalog", short_catalog, "--episodes", "2", "--run", str(run), "--resume"
+        )
+        assert result.returncode == 2 and result.stderr.count("\n") == 1
+        assert f"being written by another process (pid {os.getpid()})" in result.stderr
+        with pytest.raises(StoreError, match="being written"):
+            RunStore.open(run, write=True)
+        with RunStore.open(run) as reader:  # reports read while a run is written
+            assert len(reader.done_keys()) == 3
+    assert (run / "episodes.sqlite").read_bytes() == before
+    # The lock goes with its holder: the run resumes afterwards.
+    config = EvalConfig(policy="noop", catalog=short_catalog, episodes=2, workers=0)
+    assert evaluate(config, run, resume=True, progress=False).ran == 3
+
+
 def test_report_formats(short_catalog, tmp_path):
     run = tmp_path / "run"
     _eval(short_catalog, run, episodes=2, conditions=("given", "empty"))

@@ -4,11 +4,17 @@ A row is written once per episode, in its own transaction, as soon as the episod
 run at any moment loses at most the episodes in flight. A row is either `done` (the policy was
 evaluated: success or a policy failure) or a `gap` (infrastructure failed after bounded retries; no
 verdict on the policy). `--resume` skips `done` rows and re-runs everything else.
+
+One process writes a run at a time: a writer holds an exclusive lock on `DIR/.writer.lock` (released
+by the kernel when the process dies, so a killed run never leaves a stale lock). Readers (reports)
+take no lock.
 """
 
 from __future__ import annotations
 
+import fcntl
 import json
+import os
 import sqlite3
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field, fields
@@ -19,6 +25,7 @@ from langgap.errors import LangGapError
 
 SCHEMA_VERSION = 1
 DB_NAME = "episodes.sqlite"
+LOCK_NAME = ".writer.lock"
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -102,12 +109,29 @@ def _from_row(row: sqlite3.Row) -> EpisodeRecord:
     return EpisodeRecord(**data)
 
 
+def _lock_for_writing(directory: Path) -> int:
+    """Take the run's writer lock (non-blocking); returns its file descriptor, closed to release it."""
+    fd = os.open(directory / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        holder = os.read(fd, 32).decode(errors="replace").strip() or "unknown"
+        os.close(fd)
+        raise StoreError(
+            f"run {directory} is being written by another process (pid {holder}); wait for it, or choose another --run"
+        ) from None
+    os.ftruncate(fd, 0)
+    os.pwrite(fd, str(os.getpid()).encode(), 0)
+    return fd
+
+
 class RunStore:
     """A run directory holding `episodes.sqlite` (and videos). Use `create` or `open`."""
 
-    def __init__(self, directory: Path, connection: sqlite3.Connection):
+    def __init__(self, directory: Path, connection: sqlite3.Connection, lock: int | None = None):
         self.directory = directory
         self._db = connection
+        self._lock = lock  # the writer lock's file descriptor (None: opened for reading)
 
     # -- opening -------------------------------------------------------------------------------
 
@@ -129,6 +153,11 @@ class RunStore:
         if directory.exists() and not directory.is_dir():
             raise StoreError(f"--run {directory} is a file, not a directory")
         directory.mkdir(parents=True, exist_ok=True)
+        lock = _lock_for_writing(directory)
+        # Checked again under the lock: another process may have created the run meanwhile.
+        if path.exists():
+            os.close(lock)
+            raise StoreError(f"run {directory} already exists; pass --resume to continue it, or choose a new --run")
         db = cls._connect(path)
         with db:
             db.executescript(_SCHEMA)
@@ -136,26 +165,32 @@ class RunStore:
                 "INSERT INTO meta (key, value) VALUES (?, ?)",
                 [("schema_version", str(SCHEMA_VERSION)), ("config", json.dumps(config, sort_keys=True))],
             )
-        return cls(directory, db)
+        return cls(directory, db, lock)
 
     @classmethod
-    def open(cls, directory: str | Path) -> RunStore:
-        """Open an existing run store (read and append)."""
+    def open(cls, directory: str | Path, *, write: bool = False) -> RunStore:
+        """Open an existing run store; `write` (to append episodes) takes the run's writer lock."""
         directory = Path(directory)
         path = cls.path_of(directory)
         if not path.is_file():
             raise StoreError(f"no run store at {directory} (expected {path})")
-        db = cls._connect(path)
+        lock = _lock_for_writing(directory) if write else None
         try:
-            version = db.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()
-            db.execute("SELECT count(*) FROM episodes").fetchone()
-        except sqlite3.DatabaseError as exc:
-            db.close()
-            raise StoreError(f"{path} is not a LangGap run store ({exc})") from None
-        if version is None or int(version[0]) != SCHEMA_VERSION:
-            db.close()
-            raise StoreError(f"{path}: unsupported store schema {version[0] if version else 'none'}")
-        return cls(directory, db)
+            db = cls._connect(path)
+            try:
+                version = db.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()
+                db.execute("SELECT count(*) FROM episodes").fetchone()
+            except sqlite3.DatabaseError as exc:
+                db.close()
+                raise StoreError(f"{path} is not a LangGap run store ({exc})") from None
+            if version is None or int(version[0]) != SCHEMA_VERSION:
+                db.close()
+                raise StoreError(f"{path}: unsupported store schema {version[0] if version else 'none'}")
+        except BaseException:
+            if lock is not None:
+                os.close(lock)
+            raise
+        return cls(directory, db, lock)
 
     @staticmethod
     def _connect(path: Path) -> sqlite3.Connection:
@@ -170,6 +205,9 @@ class RunStore:
 
     def close(self) -> None:
         self._db.close()
+        if self._lock is not None:
+            os.close(self._lock)
+            self._lock = None
 
     def __enter__(self) -> RunStore:
         return self

@@ -16,7 +16,7 @@ from langgap.engine.plan import build_plan
 from langgap.engine.runner import RunnerSetup
 from langgap.errors import LangGapError
 from langgap.policies import policy_kwargs
-from langgap.store import EpisodeRecord, RunStore
+from langgap.store import EpisodeRecord, RunStore, StoreError
 from langgap.version import code_version
 
 # A resumed run must agree on these, or its episodes would not be comparable.
@@ -85,8 +85,12 @@ def evaluate(config: EvalConfig, run: str | Path, *, resume: bool = False, progr
     )
     stored = _stored_config(config)
     if resume and RunStore.exists(run):
-        store = RunStore.open(run)
-        store.check_config(stored, IDENTITY_KEYS)
+        store = RunStore.open(run, write=True)
+        try:
+            store.check_config(stored, IDENTITY_KEYS)
+        except StoreError:
+            store.close()
+            raise
     else:
         store = RunStore.create(run, stored)
     with store:
