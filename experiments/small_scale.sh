@@ -3,11 +3,11 @@
 #
 # Scope: one scene, libero_spatial task 0 (the scene of the paper's exp 2): its original task, its 6 extended
 # training tasks and its 6 held-out extended tasks share the identical scene; only the instruction differs.
-# Training data = oracle demonstrations from fresh placements (never the evaluation init states). Three
+# Training data = oracle demonstrations from fresh placements (never the evaluation init states). Four
 # small-bc policies, each trained for the same number of steps:
 #   original   the original task only                    (the LIBERO situation: one task per scene)
-#   extended   the 6 extended training tasks only         (targeted same-scene data; the paper's exp 2 / exp 4)
-#   mixed      the same extended data + the original      (the data mix of the paper's exp 5)
+#   extended   the 6 extended training tasks only         (targeted same-scene data, as the paper's exp 4)
+#   mixed      the same extended data + the original      (the paper's exp 2: one scene's tasks)
 #   diluted    the same extended data + all 40 originals  (the paper's exp 3: dilution by the LIBERO mix)
 # Each is evaluated on all 13 tasks of the scene on the fixed init states 0..EPISODES-1, beside `blind` (the
 # oracle doing the scene's original task whatever the instruction says: a policy that ignores language);
