@@ -12,6 +12,7 @@ take no lock.
 
 from __future__ import annotations
 
+import contextlib
 import fcntl
 import json
 import os
@@ -148,23 +149,24 @@ class RunStore:
         """Create a new run store; refuses to touch an existing one."""
         directory = Path(directory)
         path = cls.path_of(directory)
-        if path.exists():
-            raise StoreError(f"run {directory} already exists; pass --resume to continue it, or choose a new --run")
         if directory.exists() and not directory.is_dir():
             raise StoreError(f"--run {directory} is a file, not a directory")
         directory.mkdir(parents=True, exist_ok=True)
-        lock = _lock_for_writing(directory)
-        # Checked again under the lock: another process may have created the run meanwhile.
-        if path.exists():
-            os.close(lock)
-            raise StoreError(f"run {directory} already exists; pass --resume to continue it, or choose a new --run")
-        db = cls._connect(path)
-        with db:
-            db.executescript(_SCHEMA)
-            db.executemany(
-                "INSERT INTO meta (key, value) VALUES (?, ?)",
-                [("schema_version", str(SCHEMA_VERSION)), ("config", json.dumps(config, sort_keys=True))],
-            )
+        with contextlib.ExitStack() as undo:
+            lock = _lock_for_writing(directory)
+            undo.callback(os.close, lock)
+            # Checked under the lock: another process may be creating the same run.
+            if path.exists():
+                raise StoreError(f"run {directory} already exists; pass --resume to continue it, or choose a new --run")
+            db = cls._connect(path)
+            undo.callback(db.close)
+            with db:
+                db.executescript(_SCHEMA)
+                db.executemany(
+                    "INSERT INTO meta (key, value) VALUES (?, ?)",
+                    [("schema_version", str(SCHEMA_VERSION)), ("config", json.dumps(config, sort_keys=True))],
+                )
+            undo.pop_all()
         return cls(directory, db, lock)
 
     @classmethod
@@ -174,22 +176,21 @@ class RunStore:
         path = cls.path_of(directory)
         if not path.is_file():
             raise StoreError(f"no run store at {directory} (expected {path})")
-        lock = _lock_for_writing(directory) if write else None
-        try:
+        lock = None
+        with contextlib.ExitStack() as undo:
+            if write:
+                lock = _lock_for_writing(directory)
+                undo.callback(os.close, lock)
             db = cls._connect(path)
+            undo.callback(db.close)
             try:
                 version = db.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()
                 db.execute("SELECT count(*) FROM episodes").fetchone()
             except sqlite3.DatabaseError as exc:
-                db.close()
                 raise StoreError(f"{path} is not a LangGap run store ({exc})") from None
             if version is None or int(version[0]) != SCHEMA_VERSION:
-                db.close()
                 raise StoreError(f"{path}: unsupported store schema {version[0] if version else 'none'}")
-        except BaseException:
-            if lock is not None:
-                os.close(lock)
-            raise
+            undo.pop_all()
         return cls(directory, db, lock)
 
     @staticmethod
