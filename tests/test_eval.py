@@ -42,7 +42,7 @@ def test_episode_rows_carry_full_provenance(short_catalog, tmp_path):
     for r in rows:
         assert by_init.setdefault(r["init_index"], r["t0_hash"]) == r["t0_hash"]
     with RunStore.open(tmp_path / "run") as store:
-        assert store.config["policy"] == "tests.policies:ChunkPolicy"
+        assert store.meta("config")["policy"] == "tests.policies:ChunkPolicy"
 
 
 def test_resume_skips_done_and_extends(short_catalog, tmp_path):

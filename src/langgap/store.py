@@ -17,96 +17,48 @@ import fcntl
 import json
 import os
 import sqlite3
-from collections.abc import Iterable
-from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
-from langgap.engine.plan import EpisodeKey
 from langgap.errors import LangGapError
+from langgap.records import COLUMNS, KEY_COLUMNS, EpisodeKey, EpisodeRecord, Status, record_dict
 
-SCHEMA_VERSION = 1
+# 2: the run's spec is stored whole (meta `spec`, `execution`), episodes say whether the policy was privileged.
+SCHEMA_VERSION = 2
+READABLE_SCHEMAS = (1, 2)
 DB_NAME = "episodes.sqlite"
 LOCK_NAME = ".writer.lock"
 
-_SCHEMA = """
-CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
-CREATE TABLE IF NOT EXISTS episodes (
-    task_id TEXT NOT NULL, init_index INTEGER NOT NULL, seed INTEGER NOT NULL, condition TEXT NOT NULL,
-    status TEXT NOT NULL CHECK (status IN ('done', 'gap')),
-    success INTEGER NOT NULL, outcome TEXT NOT NULL, failure_kind TEXT, error TEXT,
-    steps INTEGER NOT NULL, policy_calls INTEGER NOT NULL,
-    instruction TEXT NOT NULL, instruction_sha256 TEXT NOT NULL, t0_hash TEXT NOT NULL,
-    reached TEXT NOT NULL, goals_at_start TEXT NOT NULL, goals_at_end TEXT NOT NULL,
-    catalog TEXT NOT NULL, suite TEXT NOT NULL, kind TEXT NOT NULL, dimension TEXT NOT NULL, split TEXT NOT NULL,
-    source TEXT NOT NULL, scene TEXT NOT NULL, max_steps INTEGER NOT NULL,
-    policy TEXT NOT NULL, policy_config_hash TEXT NOT NULL, physics TEXT NOT NULL, code_version TEXT NOT NULL,
-    attempts INTEGER NOT NULL, wall_time_s REAL NOT NULL, worker INTEGER NOT NULL, finished_at TEXT NOT NULL,
-    video TEXT,
-    PRIMARY KEY (task_id, init_index, seed, condition)
-);
-"""
+
+def _schema() -> str:
+    """The store's DDL, derived from `EpisodeRecord` (one column per field, the episode key as primary key)."""
+    columns = ",\n    ".join(c.ddl() for c in COLUMNS)
+    return (
+        "CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);\n"
+        f"CREATE TABLE IF NOT EXISTS episodes (\n    {columns},\n    PRIMARY KEY ({', '.join(KEY_COLUMNS)})\n);\n"
+    )
 
 
 class StoreError(LangGapError):
     """The run store is missing, corrupt, or belongs to another run configuration."""
 
 
-@dataclass
-class EpisodeRecord:
-    """Everything needed to trust one episode's result."""
-
-    task_id: str
-    init_index: int
-    seed: int
-    condition: str
-    status: str  # done | gap
-    success: bool
-    outcome: str  # success | did_source_task | did_other_task | no_goal_reached | policy_error | gap
-    failure_kind: str | None  # None | policy | infra
-    error: str | None
-    steps: int
-    policy_calls: int
-    instruction: str
-    instruction_sha256: str
-    t0_hash: str
-    reached: dict[str, int] = field(default_factory=dict)  # scene task id -> first step its goal held
-    goals_at_start: list[str] = field(default_factory=list)
-    goals_at_end: list[str] = field(default_factory=list)
-    catalog: str = ""
-    suite: str = ""
-    kind: str = ""
-    dimension: str = ""
-    split: str = ""
-    source: str = ""
-    scene: str = ""
-    max_steps: int = 0
-    policy: str = ""
-    policy_config_hash: str = ""
-    physics: dict = field(default_factory=dict)
-    code_version: str = ""
-    attempts: int = 1
-    wall_time_s: float = 0.0
-    worker: int = 0
-    finished_at: str = ""
-    video: str | None = None
-
-    @property
-    def key(self) -> EpisodeKey:
-        return EpisodeKey(self.task_id, self.init_index, self.seed, self.condition)
-
-
-_JSON_FIELDS = {"reached", "goals_at_start", "goals_at_end", "physics"}
-_COLUMNS = [f.name for f in fields(EpisodeRecord)]
-
-
 def _to_row(record: EpisodeRecord) -> tuple:
-    data = asdict(record)
-    return tuple(json.dumps(data[c], sort_keys=True) if c in _JSON_FIELDS else data[c] for c in _COLUMNS)
+    data = record_dict(record)
+    return tuple(json.dumps(data[c.name], sort_keys=True) if c.json else data[c.name] for c in COLUMNS)
 
 
-def _from_row(row: sqlite3.Row) -> EpisodeRecord:
-    data = {c: (json.loads(row[c]) if c in _JSON_FIELDS else row[c]) for c in _COLUMNS}
-    data["success"] = bool(data["success"])
+def _from_row(row: sqlite3.Row, present: set[str]) -> EpisodeRecord:
+    """A record from a row; columns an older schema lacks keep the record's defaults."""
+    data = {}
+    for column in COLUMNS:
+        if column.name not in present:
+            continue
+        value = row[column.name]
+        if column.json:
+            value = json.loads(value)
+        elif column.kind is bool:
+            value = bool(value)
+        data[column.name] = value
     return EpisodeRecord(**data)
 
 
@@ -129,8 +81,11 @@ def _lock_for_writing(directory: Path) -> int:
 class RunStore:
     """A run directory holding `episodes.sqlite` (and videos). Use `create` or `open`."""
 
-    def __init__(self, directory: Path, connection: sqlite3.Connection, lock: int | None = None):
+    def __init__(
+        self, directory: Path, connection: sqlite3.Connection, lock: int | None = None, schema: int = SCHEMA_VERSION
+    ):
         self.directory = directory
+        self.schema = schema
         self._db = connection
         self._lock = lock  # the writer lock's file descriptor (None: opened for reading)
 
@@ -145,7 +100,7 @@ class RunStore:
         return cls.path_of(directory).is_file()
 
     @classmethod
-    def create(cls, directory: str | Path, config: dict) -> RunStore:
+    def create(cls, directory: str | Path, meta: dict[str, dict]) -> RunStore:
         """Create a new run store; refuses to touch an existing one."""
         directory = Path(directory)
         path = cls.path_of(directory)
@@ -161,10 +116,11 @@ class RunStore:
             db = cls._connect(path)
             undo.callback(db.close)
             with db:
-                db.executescript(_SCHEMA)
+                db.executescript(_schema())
                 db.executemany(
                     "INSERT INTO meta (key, value) VALUES (?, ?)",
-                    [("schema_version", str(SCHEMA_VERSION)), ("config", json.dumps(config, sort_keys=True))],
+                    [("schema_version", str(SCHEMA_VERSION))]
+                    + [(k, json.dumps(v, sort_keys=True)) for k, v in meta.items()],
                 )
             undo.pop_all()
         return cls(directory, db, lock)
@@ -188,10 +144,16 @@ class RunStore:
                 db.execute("SELECT count(*) FROM episodes").fetchone()
             except sqlite3.DatabaseError as exc:
                 raise StoreError(f"{path} is not a LangGap run store ({exc})") from None
-            if version is None or int(version[0]) != SCHEMA_VERSION:
-                raise StoreError(f"{path}: unsupported store schema {version[0] if version else 'none'}")
+            schema = int(version[0]) if version is not None and str(version[0]).isdigit() else None
+            if schema not in READABLE_SCHEMAS:
+                raise StoreError(f"{path}: unsupported run store schema {version[0] if version else 'none'}")
+            if write and schema != SCHEMA_VERSION:
+                raise StoreError(
+                    f"{path} has run store schema {schema}, written by an older LangGap: reports read it, but it "
+                    f"cannot be resumed (this LangGap writes schema {SCHEMA_VERSION}); start a new --run"
+                )
             undo.pop_all()
-        return cls(directory, db, lock)
+        return cls(directory, db, lock, schema)
 
     @staticmethod
     def _connect(path: Path) -> sqlite3.Connection:
@@ -216,34 +178,35 @@ class RunStore:
     def __exit__(self, *exc) -> None:
         self.close()
 
-    # -- configuration ---------------------------------------------------------------------------
+    # -- what the run is -------------------------------------------------------------------------
 
-    @property
-    def config(self) -> dict:
-        return json.loads(self._db.execute("SELECT value FROM meta WHERE key = 'config'").fetchone()[0])
+    def meta(self, key: str) -> dict | None:
+        """A JSON value stored with the run (`spec`, `execution`; `config` in schema-1 stores), or None."""
+        row = self._db.execute("SELECT value FROM meta WHERE key = ?", (key,)).fetchone()
+        return None if row is None else json.loads(row[0])
 
-    def check_config(self, config: dict, identity_keys: Iterable[str]) -> None:
-        """Refuse to resume with a configuration that would make the stored episodes incomparable."""
-        stored = self.config
-        differing = [k for k in identity_keys if stored.get(k) != config.get(k)]
-        if differing:
-            details = "; ".join(f"{k}: stored {stored.get(k)!r}, given {config.get(k)!r}" for k in differing)
-            raise StoreError(f"run {self.directory} was made with another configuration ({details})")
+    def set_meta(self, key: str, value: dict) -> None:
+        with self._db:
+            self._db.execute(
+                "INSERT OR REPLACE INTO meta (key, value) VALUES (?, ?)", (key, json.dumps(value, sort_keys=True))
+            )
 
     # -- episodes --------------------------------------------------------------------------------
 
     def write(self, record: EpisodeRecord) -> None:
         """Insert or replace one episode's row, committed immediately."""
-        placeholders = ", ".join("?" for _ in _COLUMNS)
+        names = ", ".join(c.name for c in COLUMNS)
+        placeholders = ", ".join("?" for _ in COLUMNS)
         with self._db:
-            self._db.execute(
-                f"INSERT OR REPLACE INTO episodes ({', '.join(_COLUMNS)}) VALUES ({placeholders})", _to_row(record)
-            )
+            self._db.execute(f"INSERT OR REPLACE INTO episodes ({names}) VALUES ({placeholders})", _to_row(record))
 
     def done_keys(self) -> set[EpisodeKey]:
-        rows = self._db.execute("SELECT task_id, init_index, seed, condition FROM episodes WHERE status = 'done'")
+        """The keys of the judged episodes (a resume re-runs everything else)."""
+        rows = self._db.execute(f"SELECT {', '.join(KEY_COLUMNS)} FROM episodes WHERE status = ?", (str(Status.DONE),))
         return {EpisodeKey(*row) for row in rows}
 
     def records(self) -> list[EpisodeRecord]:
+        """Every stored episode, in key order."""
+        present = {row[1] for row in self._db.execute("PRAGMA table_info(episodes)")}
         rows = self._db.execute("SELECT * FROM episodes ORDER BY task_id, condition, init_index, seed")
-        return [_from_row(r) for r in rows]
+        return [_from_row(r, present) for r in rows]

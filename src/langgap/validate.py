@@ -25,8 +25,9 @@ from langgap.catalog.catalog import Catalog, load_catalog, registry_path
 from langgap.catalog.task import GateResult, Task
 from langgap.catalog.verdicts import record_verdicts
 from langgap.engine.evaluate import EvalConfig, evaluate
+from langgap.records import EpisodeRecord
 from langgap.stack import physics_stack
-from langgap.store import EpisodeRecord, RunStore
+from langgap.store import RunStore
 from langgap.version import code_version
 
 FEASIBLE_RATE = 0.90

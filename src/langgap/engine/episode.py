@@ -24,8 +24,8 @@ from langgap.engine.context import task_context
 from langgap.engine.plan import PlannedEpisode
 from langgap.engine.rollout import StepHook, run_episode
 from langgap.policies.base import Policy, PolicyOutputError
+from langgap.records import EpisodeRecord
 from langgap.sim.env import TaskEnv
-from langgap.store import EpisodeRecord
 from langgap.version import code_version
 
 OUTCOMES = ("success", "did_source_task", "did_other_task", "no_goal_reached", "policy_error", "gap")

@@ -16,7 +16,8 @@ from langgap.engine.plan import build_plan
 from langgap.engine.runner import RunnerSetup
 from langgap.errors import LangGapError
 from langgap.policies import policy_kwargs
-from langgap.store import EpisodeRecord, RunStore
+from langgap.records import EpisodeRecord
+from langgap.store import RunStore
 from langgap.version import code_version
 
 # A resumed run must agree on these, or its episodes would not be comparable.
@@ -84,9 +85,14 @@ def evaluate(config: EvalConfig, run: str | Path, *, resume: bool = False, progr
         tasks, catalog, episodes=config.episodes, seed=config.seed, conditions=config.conditions, style=config.style
     )
     stored = _stored_config(config)
-    store = RunStore.open(run, write=True) if resume and RunStore.exists(run) else RunStore.create(run, stored)
+    store = (
+        RunStore.open(run, write=True) if resume and RunStore.exists(run) else RunStore.create(run, {"config": stored})
+    )
     with store:
-        store.check_config(stored, IDENTITY_KEYS)
+        previous = store.meta("config") or {}
+        differing = [k for k in IDENTITY_KEYS if previous.get(k) != stored.get(k)]
+        if differing:
+            raise LangGapError(f"run {run} was made with another configuration ({', '.join(differing)})")
         done = store.done_keys()
         todo = [p for p in plan if p.key not in done]
         setup = RunnerSetup(

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from langgap.engine.plan import PlannedEpisode
 from langgap.engine.runner import EpisodeFailure, EpisodeRunner, RunnerSetup
 from langgap.engine.scheduling import Ledger
-from langgap.store import EpisodeRecord
+from langgap.records import EpisodeRecord
 
 DEFAULT_TIMEOUT_S = 900.0
 DEFAULT_MAX_ATTEMPTS = 3

@@ -12,25 +12,13 @@ from dataclasses import dataclass
 from langgap.catalog.catalog import Catalog
 from langgap.catalog.task import Task
 from langgap.errors import CatalogError, InitStateError
+from langgap.records import EpisodeKey
 
 CONDITIONS = ("given", "empty", "shuffled", "source")
 CONDITION_HELP = (
     "given: the task's instruction; empty: an empty string; shuffled: the instruction of another task on the "
     "same scene; source: the instruction of the task's source (original) task"
 )
-
-
-@dataclass(frozen=True, order=True)
-class EpisodeKey:
-    """The identity of one planned episode; the store's primary key."""
-
-    task_id: str
-    init_index: int
-    seed: int
-    condition: str = "given"
-
-    def label(self) -> str:
-        return f"{self.task_id}#{self.init_index}/seed{self.seed}/{self.condition}"
 
 
 @dataclass(frozen=True)

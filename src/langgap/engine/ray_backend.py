@@ -20,7 +20,7 @@ from langgap.engine.runner import EpisodeFailure, EpisodeRunner, RunnerSetup
 from langgap.engine.scheduling import Ledger
 from langgap.engine.shared_policy import start_server
 from langgap.errors import DependencyNotInstalled, LangGapError
-from langgap.store import EpisodeRecord
+from langgap.records import EpisodeRecord
 
 _POLL_S = 0.5
 

@@ -19,8 +19,8 @@ from langgap.engine.plan import EpisodeKey, PlannedEpisode
 from langgap.engine.rollout import env_options_for
 from langgap.policies import make_policy
 from langgap.policies.base import config_hash, policy_config
+from langgap.records import EpisodeRecord
 from langgap.sim.env import CAMERAS, TaskEnv
-from langgap.store import EpisodeRecord
 
 
 @dataclass(frozen=True)

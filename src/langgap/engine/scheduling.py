@@ -9,7 +9,7 @@ from langgap.catalog.catalog import load_catalog
 from langgap.engine.episode import gap_record
 from langgap.engine.plan import EpisodeKey, PlannedEpisode
 from langgap.engine.runner import RunnerSetup
-from langgap.store import EpisodeRecord
+from langgap.records import EpisodeRecord
 
 
 def make_units(

@@ -11,7 +11,7 @@ from collections import Counter, defaultdict
 from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass
 
-from langgap.store import EpisodeRecord
+from langgap.records import EpisodeRecord
 
 DIMENSION_ORDER = ("change_object", "change_target", "spatial_description", "drawer_action")
 DIMENSION_LABEL = {

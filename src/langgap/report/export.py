@@ -8,9 +8,9 @@ from dataclasses import asdict, fields
 from pathlib import Path
 
 from langgap.errors import DependencyNotInstalled, LangGapError
+from langgap.records import EpisodeRecord
 from langgap.report.aggregate import achieved
 from langgap.report.render import load_runs
-from langgap.store import EpisodeRecord
 
 COLUMNS = ["run", *(f.name for f in fields(EpisodeRecord)), "achieved"]
 

@@ -8,8 +8,9 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from langgap.records import EpisodeRecord
 from langgap.report import aggregate as agg
-from langgap.store import EpisodeRecord, RunStore
+from langgap.store import RunStore
 
 
 @dataclass
@@ -25,7 +26,7 @@ def load_runs(paths: list[str | Path]) -> list[Run]:
     runs = []
     for path in paths:
         with RunStore.open(path) as store:
-            config, records = store.config, store.records()
+            config, records = store.meta("config") or {}, store.records()
         runs.append(
             Run(
                 name=f"{config.get('policy', '?')} ({Path(path).name})", path=Path(path), config=config, records=records

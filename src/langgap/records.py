@@ -1,0 +1,171 @@
+"""Episode records and their enumerations: the bottom of LangGap's data flow.
+
+Everything above (the engine that produces records, the store that keeps them, the reports that
+read them) takes the record's shape, its key and the names of its outcomes from here. This module
+imports nothing else from LangGap.
+"""
+
+from __future__ import annotations
+
+import typing
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field, fields
+from enum import StrEnum
+
+
+class Status(StrEnum):
+    """Whether the policy was judged: `done` (success or a policy failure) or `gap` (infrastructure failed)."""
+
+    DONE = "done"
+    GAP = "gap"
+
+
+class Outcome(StrEnum):
+    """What an episode achieved (see `classify`)."""
+
+    SUCCESS = "success"
+    DID_SOURCE_TASK = "did_source_task"  # an extended task's policy did the scene's original task instead
+    DID_OTHER_TASK = "did_other_task"
+    NO_GOAL_REACHED = "no_goal_reached"
+    POLICY_ERROR = "policy_error"  # the policy returned a malformed action
+    GAP = "gap"
+
+
+# The outcomes of judged episodes, in the order reports show them.
+JUDGED_OUTCOMES = tuple(o for o in Outcome if o is not Outcome.GAP)
+
+
+class FailureKind(StrEnum):
+    """Who failed an unsuccessful episode."""
+
+    POLICY = "policy"
+    INFRA = "infra"
+
+
+@dataclass(frozen=True, order=True)
+class EpisodeKey:
+    """The identity of one planned episode; the store's primary key."""
+
+    task_id: str
+    init_index: int
+    seed: int
+    condition: str = "given"
+
+    def label(self) -> str:
+        return f"{self.task_id}#{self.init_index}/seed{self.seed}/{self.condition}"
+
+
+@dataclass
+class EpisodeRecord:
+    """Everything needed to trust one episode's result (one row of a run store)."""
+
+    task_id: str
+    init_index: int
+    seed: int
+    condition: str
+    status: str  # Status
+    success: bool
+    outcome: str  # Outcome
+    failure_kind: str | None  # FailureKind, None on success
+    error: str | None
+    steps: int
+    policy_calls: int
+    instruction: str
+    instruction_sha256: str
+    t0_hash: str
+    reached: dict[str, int] = field(default_factory=dict)  # scene task id -> first step its goal held
+    goals_at_start: list[str] = field(default_factory=list)
+    goals_at_end: list[str] = field(default_factory=list)
+    catalog: str = ""
+    suite: str = ""
+    kind: str = ""
+    dimension: str = ""
+    split: str = ""
+    source: str = ""
+    scene: str = ""
+    max_steps: int = 0
+    policy: str = ""
+    policy_config_hash: str = ""
+    privileged: bool = False  # the policy was given the goal and simulator state (a scripted reference)
+    physics: dict = field(default_factory=dict)
+    code_version: str = ""
+    attempts: int = 1
+    wall_time_s: float = 0.0
+    worker: int = 0
+    finished_at: str = ""
+    video: str | None = None
+
+    @property
+    def key(self) -> EpisodeKey:
+        return EpisodeKey(self.task_id, self.init_index, self.seed, self.condition)
+
+    @property
+    def judged(self) -> bool:
+        """True when the policy was evaluated (not a gap)."""
+        return self.status == Status.DONE
+
+
+def classify(task_id: str, kind: str, source: str, success: bool, reached: Mapping[str, int]) -> Outcome:
+    """What an episode of task `task_id` achieved, from the scene goals that became true during it."""
+    if success:
+        return Outcome.SUCCESS
+    if kind == "extended" and source in reached:
+        return Outcome.DID_SOURCE_TASK
+    if any(name != task_id for name in reached):
+        return Outcome.DID_OTHER_TASK
+    return Outcome.NO_GOAL_REACHED
+
+
+def achieved(record: EpisodeRecord) -> str:
+    """The task an episode accomplished: its own, else the scene task whose goal became true first, else `none`."""
+    if record.success:
+        return record.task_id
+    if record.reached:
+        return min(record.reached.items(), key=lambda kv: (kv[1], kv[0]))[0]
+    return "none"
+
+
+# -- the record as a table row ---------------------------------------------------------------------
+
+KEY_COLUMNS = tuple(f.name for f in fields(EpisodeKey))
+_SQL_TYPES = {str: "TEXT", int: "INTEGER", bool: "INTEGER", float: "REAL", dict: "TEXT", list: "TEXT"}
+
+
+@dataclass(frozen=True)
+class Column:
+    """One field of `EpisodeRecord` as a table column."""
+
+    name: str
+    kind: type  # str, int, bool, float, dict or list (dict and list are stored as JSON text)
+    nullable: bool
+
+    @property
+    def json(self) -> bool:
+        return self.kind in (dict, list)
+
+    def ddl(self) -> str:
+        check = ""
+        if self.name == "status":
+            check = f" CHECK (status IN ({', '.join(repr(s.value) for s in Status)}))"
+        return f"{self.name} {_SQL_TYPES[self.kind]}{'' if self.nullable else ' NOT NULL'}{check}"
+
+
+def _columns() -> tuple[Column, ...]:
+    hints = typing.get_type_hints(EpisodeRecord)
+    columns = []
+    for f in fields(EpisodeRecord):
+        hint = hints[f.name]
+        args = [a for a in typing.get_args(hint) if a is not type(None)]
+        nullable = type(None) in typing.get_args(hint)
+        base = typing.get_origin(args[0] if nullable else hint) or (args[0] if nullable else hint)
+        columns.append(Column(f.name, base, nullable))
+    return tuple(columns)
+
+
+COLUMNS = _columns()
+
+
+def record_dict(record: EpisodeRecord) -> dict:
+    """The record as plain data (enumerations as their string values)."""
+    data = asdict(record)
+    return {k: (str(v) if isinstance(v, StrEnum) else v) for k, v in data.items()}
