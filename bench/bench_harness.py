@@ -20,7 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from langgap.catalog.catalog import load_catalog
-from langgap.engine.evaluate import EvalConfig, evaluate
+from langgap.engine.evaluate import RunSummary, evaluate
+from langgap.engine.spec import ExecutionOptions, RunSpec
 from langgap.sim.env import CAMERAS, SETTLE_ACTION, SETTLE_STEPS, EnvOptions, TaskEnv
 
 SAMPLE_TASKS = (
@@ -29,11 +30,15 @@ SAMPLE_TASKS = (
 )
 
 
-def timed_eval(**kwargs) -> tuple[float, int]:
+def timed_eval(
+    policy: str, tasks: str, episodes: int, policy_args: dict[str, str] | None = None, **execution
+) -> tuple[float, RunSummary]:
+    """Wall time of one fresh evaluation (spec from the arguments, `execution`: ExecutionOptions fields)."""
+    spec = RunSpec.create(policy, policy_args=policy_args, tasks=tasks, episodes=episodes)
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()
-        summary = evaluate(EvalConfig(**kwargs), Path(tmp) / "run", progress=False)
-        return time.perf_counter() - start, summary.ran
+        summary = evaluate(spec, Path(tmp) / "run", ExecutionOptions(progress=False, **execution))
+        return time.perf_counter() - start, summary
 
 
 class ReplayPolicy:
@@ -133,9 +138,9 @@ def authors(episodes: int, workers: int, policy: str) -> None:
                     on_step=lambda e, _s, _a: [e.render(c) for c in CAMERAS],
                 )
     theirs = time.perf_counter() - start
-    ours, ran = timed_eval(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, workers=workers)
+    ours, summary = timed_eval(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, workers=workers)
     per_hour_theirs = len(tasks) * episodes / theirs * 3600
-    per_hour_ours = ran / ours * 3600
+    per_hour_ours = summary.ran / ours * 3600
     print(
         f"| {policy}, {len(tasks)} tasks x {episodes} | authors' setup {per_hour_theirs:.0f} ep/h | LangGap "
         f"({workers} workers) {per_hour_ours:.0f} ep/h | {per_hour_ours / per_hour_theirs:.1f}x (target >= 15x) |"
@@ -143,10 +148,10 @@ def authors(episodes: int, workers: int, policy: str) -> None:
 
 
 def workers(episodes: int, policy: str) -> None:
-    one, ran = timed_eval(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, workers=1)
+    one, summary = timed_eval(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, workers=1)
     two, _ = timed_eval(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, workers=2)
     print(
-        f"| {policy}, {ran} episodes | 1 worker {one:.0f} s | 2 workers {two:.0f} s | {one / two:.2f}x "
+        f"| {policy}, {summary.ran} episodes | 1 worker {one:.0f} s | 2 workers {two:.0f} s | {one / two:.2f}x "
         "(target >= 1.8x) |"
     )
 
@@ -155,7 +160,7 @@ def protocol(policy: str, run: str | None) -> None:
     directory = Path(run) if run else Path(tempfile.mkdtemp()) / "run"
     start = time.perf_counter()
     summary = evaluate(
-        EvalConfig(policy=policy, tasks="all", episodes=20, workers=2), directory, resume=run is not None, progress=True
+        RunSpec.create(policy, tasks="all", episodes=20), directory, ExecutionOptions(workers=2), resume=run is not None
     )
     wall = time.perf_counter() - start
     print(

@@ -1,4 +1,8 @@
-"""Shared fixtures. Tests run the real simulator; environments are closed by the tests that build them."""
+"""Shared fixtures. Tests run the real simulator; environments are closed by the tests that build them.
+
+Nothing heavy is imported at module level: the fast layer in `tests/unit` shares this file and must
+run without MuJoCo.
+"""
 
 from __future__ import annotations
 
@@ -9,15 +13,14 @@ from pathlib import Path
 
 import pytest
 
-from langgap.catalog.catalog import load_catalog
-from langgap.demos.collect import CollectConfig, collect
-
 REPO = Path(__file__).resolve().parents[1]
 SHORT_STEPS = 15
 
 
 @pytest.fixture(scope="session")
 def catalog():
+    from langgap.catalog.catalog import load_catalog
+
     return load_catalog("langgap99")
 
 
@@ -68,12 +71,20 @@ def short_catalog(tmp_path_factory):
 
 
 TINY_TASK = "spatial/s0/black-bowl-1-on-plate"
-TINY_CONFIG = CollectConfig(catalog="langgap99", tasks=(TINY_TASK,), demos=2, seed=7, noise=0.2)
+
+
+def tiny_config():
+    """The collection settings of `tiny_collection` (two noisy oracle demonstrations of TINY_TASK)."""
+    from langgap.demos.collect import CollectConfig
+
+    return CollectConfig(catalog="langgap99", tasks=(TINY_TASK,), demos=2, seed=7, noise=0.2)
 
 
 @pytest.fixture(scope="session")
 def tiny_collection(tmp_path_factory) -> Path:
     """Two oracle demonstrations of one spatial task (compact form, with execution noise), collected once."""
+    from langgap.demos.collect import collect
+
     out = tmp_path_factory.mktemp("demos") / "tiny"
-    collect(TINY_CONFIG, out, workers=0, progress=False)
+    collect(tiny_config(), out, workers=0, progress=False)
     return out

@@ -12,15 +12,20 @@ import time
 
 import pytest
 
-from langgap.engine.evaluate import EvalConfig, evaluate
+from langgap.engine.evaluate import evaluate
 from langgap.engine.plan import build_plan, condition_instruction, episode_seed
+from langgap.engine.spec import ExecutionOptions, RunSpec, SpecError
 from langgap.store import RunStore, StoreError
 from tests.conftest import REPO, SHORT_STEPS, run_cli, store_rows
 
 
-def _eval(short_catalog, run, policy="noop", episodes=2, workers=0, **kw):
-    config = EvalConfig(policy=policy, catalog=short_catalog, episodes=episodes, workers=workers, **kw)
-    return evaluate(config, run, progress=False)
+def _spec(short_catalog, policy="noop", episodes=2, **kw) -> RunSpec:
+    return RunSpec.create(policy, catalog=short_catalog, episodes=episodes, **kw)
+
+
+def _eval(short_catalog, run, policy="noop", episodes=2, workers=0, options=None, **kw):
+    options = options or ExecutionOptions(workers=workers, progress=False)
+    return evaluate(_spec(short_catalog, policy, episodes, **kw), run, options)
 
 
 def test_episode_rows_carry_full_provenance(short_catalog, tmp_path):
@@ -42,16 +47,25 @@ def test_episode_rows_carry_full_provenance(short_catalog, tmp_path):
     for r in rows:
         assert by_init.setdefault(r["init_index"], r["t0_hash"]) == r["t0_hash"]
     with RunStore.open(tmp_path / "run") as store:
-        assert store.meta("config")["policy"] == "tests.policies:ChunkPolicy"
+        assert store.meta("spec") == _spec(short_catalog, "tests.policies:ChunkPolicy").to_dict()
 
 
-def test_resume_skips_done_and_extends(short_catalog, tmp_path):
+def test_resume_skips_done_and_extend_grows_the_run(short_catalog, tmp_path):
     run = tmp_path / "run"
     _eval(short_catalog, run, episodes=1)
-    config = EvalConfig(policy="noop", catalog=short_catalog, episodes=2, workers=0)
-    summary = evaluate(config, run, resume=True, progress=False)
+    options = ExecutionOptions(workers=0, progress=False)
+    assert evaluate(_spec(short_catalog, episodes=1), run, options, resume=True).ran == 0
+    with pytest.raises(SpecError, match="inits: stored") as info:
+        evaluate(_spec(short_catalog, episodes=2), run, options, resume=True)
+    assert "--extend" in str(info.value)
+    summary = evaluate(_spec(short_catalog, episodes=2), run, options, resume=True, extend=True)
     assert (summary.skipped, summary.ran) == (3, 3)
     assert len(store_rows(run)) == 6
+    with RunStore.open(run) as store:
+        assert store.meta("spec")["inits"] == [0, 1]
+    # Growing never changes what the episodes are: another policy is refused even with --extend.
+    with pytest.raises(SpecError, match="policy: stored 'noop', given 'random'"):
+        evaluate(_spec(short_catalog, "random", episodes=2), run, options, resume=True, extend=True)
 
 
 def test_policy_output_errors_are_policy_failures(short_catalog, tmp_path):
@@ -65,7 +79,8 @@ def test_policy_output_errors_are_policy_failures(short_catalog, tmp_path):
 
 def test_exceptions_are_retried_then_recorded_as_gaps(short_catalog, tmp_path):
     run = tmp_path / "raise"
-    summary = _eval(short_catalog, run, policy="tests.policies:RaisingPolicy", episodes=1, max_attempts=2)
+    options = ExecutionOptions(workers=0, max_attempts=2, max_failure_streak=10, progress=False)
+    summary = _eval(short_catalog, run, policy="tests.policies:RaisingPolicy", episodes=1, options=options)
     rows = store_rows(run)
     assert summary.gaps == 3
     assert all(r["status"] == "gap" and r["failure_kind"] == "infra" and r["attempts"] == 2 for r in rows)
@@ -75,14 +90,8 @@ def test_exceptions_are_retried_then_recorded_as_gaps(short_catalog, tmp_path):
 def test_a_flaky_policy_succeeds_on_retry_in_worker_processes(short_catalog, tmp_path):
     markers = tmp_path / "markers"
     markers.mkdir()
-    config = EvalConfig(
-        policy="tests.policies:FlakyPolicy",
-        policy_args={"marker_dir": str(markers)},
-        catalog=short_catalog,
-        episodes=1,
-        workers=2,
-    )
-    summary = evaluate(config, tmp_path / "run", progress=False)
+    spec = _spec(short_catalog, "tests.policies:FlakyPolicy", episodes=1, policy_args={"marker_dir": str(markers)})
+    summary = evaluate(spec, tmp_path / "run", ExecutionOptions(workers=2, progress=False))
     rows = store_rows(tmp_path / "run")
     assert summary.gaps == 0 and len(rows) == 3
     assert all(r["status"] == "done" and r["attempts"] == 2 for r in rows)
@@ -90,26 +99,16 @@ def test_a_flaky_policy_succeeds_on_retry_in_worker_processes(short_catalog, tmp
 
 def test_hanging_and_crashing_workers_become_gaps_and_the_run_completes(short_catalog, tmp_path):
     hang = evaluate(
-        EvalConfig(
-            policy="tests.policies:HangingPolicy",
-            catalog=short_catalog,
-            tasks="spatial/s0/open*",
-            episodes=1,
-            workers=1,
-            timeout_s=8,
-            max_attempts=2,
-        ),
+        _spec(short_catalog, "tests.policies:HangingPolicy", episodes=1, tasks="spatial/s0/open*"),
         tmp_path / "hang",
-        progress=False,
+        ExecutionOptions(workers=1, timeout_s=8, max_attempts=2, progress=False),
     )
     rows = store_rows(tmp_path / "hang")
     assert hang.gaps == 1 and rows[0]["status"] == "gap" and "timed out" in rows[0]["error"]
     crash = evaluate(
-        EvalConfig(
-            policy="tests.policies:CrashingPolicy", catalog=short_catalog, episodes=1, workers=2, max_attempts=2
-        ),
+        _spec(short_catalog, "tests.policies:CrashingPolicy", episodes=1),
         tmp_path / "crash",
-        progress=False,
+        ExecutionOptions(workers=2, max_attempts=2, max_failure_streak=10, progress=False),
     )
     rows = store_rows(tmp_path / "crash")
     assert crash.gaps == 3 and all("worker process died (exit code 17)" in r["error"] for r in rows)
@@ -175,7 +174,8 @@ def test_conditions_send_the_planned_strings(catalog):
 
 
 def test_videos_are_written(short_catalog, tmp_path):
-    _eval(short_catalog, tmp_path / "run", tasks="spatial/s0/black-bowl-1-on-plate", episodes=1, videos=1)
+    options = ExecutionOptions(workers=0, videos=1, progress=False)
+    _eval(short_catalog, tmp_path / "run", tasks="spatial/s0/black-bowl-1-on-plate", episodes=1, options=options)
     (row,) = store_rows(tmp_path / "run")
     import cv2
 
@@ -210,8 +210,8 @@ def test_existing_foreign_or_corrupt_stores_are_never_overwritten(short_catalog,
     base = ["eval", "--catalog", short_catalog, "--episodes", "1", "--run", str(run), "--no-progress"]
     for extra, message in (
         (["--policy", "noop"], "already exists"),
-        (["--policy", "random", "--resume"], "another configuration"),
-        (["--policy", "noop", "--seed", "5", "--resume"], "another configuration"),
+        (["--policy", "random", "--resume"], "another spec: policy: stored 'noop', given 'random'"),
+        (["--policy", "noop", "--seed", "5", "--resume"], "another spec: seed: stored 0, given 5"),
     ):
         result = run_cli(*base, *extra)
         assert result.returncode == 2 and message in result.stderr and result.stderr.count("\n") == 1
@@ -242,8 +242,8 @@ def test_one_writer_per_run(short_catalog, tmp_path):
             assert len(reader.done_keys()) == 3
     assert (run / "episodes.sqlite").read_bytes() == before
     # The lock goes with its holder: the run resumes afterwards.
-    config = EvalConfig(policy="noop", catalog=short_catalog, episodes=2, workers=0)
-    assert evaluate(config, run, resume=True, progress=False).ran == 3
+    options = ExecutionOptions(workers=0, progress=False)
+    assert evaluate(_spec(short_catalog, episodes=2), run, options, resume=True, extend=True).ran == 3
 
 
 def test_report_formats(short_catalog, tmp_path):

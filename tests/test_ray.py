@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -18,13 +19,28 @@ pytestmark = pytest.mark.skipif(shutil.which("unshare") is None, reason="needs u
 KEEP = ("task_id", "init_index", "seed", "condition", "success", "steps", "t0_hash", "reached", "goals_at_end")
 
 
-def _in_network_namespace(script: str, ray_tmp: Path, timeout: float = 600) -> subprocess.CompletedProcess:
-    """Run a bash script in a fresh network namespace with only loopback: Ray cannot reach or bind anything else.
+# A network inside the namespace: a non-loopback address with a default route, as on a real
+# machine, so a server that binds "the machine's address" or every interface shows it.
+_FAKE_NETWORK = """
+        ip link add lg0 type veth peer name lg1
+        ip addr add 10.77.0.1/24 dev lg0
+        ip link set lg0 up
+        ip link set lg1 up
+        ip route add default via 10.77.0.2 dev lg0
+"""
+
+
+def _in_network_namespace(
+    script: str, ray_tmp: Path, timeout: float = 600, *, network: bool = False
+) -> subprocess.CompletedProcess:
+    """Run a bash script in a fresh network namespace (loopback only, or with `network` a private
+    non-loopback address too): nothing started inside can reach or be reached from outside.
     Ray's session files go to `ray_tmp`, so no other Ray instance on the machine is seen or touched."""
     bin_dir = Path(sys.executable).parent
     prelude = f"""
         set -euo pipefail
         ip link set lo up
+        {_FAKE_NETWORK if network else ""}
         export PATH={bin_dir}:$PATH PYTHONPATH={REPO} RAY_AUTH_MODE=disabled RAY_USAGE_STATS_ENABLED=0
         export RAY_TMPDIR={ray_tmp}
         trap 'ray stop --force >/dev/null 2>&1 || true' EXIT
@@ -126,7 +142,7 @@ def test_core_works_without_ray(short_catalog, tmp_path):
     assert not (tmp_path / "b").exists()
 
 
-def test_shared_policy_gives_the_same_episodes(short_catalog, tmp_path):
+def test_shared_policy_batches_queries_and_gives_the_same_episodes(short_catalog, tmp_path):
     common = [
         "--policy",
         "random",
@@ -143,12 +159,56 @@ def test_shared_policy_gives_the_same_episodes(short_catalog, tmp_path):
     ]
     local = tmp_path / "local"
     assert run_cli("eval", *common, "--run", str(local)).returncode == 0
-    shared = tmp_path / "shared"
+    shared, unbatched = tmp_path / "shared", tmp_path / "unbatched"
+    eval_ray = f"python -m langgap.cli.main eval {' '.join(common)} --backend ray --shared-policy --max-wait-ms 300"
     result = _in_network_namespace(
-        f"python -m langgap.cli.main eval {' '.join(common)} --backend ray --shared-policy --max-batch 2 "
-        f"--run {shared}",
-        _ray_tmp(),
+        f"{eval_ray} --max-batch 2 --run {shared}\n{eval_ray} --max-batch 1 --run {unbatched}", _ray_tmp()
     )
     assert result.returncode == 0, result.stderr
+    (queries, calls), (queries_1, calls_1) = [
+        tuple(map(int, m)) for m in re.findall(r"shared policy: (\d+) queries in (\d+) batched calls", result.stdout)
+    ]
+    assert queries == queries_1 > 0
+    assert calls < queries  # two environment actors' queries shared forward passes
+    assert calls_1 == queries_1  # --max-batch 1: one query per call
     assert [{k: r[k] for k in KEEP} for r in store_rows(shared)] == [{k: r[k] for k in KEEP} for r in store_rows(local)]
     assert all(json.loads(r["physics"]) for r in store_rows(shared))
+
+
+def test_policy_gpus_beyond_the_cluster_is_an_error_before_anything_is_stored(short_catalog, tmp_path):
+    run = tmp_path / "run"
+    result = _in_network_namespace(
+        f"python -m langgap.cli.main eval --policy noop --catalog {short_catalog} --episodes 1 --backend ray "
+        f"--shared-policy --policy-gpus 1 --run {run} --no-progress --quiet",
+        _ray_tmp(),
+    )
+    assert result.returncode == 2
+    assert result.stderr.strip().splitlines()[-1] == "error: --policy-gpus 1: the Ray cluster has 0 GPU(s)"
+    assert not run.exists()
+
+
+def test_a_local_ray_instance_listens_on_loopback_only(short_catalog, tmp_path):
+    run = tmp_path / "run"
+    result = _in_network_namespace(
+        f"""
+        python -m langgap.cli.main eval --policy delay --policy-arg delay_ms=100 --catalog {short_catalog} \
+            --episodes 1 --workers 2 --backend ray --run {run} --no-progress --quiet &
+        EVAL=$!
+        # Once an environment actor runs an episode, every Ray process has started its servers.
+        for _ in $(seq 1 240); do
+            [ "$(pgrep -fc '^ray::RunnerActor' || true)" -ge 1 ] && break
+            sleep 0.5
+        done
+        ss -ltnpH
+        wait $EVAL
+    """,
+        _ray_tmp(),
+        network=True,
+    )
+    assert result.returncode == 0, result.stderr
+    listening = [line.split()[3] for line in result.stdout.splitlines() if line.startswith("LISTEN")]
+    owners = " ".join(line for line in result.stdout.splitlines() if line.startswith("LISTEN"))
+    assert "gcs_server" in owners and "raylet" in owners and "ray::RunnerActo" in owners  # ss cuts names at 15
+    exposed = [a for a in listening if a.rsplit(":", 1)[0] not in ("127.0.0.1", "[::ffff:127.0.0.1]", "[::1]")]
+    assert not exposed, result.stdout
+    assert len(store_rows(run)) == 3

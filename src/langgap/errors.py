@@ -2,7 +2,9 @@
 
 
 class LangGapError(Exception):
-    """Base class: the CLI prints `error: <message>` and exits non-zero."""
+    """Base class: the CLI prints `error: <message>` and exits with `exit_code`."""
+
+    exit_code = 2
 
 
 class CatalogError(LangGapError):

@@ -24,7 +24,8 @@ from langgap.bddl import Predicate
 from langgap.catalog.catalog import Catalog, load_catalog, registry_path
 from langgap.catalog.task import GateResult, Task
 from langgap.catalog.verdicts import record_verdicts
-from langgap.engine.evaluate import EvalConfig, evaluate
+from langgap.engine.evaluate import evaluate
+from langgap.engine.spec import ExecutionOptions, RunSpec
 from langgap.records import EpisodeRecord
 from langgap.stack import physics_stack
 from langgap.store import RunStore
@@ -141,12 +142,10 @@ def validate(
     """Run the gate on the selected tasks; returns one row per task (catalog order)."""
     catalog = load_catalog(catalog_name)
     tasks = catalog.select(selection)
-    config = EvalConfig(
-        policy=policy, catalog=catalog_name, tasks=",".join(t.id for t in tasks), episodes=inits, workers=workers
-    )
+    spec = RunSpec.create(policy, catalog=catalog_name, tasks=",".join(t.id for t in tasks), episodes=inits)
     with tempfile.TemporaryDirectory(prefix="langgap-validate-") as scratch:
         directory = Path(run) if run is not None else Path(scratch) / "run"
-        evaluate(config, directory, resume=resume, progress=progress)
+        evaluate(spec, directory, ExecutionOptions(workers=workers, progress=progress), resume=resume, extend=resume)
         with RunStore.open(directory) as store:
             records = store.records()
     by_task: dict[str, list[EpisodeRecord]] = {}

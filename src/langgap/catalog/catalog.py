@@ -10,6 +10,7 @@ from __future__ import annotations
 import difflib
 import fnmatch
 import functools
+import hashlib
 from collections.abc import Iterable
 from importlib import resources
 from pathlib import Path
@@ -207,6 +208,15 @@ def available_catalogs() -> list[str]:
     """Names of the registries shipped with the package."""
     folder = resources.files("langgap.catalog") / "registry"
     return sorted(p.name.removesuffix(".yaml") for p in folder.iterdir() if p.name.endswith(".yaml"))
+
+
+def catalog_hash(name: str) -> str:
+    """SHA-256 of catalog `name`'s registry file: two runs on the same hash saw the same tasks, goals and sentences."""
+    path = registry_path(name)
+    try:
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError as exc:
+        raise CatalogError(f"cannot read catalog {path}: {exc}") from None
 
 
 @functools.cache

@@ -1,12 +1,19 @@
-"""`langgap eval`: evaluate a policy on a task selection into a durable, resumable run."""
+"""`langgap eval`: evaluate a policy on a task selection into a durable, resumable run.
+
+Exit codes: 0 every planned episode is stored and judged; 3 the run finished with gaps (episodes
+infrastructure could not run; `--resume` retries them); 4 the run stopped after repeated
+infrastructure failures with one cause; 2 bad input or another error (nothing stored is touched).
+"""
 
 from __future__ import annotations
 
 from langgap.cli.tasks_cmd import add_catalog_options
-from langgap.engine.evaluate import PAPER_EPISODES
-from langgap.engine.local import DEFAULT_MAX_ATTEMPTS, DEFAULT_TIMEOUT_S
 from langgap.engine.plan import CONDITION_HELP, CONDITIONS
+from langgap.engine.pools import BACKENDS
+from langgap.engine.spec import DEFAULT_FAILURE_STREAK, DEFAULT_MAX_ATTEMPTS, DEFAULT_TIMEOUT_S, PAPER_EPISODES
 from langgap.errors import LangGapError
+
+EXIT_GAPS = 3
 
 
 def parse_key_values(pairs: list[str] | None, option: str) -> dict[str, str]:
@@ -38,6 +45,11 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--workers", type=int, default=1, help="local worker processes; 0 runs in this process")
     parser.add_argument("--resume", action="store_true", help="continue a run: skip stored episodes, redo gaps")
     parser.add_argument(
+        "--extend",
+        action="store_true",
+        help="with --resume: let the run grow (more tasks, episodes or conditions; everything else must match)",
+    )
+    parser.add_argument(
         "--condition", action="append", choices=CONDITIONS, help=f"instruction condition(s) ({CONDITION_HELP})"
     )
     parser.add_argument(
@@ -51,14 +63,25 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument("--seed", type=int, default=0, help="run seed; episode k uses env seed SEED+k")
     parser.add_argument(
-        "--timeout", type=float, default=DEFAULT_TIMEOUT_S, help="seconds per episode before it is an infra error"
+        "--timeout",
+        type=float,
+        metavar="S",
+        help=f"seconds per episode before it is an infrastructure failure (default: {DEFAULT_TIMEOUT_S:g}; "
+        "needs worker processes)",
     )
     parser.add_argument(
         "--max-attempts", type=int, default=DEFAULT_MAX_ATTEMPTS, help="attempts before an episode becomes a gap"
     )
     parser.add_argument(
+        "--max-failure-streak",
+        type=int,
+        default=DEFAULT_FAILURE_STREAK,
+        metavar="N",
+        help="stop the run after N consecutive infrastructure failures with the same cause (default: %(default)s)",
+    )
+    parser.add_argument(
         "--backend",
-        choices=("local", "ray"),
+        choices=sorted(BACKENDS),
         default="local",
         help="local worker processes, or actors on a Ray cluster (pip install 'langgap[ray]')",
     )
@@ -68,24 +91,24 @@ def add_parser(subparsers) -> None:
         action="store_true",
         help="ray: one policy actor for all environment actors, batching their queries",
     )
-    parser.add_argument("--max-batch", type=int, default=8, help="shared policy: largest batch (default: %(default)s)")
+    parser.add_argument("--max-batch", type=int, help="shared policy: largest batch (default: 8)")
     parser.add_argument(
-        "--max-wait-ms",
-        type=float,
-        default=5.0,
-        help="shared policy: how long a query waits for others (default: %(default)s)",
+        "--max-wait-ms", type=float, help="shared policy: how long a query waits for others (default: 5)"
     )
-    parser.add_argument("--policy-gpus", type=float, default=0.0, help="shared policy: GPUs for the policy actor")
+    parser.add_argument("--policy-gpus", type=float, help="shared policy: GPUs for the policy actor (default: 0)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--quiet", action="store_true", help="print no diagnosis table at the end")
     parser.set_defaults(handler=run)
 
 
 def run(args) -> int:
-    from langgap.engine.evaluate import EvalConfig, evaluate
+    from langgap.engine.evaluate import evaluate
+    from langgap.engine.spec import ExecutionOptions, RunSpec
 
-    config = EvalConfig(
-        policy=args.policy,
+    if args.extend and not args.resume:
+        raise LangGapError("--extend needs --resume")
+    spec = RunSpec.create(
+        args.policy,
         policy_args=parse_key_values(args.policy_arg, "--policy-arg"),
         catalog=args.catalog,
         tasks=args.tasks,
@@ -93,24 +116,31 @@ def run(args) -> int:
         seed=args.seed,
         conditions=tuple(args.condition or ("given",)),
         style=args.style,
+    )
+    options = ExecutionOptions(
+        backend=args.backend,
         workers=args.workers,
-        videos=args.video,
         timeout_s=args.timeout,
         max_attempts=args.max_attempts,
-        backend=args.backend,
+        max_failure_streak=args.max_failure_streak,
+        videos=args.video,
+        progress=not args.no_progress,
         ray_address=args.ray_address,
         shared_policy=args.shared_policy,
         max_batch=args.max_batch,
         max_wait_ms=args.max_wait_ms,
         policy_gpus=args.policy_gpus,
     )
-    summary = evaluate(config, args.run, resume=args.resume, progress=not args.no_progress)
+    summary = evaluate(spec, args.run, options, resume=args.resume, extend=args.extend)
     print(
         f"run {summary.run}: {summary.planned} planned, {summary.skipped} already stored, {summary.ran} run "
         f"({summary.successes} successes, {summary.gaps} gaps)"
     )
+    if summary.policy_server:
+        calls, queries = summary.policy_server["calls"], summary.policy_server["queries"]
+        print(f"shared policy: {queries} queries in {calls} batched calls ({queries / max(1, calls):.2f} per call)")
     if not args.quiet:
         from langgap.report.render import diagnosis_text
 
         print(diagnosis_text([summary.run]))
-    return 0
+    return 0 if summary.complete else EXIT_GAPS

@@ -16,6 +16,7 @@ def task_context(
     style: str = DEFAULT_STYLE,
     condition: str = "given",
     instruction: str | None = None,
+    privileged: bool = False,
 ) -> TaskContext:
     """The context for one episode of `task`; `instruction` overrides the catalog sentence (conditions)."""
     return TaskContext(

@@ -3,9 +3,8 @@
 Besides success, every step evaluates the goals of all tasks set in the same scene (the task's
 scene mates, its source included). The record says which of them became true and when, and the
 episode is classified by what the policy did *instead* of its task:
-`success`, `did_source_task` (an extended task's policy performed the original task of the scene:
-the memorisation signature), `did_other_task`, `no_goal_reached`, or `policy_error` (the policy
-returned a malformed action).
+one of `langgap.records.Outcome` (`did_source_task` is the memorisation signature: an extended
+task's policy performed the original task of the scene).
 """
 
 from __future__ import annotations
@@ -24,22 +23,9 @@ from langgap.engine.context import task_context
 from langgap.engine.plan import PlannedEpisode
 from langgap.engine.rollout import StepHook, run_episode
 from langgap.policies.base import Policy, PolicyOutputError
-from langgap.records import EpisodeRecord
+from langgap.records import EpisodeRecord, FailureKind, Outcome, Status, classify
 from langgap.sim.env import TaskEnv
 from langgap.version import code_version
-
-OUTCOMES = ("success", "did_source_task", "did_other_task", "no_goal_reached", "policy_error", "gap")
-
-
-def classify(task: Task, success: bool, reached: dict[str, int]) -> str:
-    """What the episode achieved, from the goals that became true during it."""
-    if success:
-        return "success"
-    if task.kind == "extended" and task.source in reached:
-        return "did_source_task"
-    if any(name != task.id for name in reached):
-        return "did_other_task"
-    return "no_goal_reached"
 
 
 def scene_goals(task: Task, catalog: Catalog) -> dict[str, tuple[tuple[str, ...], ...]]:
@@ -96,19 +82,26 @@ def execute_episode(
         style=style,
         condition=key.condition,
         instruction=planned.instruction,
+        privileged=policy.spec.privileged,
     )
     started = time.perf_counter()
-    common = dict(policy=policy_name, policy_config_hash=policy_hash, worker=worker, attempts=attempts)
+    common = dict(
+        policy=policy_name,
+        policy_config_hash=policy_hash,
+        privileged=policy.spec.privileged,
+        worker=worker,
+        attempts=attempts,
+    )
     try:
         result = run_episode(env, policy, context, watch=scene_goals(task, catalog), on_step=on_step)
     except PolicyOutputError as exc:
         return _record(
             planned,
             task,
-            status="done",
+            status=Status.DONE,
             success=False,
-            outcome="policy_error",
-            failure_kind="policy",
+            outcome=Outcome.POLICY_ERROR,
+            failure_kind=FailureKind.POLICY,
             error=str(exc),
             steps=env.steps,
             policy_calls=0,
@@ -119,10 +112,10 @@ def execute_episode(
     return _record(
         planned,
         task,
-        status="done",
+        status=Status.DONE,
         success=result.success,
-        outcome=classify(task, result.success, result.reached),
-        failure_kind=None if result.success else "policy",
+        outcome=classify(task.id, task.kind, task.source, result.success, result.reached),
+        failure_kind=None if result.success else FailureKind.POLICY,
         error=None,
         steps=result.steps,
         policy_calls=result.policy_calls,
@@ -140,10 +133,10 @@ def gap_record(planned: PlannedEpisode, task: Task, *, policy_name: str, error: 
     return _record(
         planned,
         task,
-        status="gap",
+        status=Status.GAP,
         success=False,
-        outcome="gap",
-        failure_kind="infra",
+        outcome=Outcome.GAP,
+        failure_kind=FailureKind.INFRA,
         error=error,
         steps=0,
         policy_calls=0,

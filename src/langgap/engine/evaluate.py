@@ -1,137 +1,139 @@
-"""The evaluator core: plan a run, skip what the store already has, schedule the rest, store every episode."""
+"""The evaluator: plan a run from its spec, skip what the store already has, schedule the rest, store every episode."""
 
 from __future__ import annotations
 
+import contextlib
 import sys
 from collections.abc import Iterable, Iterator
 from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
-from langgap import stack
-from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
-from langgap.catalog.task import DEFAULT_STYLE
-from langgap.engine.local import DEFAULT_MAX_ATTEMPTS, DEFAULT_TIMEOUT_S, LocalBackend, run_in_process
-from langgap.engine.plan import build_plan
+from langgap.catalog.catalog import load_catalog
+from langgap.engine.episode import gap_record
+from langgap.engine.plan import PlannedEpisode, build_plan
+from langgap.engine.pools import make_pool
 from langgap.engine.runner import RunnerSetup
-from langgap.errors import LangGapError
-from langgap.policies import policy_kwargs
-from langgap.records import EpisodeRecord
+from langgap.engine.scheduler import schedule
+from langgap.engine.spec import PLAN_FIELDS, ExecutionOptions, RunSpec, SpecError
+from langgap.records import EpisodeRecord, Status
 from langgap.store import RunStore
 from langgap.version import code_version
-
-# A resumed run must agree on these, or its episodes would not be comparable.
-IDENTITY_KEYS = ("policy", "policy_args", "catalog", "style", "seed", "physics")
-PAPER_EPISODES = 20
-
-
-@dataclass(frozen=True)
-class EvalConfig:
-    """One evaluation run (what `langgap eval` is asked to do)."""
-
-    policy: str
-    policy_args: dict[str, str] = field(default_factory=dict)
-    catalog: str = DEFAULT_CATALOG
-    tasks: str | None = None
-    episodes: int = PAPER_EPISODES
-    seed: int = 0
-    conditions: tuple[str, ...] = ("given",)
-    style: str = DEFAULT_STYLE
-    workers: int = 1
-    videos: int = 0  # record this many episodes (the first of the plan) as mp4
-    timeout_s: float = DEFAULT_TIMEOUT_S
-    max_attempts: int = DEFAULT_MAX_ATTEMPTS
-    backend: str = "local"  # local | ray; not part of a run's identity: every backend gives the same episodes
-    ray_address: str | None = None
-    shared_policy: bool = False  # ray: one policy actor batching the queries of all environment actors
-    max_batch: int = 8
-    max_wait_ms: float = 5.0
-    policy_gpus: float = 0.0
 
 
 @dataclass
 class RunSummary:
+    """What one `evaluate` call did."""
+
     run: Path
     planned: int
     skipped: int
-    ran: int
-    successes: int
-    gaps: int
+    ran: int = 0
+    successes: int = 0
+    gaps: int = 0
+    policy_server: dict = field(default_factory=dict)  # a shared policy's counters (Ray): calls, queries
+
+    @property
+    def complete(self) -> bool:
+        """True when every planned episode is stored as judged (no gaps left)."""
+        return self.gaps == 0
 
 
-def _stored_config(config: EvalConfig) -> dict:
-    data = asdict(config)
-    data["conditions"] = list(config.conditions)
-    data.update(
-        physics=stack.physics_stack(),
-        code_version=code_version(),
-        created_at=datetime.now(UTC).isoformat(timespec="seconds"),
+def plan_of(spec: RunSpec) -> list[PlannedEpisode]:
+    """Every episode of the run: each task × condition × init index of the spec."""
+    catalog = load_catalog(spec.catalog)
+    return build_plan(
+        [catalog.get(t) for t in spec.tasks],
+        catalog,
+        episodes=len(spec.inits),
+        first_init=spec.inits[0],
+        seed=spec.seed,
+        conditions=spec.conditions,
+        style=spec.style,
     )
-    return data
 
 
-def evaluate(config: EvalConfig, run: str | Path, *, resume: bool = False, progress: bool = True) -> RunSummary:
-    """Run (or resume) an evaluation into the run directory `run`.
-
-    Everything that can be checked is checked before the store is touched: the policy and its
-    arguments, the task selection, the plan (init indices in range), and, when resuming, that the
-    stored run was made with the same configuration.
-    """
-    policy_kwargs(config.policy, config.policy_args)
-    _backend(config)  # an unknown backend or a missing Ray fails before anything is stored
-    catalog = load_catalog(config.catalog)
-    tasks = catalog.select(config.tasks)
-    plan = build_plan(
-        tasks, catalog, episodes=config.episodes, seed=config.seed, conditions=config.conditions, style=config.style
-    )
-    stored = _stored_config(config)
-    store = (
-        RunStore.open(run, write=True) if resume and RunStore.exists(run) else RunStore.create(run, {"config": stored})
-    )
-    with store:
-        previous = store.meta("config") or {}
-        differing = [k for k in IDENTITY_KEYS if previous.get(k) != stored.get(k)]
+def _open_store(spec: RunSpec, options: ExecutionOptions, run: Path, *, resume: bool, extend: bool) -> RunStore:
+    """Create the run's store, or reopen it for a resume after checking that it holds the same run."""
+    if not (resume and RunStore.exists(run)):
+        created = {"code_version": code_version(), "created_at": datetime.now(UTC).isoformat(timespec="seconds")}
+        return RunStore.create(run, {"spec": spec.to_dict(), "execution": asdict(options), "created": created})
+    store = RunStore.open(run, write=True)
+    try:
+        stored = store.meta("spec") or {}
+        differing = spec.differences(stored)
+        growing = extend and not set(differing) - set(PLAN_FIELDS)
+        if differing and not growing:
+            hint = (
+                " (--extend grows a run's tasks, episodes or conditions)" if set(differing) <= set(PLAN_FIELDS) else ""
+            )
+            raise SpecError(
+                f"run {run} was made with another spec: {spec.describe_differences(stored, differing)}{hint}"
+            )
         if differing:
-            raise LangGapError(f"run {run} was made with another configuration ({', '.join(differing)})")
+            store.set_meta("spec", spec.to_dict())
+        store.set_meta("execution", asdict(options))
+    except BaseException:
+        store.close()
+        raise
+    return store
+
+
+def evaluate(
+    spec: RunSpec,
+    run: str | Path,
+    options: ExecutionOptions | None = None,
+    *,
+    resume: bool = False,
+    extend: bool = False,
+) -> RunSummary:
+    """Run (or resume) the evaluation `spec` into the run directory `run`; returns what was done.
+
+    Everything that can be checked is checked before the store is touched: the spec (built by
+    `RunSpec.create`), the execution options, the plan (init indices in range), and, when resuming,
+    that the stored run has the same spec (`extend` lets it grow its tasks, inits or conditions).
+    A run that hits `options.max_failure_streak` consecutive infrastructure failures with one cause
+    raises `RunStopped`; every episode stored before stays, and a resume continues.
+    """
+    options = options or ExecutionOptions()
+    run = Path(run)
+    plan = plan_of(spec)
+    catalog = load_catalog(spec.catalog)
+    setup = RunnerSetup(
+        catalog=spec.catalog,
+        policy=spec.policy,
+        policy_args=dict(spec.policy_args),
+        style=spec.style,
+        video_dir=str(run / "videos") if options.videos else None,
+        video_keys=frozenset(p.key for p in plan[: options.videos]),
+    )
+
+    def make_gap(planned: PlannedEpisode, error: str, attempts: int) -> EpisodeRecord:
+        task = catalog.get(planned.key.task_id)
+        return gap_record(planned, task, policy_name=spec.policy, error=error, attempts=attempts)
+
+    # The pool comes first: options it cannot satisfy (no Ray, too few GPUs) fail before a run
+    # directory exists. Workers only start when the scheduler asks for them.
+    pool = make_pool(setup, options)
+    with contextlib.ExitStack() as stack:
+        stack.callback(pool.close)
+        store = stack.enter_context(_open_store(spec, options, run, resume=resume, extend=extend))
         done = store.done_keys()
         todo = [p for p in plan if p.key not in done]
-        setup = RunnerSetup(
-            catalog=config.catalog,
-            policy=config.policy,
-            policy_args=dict(config.policy_args),
-            style=config.style,
-            video_dir=str(Path(run) / "videos") if config.videos else None,
-            video_keys=frozenset(p.key for p in plan[: config.videos] if p.key not in done),
+        summary = RunSummary(run, planned=len(plan), skipped=len(plan) - len(todo))
+        records = schedule(
+            todo,
+            pool,
+            workers=max(1, options.workers),
+            make_gap=make_gap,
+            max_attempts=options.max_attempts,
+            max_failure_streak=options.max_failure_streak,
+            timeout_s=options.episode_timeout_s,
         )
-        records = _backend(config).run(todo, setup)
-        summary = RunSummary(Path(run), planned=len(plan), skipped=len(plan) - len(todo), ran=0, successes=0, gaps=0)
-        for record in _with_progress(records, len(todo), summary, enabled=progress):
+        for record in _with_progress(records, len(todo), summary, enabled=options.progress):
             store.write(record)
+    summary.policy_server = dict(getattr(pool, "server_stats", {}))  # set by closing a shared-policy pool
     return summary
-
-
-class _InProcess:
-    def __init__(self, max_attempts: int):
-        self.max_attempts = max_attempts
-
-    def run(self, plan, setup):
-        return run_in_process(plan, setup, max_attempts=self.max_attempts)
-
-
-def _backend(config: EvalConfig):
-    if config.backend == "ray":
-        from langgap.engine.ray_backend import RayBackend
-
-        return RayBackend(
-            config.workers, address=config.ray_address, timeout_s=config.timeout_s, max_attempts=config.max_attempts
-        )
-    if config.backend != "local":
-        raise LangGapError(f"unknown backend {config.backend!r} (local or ray)")
-    if config.shared_policy:
-        raise LangGapError("--shared-policy needs --backend ray")
-    if config.workers <= 0:
-        return _InProcess(config.max_attempts)
-    return LocalBackend(config.workers, timeout_s=config.timeout_s, max_attempts=config.max_attempts)
 
 
 def _with_progress(
@@ -154,7 +156,7 @@ def _with_progress(
             yield record
             summary.ran += 1
             summary.successes += record.success
-            summary.gaps += record.status == "gap"
+            summary.gaps += record.status == Status.GAP
             if bar is not None:
                 valid = summary.ran - summary.gaps
                 bar.set_postfix(success=f"{summary.successes / max(1, valid):.0%}", gaps=summary.gaps, refresh=False)

@@ -25,6 +25,7 @@ CONDITION_HELP = (
 class PlannedEpisode:
     key: EpisodeKey
     instruction: str  # the exact string the policy will receive
+    scene: str = ""  # the scene it is set in: a worker's environment serves every task of one scene
 
     @property
     def instruction_sha256(self) -> str:
@@ -75,6 +76,7 @@ def build_plan(
     if unknown:
         raise CatalogError(f"unknown condition(s) {unknown} ({CONDITION_HELP})")
     from langgap.catalog import files
+    from langgap.catalog.files import scene_key
 
     plan = []
     for task in tasks:
@@ -87,5 +89,6 @@ def build_plan(
         for condition in conditions:
             for init_index in range(first_init, first_init + episodes):
                 key = EpisodeKey(task.id, init_index, episode_seed(seed, init_index), condition)
-                plan.append(PlannedEpisode(key, condition_instruction(task, catalog, condition, style, init_index)))
+                instruction = condition_instruction(task, catalog, condition, style, init_index)
+                plan.append(PlannedEpisode(key, instruction, scene=scene_key(task)))
     return plan

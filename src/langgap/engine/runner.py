@@ -15,11 +15,11 @@ from typing import Any
 
 from langgap.catalog.catalog import load_catalog
 from langgap.engine.episode import execute_episode, video_hook
-from langgap.engine.plan import EpisodeKey, PlannedEpisode
+from langgap.engine.plan import PlannedEpisode
 from langgap.engine.rollout import env_options_for
 from langgap.policies import make_policy
 from langgap.policies.base import config_hash, policy_config
-from langgap.records import EpisodeRecord
+from langgap.records import EpisodeKey, EpisodeRecord
 from langgap.sim.env import CAMERAS, TaskEnv
 
 

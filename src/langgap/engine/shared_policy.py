@@ -1,6 +1,6 @@
 """One shared policy for many environment workers, batching their queries (Ray backend).
 
-A GPU policy should not be loaded once per environment worker. With `--shared-policy`, the driver
+A GPU policy should not be loaded once per environment worker. With `--shared-policy`, the Ray pool
 starts one `PolicyServer` actor (given the GPUs); every environment actor talks to it through a
 `SharedPolicyClient`, which follows the ordinary `Policy` protocol. The server keeps one policy
 instance per worker slot (policies are stateful within an episode) and answers concurrent `act`
@@ -30,7 +30,8 @@ class PolicyServer:
         self._spec, self._config = template.spec, policy_config(template)
         self._pending: list[tuple[int, Observation, asyncio.Future]] = []
         self._timer: asyncio.TimerHandle | None = None
-        self.calls = 0  # batched calls made: the measure of batching
+        self.calls = 0  # batched calls made
+        self.queries = 0  # act() requests answered: queries / calls is the mean batch
 
     def spec(self) -> PolicySpec:
         return self._spec
@@ -39,7 +40,7 @@ class PolicyServer:
         return {**self._config, "shared": {"max_batch": self.max_batch, "max_wait_ms": self.max_wait_s * 1000}}
 
     def stats(self) -> dict:
-        return {"calls": self.calls}
+        return {"calls": self.calls, "queries": self.queries}
 
     async def reset(self, slot: int, context: TaskContext) -> None:
         if slot not in self.policies:
@@ -47,6 +48,7 @@ class PolicyServer:
         self.policies[slot].reset(context)
 
     async def act(self, slot: int, observation: Observation):
+        self.queries += 1
         future = asyncio.get_running_loop().create_future()
         self._pending.append((slot, observation, future))
         if len(self._pending) >= self.max_batch:

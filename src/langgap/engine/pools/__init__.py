@@ -1,0 +1,99 @@
+"""Worker pools: where episodes run. They only provide workers; `langgap.engine.scheduler` decides what runs.
+
+A pool starts workers, hands one planned episode at a time to a worker, and reports what happened
+as typed events. Retries, timeouts, respawns and gaps are the scheduler's, written once for all pools.
+
+Backends by name (`--backend`): `local` (worker processes on this machine, or this process with
+`--workers 0`) and `ray` (actors on a Ray cluster).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol
+
+from langgap.records import EpisodeRecord
+
+if TYPE_CHECKING:
+    from langgap.engine.plan import PlannedEpisode
+    from langgap.engine.runner import RunnerSetup
+    from langgap.engine.spec import ExecutionOptions
+
+
+@dataclass(frozen=True)
+class EpisodeDone:
+    """A worker finished an episode (a success or a policy failure: the policy was judged)."""
+
+    worker: int
+    record: EpisodeRecord
+
+
+@dataclass(frozen=True)
+class EpisodeFailed:
+    """Infrastructure failed an episode on a worker that is still usable (its runner rebuilt its state)."""
+
+    worker: int
+    error: str
+
+
+@dataclass(frozen=True)
+class WorkerLost:
+    """A worker is gone (its process or actor died); whatever it was running failed with it."""
+
+    worker: int
+    reason: str
+
+
+Event = EpisodeDone | EpisodeFailed | WorkerLost
+
+
+class WorkerPool(Protocol):
+    """What the scheduler needs from a backend."""
+
+    def spawn(self) -> int:
+        """Start a worker; returns its id (never reused)."""
+        ...
+
+    def submit(self, worker: int, planned: PlannedEpisode, attempt: int) -> None:
+        """Start `planned` on an idle `worker`."""
+        ...
+
+    def poll(self, timeout: float) -> list[Event]:
+        """Events since the last call, waiting up to `timeout` seconds for the first."""
+        ...
+
+    def kill(self, worker: int) -> None:
+        """Stop a worker at once (an episode past its timeout); no event follows for it."""
+        ...
+
+    def close(self) -> None:
+        """Stop every worker and release the pool's resources."""
+        ...
+
+
+PoolFactory = Callable[["RunnerSetup", "ExecutionOptions"], WorkerPool]
+
+
+def _local(setup: RunnerSetup, options: ExecutionOptions) -> WorkerPool:
+    if options.workers == 0:
+        from langgap.engine.pools.inprocess import InProcessPool
+
+        return InProcessPool(setup)
+    from langgap.engine.pools.processes import ProcessPool
+
+    return ProcessPool(setup)
+
+
+def _ray(setup: RunnerSetup, options: ExecutionOptions) -> WorkerPool:
+    from langgap.engine.pools.ray import RayPool
+
+    return RayPool(setup, options)
+
+
+BACKENDS: dict[str, PoolFactory] = {"local": _local, "ray": _ray}
+
+
+def make_pool(setup: RunnerSetup, options: ExecutionOptions) -> WorkerPool:
+    """The worker pool of backend `options.backend`."""
+    return BACKENDS[options.backend](setup, options)

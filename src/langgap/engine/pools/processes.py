@@ -1,0 +1,97 @@
+"""The pool of local worker processes.
+
+Workers are started with `spawn` (no simulator or GL state crosses a fork), build their environment
+lazily, keep it while consecutive episodes share a scene, and exit on their own if the scheduling
+process dies (so a `kill -9` of `langgap eval` leaves no orphan simulating).
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+import queue
+import threading
+import time
+
+from langgap.engine.plan import PlannedEpisode
+from langgap.engine.pools import EpisodeDone, EpisodeFailed, Event, WorkerLost
+from langgap.engine.runner import EpisodeFailure, EpisodeRunner, RunnerSetup
+
+
+def _exit_with_parent(parent_pid: int) -> None:
+    while True:
+        if os.getppid() != parent_pid:
+            os._exit(1)
+        time.sleep(0.5)
+
+
+def worker_main(worker: int, setup: RunnerSetup, inbox, outbox, parent_pid: int) -> None:
+    """Entry point of a worker process: run the episodes it is sent until it receives None."""
+    threading.Thread(target=_exit_with_parent, args=(parent_pid,), daemon=True).start()
+    runner = EpisodeRunner(setup, worker=worker)
+    try:
+        while (item := inbox.get()) is not None:
+            planned, attempt = item
+            try:
+                outbox.put(EpisodeDone(worker, runner.run(planned, attempt)))
+            except EpisodeFailure as exc:
+                outbox.put(EpisodeFailed(worker, str(exc)))
+    finally:
+        runner.close()
+
+
+class ProcessPool:
+    """Worker processes on this machine, one episode at a time each."""
+
+    def __init__(self, setup: RunnerSetup):
+        self.setup = setup
+        self._context = mp.get_context("spawn")
+        self._outbox = self._context.Queue()
+        self._workers: dict[int, tuple[mp.Process, object]] = {}  # id -> (process, inbox)
+        self._next_id = 0
+
+    def spawn(self) -> int:
+        worker, self._next_id = self._next_id, self._next_id + 1
+        inbox = self._context.Queue()
+        process = self._context.Process(
+            target=worker_main,
+            args=(worker, self.setup, inbox, self._outbox, os.getpid()),
+            daemon=True,
+            name=f"langgap-worker-{worker}",
+        )
+        process.start()
+        self._workers[worker] = (process, inbox)
+        return worker
+
+    def submit(self, worker: int, planned: PlannedEpisode, attempt: int) -> None:
+        self._workers[worker][1].put((planned, attempt))
+
+    def poll(self, timeout: float) -> list[Event]:
+        # Deaths are read before the queue is drained: whatever a dead worker sent before it died is
+        # already in the pipe, so its last result is never mistaken for a loss.
+        dead = [w for w, (process, _) in self._workers.items() if not process.is_alive()]
+        events: list[Event] = []
+        try:
+            events.append(self._outbox.get(timeout=timeout))
+            while True:
+                events.append(self._outbox.get_nowait())
+        except queue.Empty:
+            pass
+        for worker in dead:
+            process, _ = self._workers.pop(worker)
+            events.append(WorkerLost(worker, f"worker process died (exit code {process.exitcode})"))
+        return events
+
+    def kill(self, worker: int) -> None:
+        process, _ = self._workers.pop(worker)
+        process.kill()
+        process.join(timeout=10)
+
+    def close(self) -> None:
+        for _, inbox in self._workers.values():
+            inbox.put(None)
+        for process, _ in self._workers.values():
+            process.join(timeout=30)
+            if process.is_alive():
+                process.kill()
+        self._workers.clear()

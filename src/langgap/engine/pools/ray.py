@@ -1,0 +1,165 @@
+"""The pool of Ray actors: one `EpisodeRunner` per actor, results back to the driver (and its store).
+
+Without `--ray-address` a local Ray instance is started that listens on 127.0.0.1 only (Ray has no
+authentication). With `--shared-policy` one policy actor (given `--policy-gpus`) serves every
+environment actor, batching their queries (`langgap.engine.shared_policy`).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import replace
+
+from langgap.engine.plan import PlannedEpisode
+from langgap.engine.pools import EpisodeDone, EpisodeFailed, Event, WorkerLost
+from langgap.engine.runner import EpisodeFailure, EpisodeRunner, RunnerSetup
+from langgap.engine.shared_policy import start_server
+from langgap.engine.spec import ExecutionOptions
+from langgap.errors import DependencyNotInstalled, LangGapError
+
+SHARED_DEFAULTS = {"max_batch": 8, "max_wait_ms": 5.0, "policy_gpus": 0.0}
+
+
+def import_ray():
+    try:
+        import ray
+    except ImportError:
+        raise DependencyNotInstalled("the Ray backend needs Ray: pip install 'langgap[ray]'") from None
+    return ray
+
+
+class RunnerActor:
+    """The body of a Ray actor: an `EpisodeRunner` that lives as long as the actor."""
+
+    def __init__(self, setup: RunnerSetup, worker: int):
+        self.runner = EpisodeRunner(setup, worker=worker)
+
+    def pid(self) -> int:
+        return os.getpid()
+
+    def run(self, planned: PlannedEpisode, attempt: int):
+        return self.runner.run(planned, attempt)
+
+
+# Ray takes a node address of 127.0.0.1 as a request to find the machine's network address, and then
+# binds its servers (GCS, raylet, workers, runtime-env agent) to every interface. With its
+# single-machine switch set, it keeps the loopback address and every server binds 127.0.0.1. The
+# variable reaches the processes Ray starts during `init` (which keep it); the constant is what this
+# process reads. Both are restored afterwards, so a later connection to a real cluster still works.
+_SINGLE_MACHINE = "RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"
+
+
+def start_loopback_instance(ray, num_cpus: int, **init_options) -> None:
+    """Start a local Ray instance whose every server listens on 127.0.0.1 only."""
+    from ray._private import ray_constants
+
+    saved = os.environ.get(_SINGLE_MACHINE), ray_constants.ENABLE_RAY_CLUSTER
+    os.environ[_SINGLE_MACHINE], ray_constants.ENABLE_RAY_CLUSTER = "0", False
+    try:
+        ray.init(num_cpus=num_cpus, _node_ip_address="127.0.0.1", **init_options)
+    finally:
+        if saved[0] is None:
+            os.environ.pop(_SINGLE_MACHINE, None)
+        else:
+            os.environ[_SINGLE_MACHINE] = saved[0]
+        ray_constants.ENABLE_RAY_CLUSTER = saved[1]
+
+
+class RayPool:
+    """Environment actors on a Ray cluster (a local one when no address is given)."""
+
+    def __init__(self, setup: RunnerSetup, options: ExecutionOptions):
+        ray = import_ray()
+        self._ray = ray
+        self._started = self._connect(options)
+        self.server = None
+        self.server_stats: dict = {}
+        try:
+            if options.shared_policy:
+                shared = {
+                    k: getattr(options, k) if getattr(options, k) is not None else v for k, v in SHARED_DEFAULTS.items()
+                }
+                self._check_gpus(shared["policy_gpus"])
+                self.server = start_server(
+                    ray,
+                    setup.policy,
+                    setup.policy_args,
+                    max_batch=shared["max_batch"],
+                    max_wait_ms=shared["max_wait_ms"],
+                    num_gpus=shared["policy_gpus"],
+                )
+                setup = replace(setup, policy_server=self.server)
+        except BaseException:
+            self.close()
+            raise
+        self.setup = setup
+        self._remote = ray.remote(num_cpus=1, max_restarts=0, max_task_retries=0)(RunnerActor)
+        self._actors: dict[int, object] = {}
+        self._running: dict[object, int] = {}  # object ref -> worker
+        self._next_id = 0
+
+    def _connect(self, options: ExecutionOptions) -> bool:
+        """Connect to (or start) Ray; returns whether this pool started it (and so shuts it down)."""
+        ray = self._ray
+        if ray.is_initialized():
+            return False
+        common = dict(include_dashboard=False, log_to_driver=False, configure_logging=False)
+        try:
+            if options.ray_address:
+                ray.init(address=options.ray_address, **common)
+            else:
+                start_loopback_instance(ray, options.workers, **common)
+        except ConnectionError as exc:
+            raise LangGapError(f"cannot reach the Ray cluster at {options.ray_address}: {exc}") from None
+        return True
+
+    def _check_gpus(self, gpus: float) -> None:
+        available = self._ray.cluster_resources().get("GPU", 0)
+        if gpus > available:
+            raise LangGapError(f"--policy-gpus {gpus:g}: the Ray cluster has {available:g} GPU(s)")
+
+    def spawn(self) -> int:
+        worker, self._next_id = self._next_id, self._next_id + 1
+        self._actors[worker] = self._remote.remote(self.setup, worker)
+        return worker
+
+    def submit(self, worker: int, planned: PlannedEpisode, attempt: int) -> None:
+        self._running[self._actors[worker].run.remote(planned, attempt)] = worker
+
+    def poll(self, timeout: float) -> list[Event]:
+        from ray.exceptions import GetTimeoutError, RayActorError, RayTaskError
+
+        if not self._running:
+            return []
+        ready, _ = self._ray.wait(list(self._running), num_returns=1, timeout=timeout)
+        events: list[Event] = []
+        for ref in ready:
+            worker = self._running.pop(ref)
+            try:
+                events.append(EpisodeDone(worker, self._ray.get(ref, timeout=60)))
+            except RayTaskError as exc:
+                cause = exc.cause if isinstance(exc.cause, EpisodeFailure) else exc
+                events.append(EpisodeFailed(worker, str(cause).strip().splitlines()[-1]))
+            except (RayActorError, GetTimeoutError) as exc:
+                self._drop(worker)
+                events.append(WorkerLost(worker, f"Ray actor died: {type(exc).__name__}"))
+        return events
+
+    def _drop(self, worker: int) -> None:
+        actor = self._actors.pop(worker)
+        self._running = {ref: w for ref, w in self._running.items() if w != worker}
+        self._ray.kill(actor, no_restart=True)
+
+    def kill(self, worker: int) -> None:
+        self._drop(worker)
+
+    def close(self) -> None:
+        for worker in list(getattr(self, "_actors", {})):
+            self._drop(worker)
+        if self.server is not None:
+            self.server_stats = self._ray.get(self.server.stats.remote())
+            self._ray.kill(self.server, no_restart=True)
+            self.server = None
+        if self._started:
+            self._ray.shutdown()
+            self._started = False

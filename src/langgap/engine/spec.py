@@ -1,0 +1,165 @@
+"""What a run *is* (`RunSpec`) and how it is *executed* (`ExecutionOptions`): two validated values.
+
+A `RunSpec` holds everything that changes a run's results: the policy and its arguments, the
+catalog (name and content hash), the tasks, init indices, seed, language conditions, instruction
+style and the physics stack. It is stored whole with the run and compared whole on `--resume`, so
+a resumed run can never mix episodes made under two protocols. `ExecutionOptions` says how the
+episodes are run (backend, workers, timeouts, retries, videos, Ray's options): every backend gives
+the same episodes, so none of it is part of the run's identity.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields
+
+from langgap import stack
+from langgap.catalog.catalog import DEFAULT_CATALOG, catalog_hash, load_catalog
+from langgap.catalog.task import DEFAULT_STYLE, INSTRUCTION_STYLES
+from langgap.engine.plan import CONDITION_HELP, CONDITIONS
+from langgap.errors import LangGapError
+from langgap.policies import policy_kwargs
+
+PAPER_EPISODES = 20
+DEFAULT_TIMEOUT_S = 900.0
+DEFAULT_MAX_ATTEMPTS = 3
+DEFAULT_FAILURE_STREAK = 3
+# The fields that only say which episodes a run holds: `--extend` lets a resumed run grow them.
+PLAN_FIELDS = ("selection", "tasks", "inits", "conditions")
+
+
+class SpecError(LangGapError):
+    """A run spec or execution option is invalid, or a stored run was made with another spec."""
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """Everything that determines a run's results. Build one with `RunSpec.create` (which validates it)."""
+
+    policy: str
+    policy_args: dict[str, str]
+    catalog: str
+    catalog_hash: str
+    selection: str | None  # the task selection as given (None: the catalog's default selection)
+    tasks: tuple[str, ...]  # the task ids it resolved to
+    inits: tuple[int, ...]  # the init-state indices every task runs (episode k uses init state k)
+    seed: int  # episode k's env seed is seed + k
+    conditions: tuple[str, ...]
+    style: str
+    physics: dict[str, str]  # the installed physics stack
+
+    @classmethod
+    def create(
+        cls,
+        policy: str,
+        *,
+        policy_args: dict[str, str] | None = None,
+        catalog: str = DEFAULT_CATALOG,
+        tasks: str | None = None,
+        episodes: int = PAPER_EPISODES,
+        seed: int = 0,
+        conditions: tuple[str, ...] = ("given",),
+        style: str = DEFAULT_STYLE,
+    ) -> RunSpec:
+        """A validated spec: the policy accepts its arguments, the selection resolves, the options exist.
+
+        `tasks` is a task selection (see `Catalog.select`); `episodes` runs init states 0..episodes-1.
+        """
+        policy_args = {str(k): str(v) for k, v in (policy_args or {}).items()}
+        policy_kwargs(policy, policy_args)
+        if episodes < 1:
+            raise SpecError(f"--episodes must be at least 1, got {episodes}")
+        if style not in INSTRUCTION_STYLES:
+            raise SpecError(f"unknown instruction style {style!r} (known: {', '.join(INSTRUCTION_STYLES)})")
+        conditions = tuple(dict.fromkeys(conditions))
+        unknown = [c for c in conditions if c not in CONDITIONS]
+        if unknown or not conditions:
+            raise SpecError(f"unknown condition(s) {unknown} ({CONDITION_HELP})")
+        selected = load_catalog(catalog).select(tasks)
+        return cls(
+            policy=policy,
+            policy_args=policy_args,
+            catalog=catalog,
+            catalog_hash=catalog_hash(catalog),
+            selection=tasks,
+            tasks=tuple(t.id for t in selected),
+            inits=tuple(range(episodes)),
+            seed=seed,
+            conditions=conditions,
+            style=style,
+            physics=stack.physics_stack(),
+        )
+
+    def to_dict(self) -> dict:
+        """The spec as JSON data (the form stored with a run)."""
+        data = asdict(self)
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in data.items()}
+
+    def differences(self, stored: dict) -> list[str]:
+        """The fields in which a stored spec (`to_dict` form) differs from this one."""
+        mine = self.to_dict()
+        return [f.name for f in fields(self) if stored.get(f.name) != mine[f.name]]
+
+    def describe_differences(self, stored: dict, names: list[str]) -> str:
+        """One line naming each differing field with its stored and given values."""
+
+        def short(value) -> str:
+            text = repr(value)
+            return text if len(text) <= 60 else text[:57] + "..."
+
+        mine = self.to_dict()
+        return "; ".join(f"{n}: stored {short(stored.get(n))}, given {short(mine[n])}" for n in names)
+
+
+@dataclass(frozen=True)
+class ExecutionOptions:
+    """How a run is executed; results do not depend on any of it."""
+
+    backend: str = "local"  # a name in `langgap.engine.pools.BACKENDS`
+    workers: int = 1  # local: worker processes (0: in this process); ray: environment actors
+    timeout_s: float | None = None  # per episode; None: DEFAULT_TIMEOUT_S where it can be enforced
+    max_attempts: int = DEFAULT_MAX_ATTEMPTS
+    max_failure_streak: int = DEFAULT_FAILURE_STREAK  # consecutive infrastructure failures (same cause) that stop
+    videos: int = 0  # film the first N planned episodes
+    progress: bool = True
+    ray_address: str | None = None
+    shared_policy: bool = False  # ray: one policy actor batching the queries of all environment actors
+    max_batch: int | None = None  # shared policy: largest batch (default 8)
+    max_wait_ms: float | None = None  # shared policy: how long a query waits for others (default 5)
+    policy_gpus: float | None = None  # shared policy: GPUs for the policy actor (default 0)
+
+    def __post_init__(self) -> None:
+        from langgap.engine.pools import BACKENDS
+
+        if self.backend not in BACKENDS:
+            raise SpecError(f"unknown backend {self.backend!r} (known: {', '.join(BACKENDS)})")
+        if self.workers < 0 or (self.backend != "local" and self.workers < 1):
+            raise SpecError(f"--workers must be at least {0 if self.backend == 'local' else 1}, got {self.workers}")
+        if self.timeout_s is not None and self.timeout_s <= 0:
+            raise SpecError(f"--timeout must be positive, got {self.timeout_s}")
+        if self.timeout_s is not None and self.backend == "local" and self.workers == 0:
+            raise SpecError("--timeout needs worker processes: an episode in this process cannot be stopped")
+        if self.max_attempts < 1:
+            raise SpecError(f"--max-attempts must be at least 1, got {self.max_attempts}")
+        if self.max_failure_streak < 1:
+            raise SpecError(f"--max-failure-streak must be at least 1, got {self.max_failure_streak}")
+        if self.videos < 0:
+            raise SpecError(f"--video must be at least 0, got {self.videos}")
+        if self.ray_address is not None and self.backend != "ray":
+            raise SpecError("--ray-address needs --backend ray")
+        if self.shared_policy and self.backend != "ray":
+            raise SpecError("--shared-policy needs --backend ray")
+        batching = {"--max-batch": self.max_batch, "--max-wait-ms": self.max_wait_ms, "--policy-gpus": self.policy_gpus}
+        given = [flag for flag, value in batching.items() if value is not None]
+        if given and not self.shared_policy:
+            raise SpecError(f"{', '.join(given)} only apply to a shared policy (--shared-policy)")
+        if self.max_batch is not None and self.max_batch < 1:
+            raise SpecError(f"--max-batch must be at least 1, got {self.max_batch}")
+        if (self.max_wait_ms or 0) < 0 or (self.policy_gpus or 0) < 0:
+            raise SpecError("--max-wait-ms and --policy-gpus must not be negative")
+
+    @property
+    def episode_timeout_s(self) -> float | None:
+        """The enforced per-episode timeout (None in this process, where nothing can stop an episode)."""
+        if self.backend == "local" and self.workers == 0:
+            return None
+        return DEFAULT_TIMEOUT_S if self.timeout_s is None else self.timeout_s
