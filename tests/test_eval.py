@@ -91,7 +91,9 @@ def test_a_flaky_policy_succeeds_on_retry_in_worker_processes(short_catalog, tmp
     markers = tmp_path / "markers"
     markers.mkdir()
     spec = _spec(short_catalog, "tests.policies:FlakyPolicy", episodes=1, policy_args={"marker_dir": str(markers)})
-    summary = evaluate(spec, tmp_path / "run", ExecutionOptions(workers=2, progress=False))
+    # Every episode fails once with the same cause: without a higher streak limit that stops the run.
+    options = ExecutionOptions(workers=2, max_failure_streak=10, progress=False)
+    summary = evaluate(spec, tmp_path / "run", options)
     rows = store_rows(tmp_path / "run")
     assert summary.gaps == 0 and len(rows) == 3
     assert all(r["status"] == "done" and r["attempts"] == 2 for r in rows)
@@ -112,15 +114,6 @@ def test_hanging_and_crashing_workers_become_gaps_and_the_run_completes(short_ca
     )
     rows = store_rows(tmp_path / "crash")
     assert crash.gaps == 3 and all("worker process died (exit code 17)" in r["error"] for r in rows)
-
-
-def test_worker_backend_equals_in_process(short_catalog, tmp_path):
-    _eval(short_catalog, tmp_path / "inproc", policy="random", episodes=2, workers=0)
-    _eval(short_catalog, tmp_path / "workers", policy="random", episodes=2, workers=2)
-    keep = ("task_id", "init_index", "seed", "success", "steps", "t0_hash", "reached", "outcome")
-    assert [{k: r[k] for k in keep} for r in store_rows(tmp_path / "inproc")] == [
-        {k: r[k] for k in keep} for r in store_rows(tmp_path / "workers")
-    ]
 
 
 def test_kill_minus_nine_and_resume_loses_and_duplicates_nothing(short_catalog, tmp_path):
@@ -266,3 +259,144 @@ def test_report_formats(short_catalog, tmp_path):
     assert len(rows) == 12 and {r["condition"] for r in rows} == {"given", "empty"}
     assert r"\toprule" in run_cli("report", str(run), "--format", "latex").stdout
     assert run_cli("report", str(run), "--format", "csv").stdout.startswith("run,table,group")
+
+
+def _cli_eval(short_catalog, run, policy, *extra):
+    return run_cli(
+        "eval",
+        "--policy",
+        policy,
+        "--catalog",
+        short_catalog,
+        "--run",
+        str(run),
+        "--workers",
+        "0",
+        "--no-progress",
+        "--quiet",
+        *extra,
+    )
+
+
+def test_a_dead_policy_server_stops_the_run_and_resume_continues(short_catalog, tmp_path):
+    run, switch = tmp_path / "run", tmp_path / "server-down"
+    outage = ["tests.outage_policy:OutagePolicy", "--policy-arg", f"switch={switch}"]
+    assert _cli_eval(short_catalog, run, *outage, "--episodes", "1").returncode == 0
+    before = store_rows(run)
+    switch.touch()
+    stopped = _cli_eval(short_catalog, run, *outage, "--episodes", "3", "--resume", "--extend")
+    assert stopped.returncode == 4, stopped.stderr
+    assert (
+        stopped.stderr.strip()
+        .splitlines()[-1]
+        .startswith("error: stopped after 3 episodes in a row failed with: ConnectionError: policy server unreachable")
+    )
+    assert store_rows(run) == before  # nothing stored was touched, no gap charged to the policy
+    switch.unlink()
+    resumed = _cli_eval(short_catalog, run, *outage, "--episodes", "3", "--resume", "--extend")
+    assert resumed.returncode == 0 and "3 already stored, 6 run" in resumed.stdout
+    assert len(store_rows(run)) == 9 and all(r["status"] == "done" for r in store_rows(run))
+
+
+def test_no_openpi_server_stops_the_run_with_its_address(short_catalog, tmp_path):
+    start = time.monotonic()
+    result = _cli_eval(
+        short_catalog,
+        tmp_path / "run",
+        "openpi",
+        "--policy-arg",
+        "port=1",
+        "--policy-arg",
+        "connect_timeout=1",
+        "--episodes",
+        "2",
+    )
+    assert result.returncode == 4
+    assert "no policy server at 127.0.0.1:1" in result.stderr.strip().splitlines()[-1]
+    assert time.monotonic() - start < 60
+    assert store_rows(tmp_path / "run") == []
+
+
+def test_a_run_that_ends_with_gaps_exits_3(short_catalog, tmp_path):
+    result = _cli_eval(
+        short_catalog,
+        tmp_path / "run",
+        "tests.policies:RaisingPolicy",
+        "--episodes",
+        "1",
+        "--max-attempts",
+        "1",
+        "--max-failure-streak",
+        "10",
+    )
+    assert result.returncode == 3 and "(0 successes, 3 gaps)" in result.stdout
+
+
+def test_every_flag_of_a_run_reaches_its_effect(short_catalog, tmp_path):
+    run = tmp_path / "run"
+    result = run_cli(
+        "eval",
+        "--policy",
+        "noop",
+        "--catalog",
+        short_catalog,
+        "--run",
+        str(run),
+        "--episodes",
+        "2",
+        "--tasks",
+        "spatial/s0/black-bowl-*",
+        "--style",
+        "paper",
+        "--seed",
+        "5",
+        "--condition",
+        "given",
+        "--condition",
+        "empty",
+        "--workers",
+        "2",
+        "--max-attempts",
+        "2",
+        "--timeout",
+        "300",
+    )
+    assert result.returncode == 0, result.stderr
+    rows = store_rows(run)
+    assert {r["task_id"] for r in rows} == {"spatial/s0/black-bowl-1-on-plate", "spatial/s0/black-bowl-2-on-plate"}
+    assert sorted({(r["init_index"], r["seed"]) for r in rows}) == [(0, episode_seed(5, 0)), (1, episode_seed(5, 1))]
+    assert {r["condition"] for r in rows} == {"given", "empty"}
+    given = [r["instruction"] for r in rows if r["condition"] == "given"]
+    from langgap.catalog.catalog import load_catalog_file
+
+    task = load_catalog_file(short_catalog).get("spatial/s0/black-bowl-1-on-plate")
+    assert task.instruction("paper") in given and task.instruction("libero") not in given
+    assert {r["worker"] for r in rows} == {0, 1}
+    assert "Table VII" in result.stdout  # the diagnosis, since --quiet was not given
+    assert "%|" in result.stderr  # the progress bar, since --no-progress was not given
+    with RunStore.open(run) as store:
+        execution = store.meta("execution")
+    assert (execution["max_attempts"], execution["timeout_s"], execution["workers"]) == (2, 300, 2)
+    quiet = _cli_eval(short_catalog, tmp_path / "quiet", "noop", "--episodes", "1")
+    assert quiet.returncode == 0 and quiet.stdout.count("\n") == 1 and "%|" not in quiet.stderr
+
+
+def test_the_shared_policy_server_waits_max_wait_ms_for_a_batch():
+    import asyncio
+
+    from langgap.engine.shared_policy import PolicyServer
+
+    async def two_queries_50_ms_apart(max_wait_ms: float) -> int:
+        server = PolicyServer("noop", {}, max_batch=2, max_wait_ms=max_wait_ms)
+        for slot in (0, 1):
+            await server.reset(slot, None)
+
+        async def later(slot: int, delay: float):
+            await asyncio.sleep(delay)
+            return await server.act(slot, None)
+
+        await asyncio.gather(later(0, 0.0), later(1, 0.05))
+        return server.calls
+
+    assert asyncio.run(two_queries_50_ms_apart(500)) == 1
+    assert asyncio.run(two_queries_50_ms_apart(5)) == 2

@@ -60,6 +60,44 @@ def _ray_tmp() -> Path:
     return Path(tempfile.mkdtemp(prefix="lg-ray-", dir="/tmp"))
 
 
+@pytest.fixture(scope="module")
+def reference_episodes(short_catalog, tmp_path_factory):
+    """The plan of `_POOL_RUN` run in this process: what every pool must reproduce."""
+    run = tmp_path_factory.mktemp("reference") / "run"
+    assert run_cli("eval", *_POOL_RUN, short_catalog, "--workers", "0", "--run", str(run)).returncode == 0
+    return [{k: r[k] for k in (*KEEP, "outcome", "instruction")} for r in store_rows(run)]
+
+
+_POOL_RUN = (
+    "--policy",
+    "random",
+    "--episodes",
+    "2",
+    "--condition",
+    "given",
+    "--condition",
+    "shuffled",
+    "--no-progress",
+    "--quiet",
+    "--catalog",
+)
+
+
+@pytest.mark.parametrize("pool", ["in-process", "processes", "ray"])
+def test_the_same_plan_gives_the_same_episodes_on_every_pool(pool, reference_episodes, short_catalog, tmp_path):
+    run = tmp_path / "run"
+    args = [*_POOL_RUN, short_catalog, "--run", str(run)]
+    if pool == "ray":
+        command = " ".join(["python -m langgap.cli.main eval", *args, "--backend ray --workers 2"])
+        result = _in_network_namespace(command, _ray_tmp())
+    else:
+        result = run_cli("eval", *args, "--workers", "0" if pool == "in-process" else "2")
+    assert result.returncode == 0, result.stderr
+    rows = store_rows(run)
+    assert [{k: r[k] for k in reference_episodes[0]} for r in rows] == reference_episodes
+    assert {r["worker"] for r in rows} == ({0} if pool == "in-process" else {0, 1})
+
+
 def test_cluster_run_survives_a_killed_worker_and_equals_the_local_backend(short_catalog, tmp_path):
     common = ["--policy", "random", "--catalog", short_catalog, "--episodes", "4", "--no-progress", "--quiet"]
     local = tmp_path / "local"
@@ -136,7 +174,10 @@ def test_core_works_without_ray(short_catalog, tmp_path):
     local = subprocess.run([*base, "--run", str(tmp_path / "a")], capture_output=True, text=True, env=env)
     assert local.returncode == 0, local.stderr
     missing = subprocess.run(
-        [*base, "--backend", "ray", "--run", str(tmp_path / "b")], capture_output=True, text=True, env=env
+        [*base, "--backend", "ray", "--workers", "1", "--run", str(tmp_path / "b")],
+        capture_output=True,
+        text=True,
+        env=env,
     )
     assert missing.returncode == 2 and "pip install 'langgap[ray]'" in missing.stderr
     assert not (tmp_path / "b").exists()

@@ -8,7 +8,6 @@ After an infrastructure failure everything is rebuilt, since a crash may leave e
 from __future__ import annotations
 
 import contextlib
-import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -37,7 +36,7 @@ class RunnerSetup:
 
 
 class EpisodeFailure(Exception):
-    """An episode could not be run (infrastructure): the message and traceback travel to the scheduler."""
+    """An episode could not be run (infrastructure): its one-line message travels to the scheduler."""
 
 
 class EpisodeRunner:
@@ -55,8 +54,9 @@ class EpisodeRunner:
             return self._run(planned, attempts)
         except Exception as exc:
             self.close()
-            detail = "".join(traceback.format_exception_only(type(exc), exc)).strip().splitlines()[-1]
-            raise EpisodeFailure(detail) from exc
+            # One line that is the same for the same cause (the scheduler's fail-fast compares them).
+            lines = str(exc).strip().splitlines()
+            raise EpisodeFailure(f"{type(exc).__name__}: {lines[-1]}" if lines else type(exc).__name__) from exc
 
     def _run(self, planned: PlannedEpisode, attempts: int) -> EpisodeRecord:
         task = self.catalog.get(planned.key.task_id)
