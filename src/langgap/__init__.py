@@ -17,7 +17,6 @@ A policy is any object with `spec` (a `PolicySpec`), `reset(TaskContext)` and
 from __future__ import annotations
 
 import importlib
-from typing import TYPE_CHECKING
 
 # public name -> module that defines it
 _EXPORTS = {
@@ -40,18 +39,6 @@ _EXPORTS = {
 }
 
 __all__ = sorted(_EXPORTS)
-
-if TYPE_CHECKING:
-    from langgap.catalog.catalog import Catalog, load_catalog
-    from langgap.catalog.task import Task
-    from langgap.engine.evaluate import RunSummary, evaluate
-    from langgap.engine.spec import ExecutionOptions, RunSpec
-    from langgap.errors import LangGapError
-    from langgap.policies import make_policy
-    from langgap.policies.base import Policy, PolicySpec, TaskContext
-    from langgap.records import EpisodeRecord, Outcome
-    from langgap.report import load_runs
-    from langgap.sim.env import Observation
 
 
 def __getattr__(name: str):

@@ -128,10 +128,7 @@ class ExecutionOptions:
     policy_gpus: float | None = None  # shared policy: GPUs for the policy actor (default 0)
 
     def __post_init__(self) -> None:
-        from langgap.engine.pools import BACKENDS
-
-        if self.backend not in BACKENDS:
-            raise SpecError(f"unknown backend {self.backend!r} (known: {', '.join(BACKENDS)})")
+        # The backend's name is checked by `langgap.engine.pools.make_pool`, which owns the registry.
         if self.workers < 0 or (self.backend != "local" and self.workers < 1):
             raise SpecError(f"--workers must be at least {0 if self.backend == 'local' else 1}, got {self.workers}")
         if self.timeout_s is not None and self.timeout_s <= 0:

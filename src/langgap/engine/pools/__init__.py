@@ -13,6 +13,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
+from langgap.errors import LangGapError
 from langgap.records import EpisodeRecord
 
 if TYPE_CHECKING:
@@ -96,4 +97,6 @@ BACKENDS: dict[str, PoolFactory] = {"local": _local, "ray": _ray}
 
 def make_pool(setup: RunnerSetup, options: ExecutionOptions) -> WorkerPool:
     """The worker pool of backend `options.backend`."""
+    if options.backend not in BACKENDS:
+        raise LangGapError(f"unknown backend {options.backend!r} (known: {', '.join(sorted(BACKENDS))})")
     return BACKENDS[options.backend](setup, options)

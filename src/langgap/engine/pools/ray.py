@@ -9,13 +9,16 @@ from __future__ import annotations
 
 import os
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 from langgap.engine.plan import PlannedEpisode
 from langgap.engine.pools import EpisodeDone, EpisodeFailed, Event, WorkerLost
 from langgap.engine.runner import EpisodeFailure, EpisodeRunner, RunnerSetup
 from langgap.engine.shared_policy import start_server
-from langgap.engine.spec import ExecutionOptions
 from langgap.errors import DependencyNotInstalled, LangGapError
+
+if TYPE_CHECKING:
+    from langgap.engine.spec import ExecutionOptions
 
 SHARED_DEFAULTS = {"max_batch": 8, "max_wait_ms": 5.0, "policy_gpus": 0.0}
 
