@@ -1,0 +1,100 @@
+"""The run store on real SQLite: the schema follows the record, older stores stay readable."""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+from dataclasses import fields
+
+import pytest
+
+from langgap.records import EpisodeKey, EpisodeRecord, Outcome, Status
+from langgap.store import SCHEMA_VERSION, RunStore, StoreError
+
+# The schema-1 layout (LangGap before the `privileged` column), as such stores exist on disk.
+_SCHEMA_1 = """
+CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
+CREATE TABLE episodes (
+    task_id TEXT NOT NULL, init_index INTEGER NOT NULL, seed INTEGER NOT NULL, condition TEXT NOT NULL,
+    status TEXT NOT NULL, success INTEGER NOT NULL, outcome TEXT NOT NULL, failure_kind TEXT, error TEXT,
+    steps INTEGER NOT NULL, policy_calls INTEGER NOT NULL,
+    instruction TEXT NOT NULL, instruction_sha256 TEXT NOT NULL, t0_hash TEXT NOT NULL,
+    reached TEXT NOT NULL, goals_at_start TEXT NOT NULL, goals_at_end TEXT NOT NULL,
+    catalog TEXT NOT NULL, suite TEXT NOT NULL, kind TEXT NOT NULL, dimension TEXT NOT NULL, split TEXT NOT NULL,
+    source TEXT NOT NULL, scene TEXT NOT NULL, max_steps INTEGER NOT NULL,
+    policy TEXT NOT NULL, policy_config_hash TEXT NOT NULL, physics TEXT NOT NULL, code_version TEXT NOT NULL,
+    attempts INTEGER NOT NULL, wall_time_s REAL NOT NULL, worker INTEGER NOT NULL, finished_at TEXT NOT NULL,
+    video TEXT, PRIMARY KEY (task_id, init_index, seed, condition)
+);
+"""
+
+
+def record(task_id="spatial/s0/a", init_index=0, **changes) -> EpisodeRecord:
+    base = dict(
+        task_id=task_id,
+        init_index=init_index,
+        seed=init_index,
+        condition="given",
+        status=Status.DONE,
+        success=False,
+        outcome=Outcome.DID_SOURCE_TASK,
+        failure_kind="policy",
+        error=None,
+        steps=10,
+        policy_calls=10,
+        instruction="put it there",
+        instruction_sha256="0" * 64,
+        t0_hash="1" * 64,
+        reached={"spatial/s0/b": 7},
+        kind="extended",
+        privileged=True,
+        physics={"mujoco": "3.2.3"},
+    )
+    return EpisodeRecord(**{**base, **changes})
+
+
+def test_a_record_round_trips_through_the_store(tmp_path):
+    with RunStore.create(tmp_path / "run", {"spec": {"policy": "noop"}}) as store:
+        store.write(record())
+        store.write(record(init_index=1, status=Status.GAP, outcome=Outcome.GAP))
+    with RunStore.open(tmp_path / "run") as store:
+        assert store.records() == [record(), record(init_index=1, status=Status.GAP, outcome=Outcome.GAP)]
+        assert store.done_keys() == {EpisodeKey("spatial/s0/a", 0, 0)}
+        assert store.meta("spec") == {"policy": "noop"} and store.meta("missing") is None
+    db = sqlite3.connect(tmp_path / "run" / "episodes.sqlite")
+    columns = [row[1] for row in db.execute("PRAGMA table_info(episodes)")]
+    assert columns == [f.name for f in fields(EpisodeRecord)]  # the table is the dataclass
+    assert db.execute("SELECT value FROM meta WHERE key='schema_version'").fetchone() == (str(SCHEMA_VERSION),)
+
+
+def _schema_1_store(directory, version="1"):
+    directory.mkdir()
+    db = sqlite3.connect(directory / "episodes.sqlite")
+    db.executescript(_SCHEMA_1)
+    db.execute("INSERT INTO meta VALUES ('schema_version', ?)", (version,))
+    db.execute("INSERT INTO meta VALUES ('config', ?)", (json.dumps({"policy": "oracle"}),))
+    old = record(privileged=False)
+    row = {f.name: getattr(old, f.name) for f in fields(EpisodeRecord) if f.name != "privileged"}
+    for name in ("reached", "goals_at_start", "goals_at_end", "physics"):
+        row[name] = json.dumps(row[name])
+    db.execute(f"INSERT INTO episodes ({', '.join(row)}) VALUES ({', '.join('?' * len(row))})", list(row.values()))
+    db.commit()
+    db.close()
+
+
+def test_a_schema_1_store_opens_for_reading_and_refuses_writing_in_one_line(tmp_path):
+    _schema_1_store(tmp_path / "old")
+    with RunStore.open(tmp_path / "old") as store:
+        (old,) = store.records()
+        assert old == record(privileged=False)  # the missing column takes the record's default
+        assert store.meta("config") == {"policy": "oracle"}
+    with pytest.raises(StoreError) as info:
+        RunStore.open(tmp_path / "old", write=True)
+    message = str(info.value)
+    assert "schema 1" in message and "\n" not in message
+
+
+def test_an_unknown_schema_is_a_one_line_error(tmp_path):
+    _schema_1_store(tmp_path / "future", version="99")
+    with pytest.raises(StoreError, match="unsupported run store schema 99"):
+        RunStore.open(tmp_path / "future")
