@@ -42,5 +42,5 @@ def test_the_readme_python_example_runs_as_printed(tmp_path):
     assert len(code.strip().splitlines()) <= 10
     result = _python(code, cwd=tmp_path)
     assert result.returncode == 0, result.stderr
-    assert result.stdout.splitlines() == ["1/5 episodes succeeded", "Counter({'did_source_task': 4})"]
+    assert result.stdout.splitlines() == ["1/13 episodes succeeded", "Counter({'did_source_task': 12})"]
     assert (tmp_path / "runs" / "api" / "episodes.sqlite").exists()

@@ -258,7 +258,7 @@ def test_report_formats(short_catalog, tmp_path):
     rows = list(csv.DictReader((tmp_path / "ep.csv").open()))
     assert len(rows) == 12 and {r["condition"] for r in rows} == {"given", "empty"}
     assert r"\toprule" in run_cli("report", str(run), "--format", "latex").stdout
-    assert run_cli("report", str(run), "--format", "csv").stdout.startswith("run,table,group")
+    assert run_cli("report", str(run), "--format", "csv").stdout.startswith("run,privileged,table,group")
 
 
 def _cli_eval(short_catalog, run, policy, *extra):

@@ -140,7 +140,7 @@ def run(args) -> int:
         calls, queries = summary.policy_server["calls"], summary.policy_server["queries"]
         print(f"shared policy: {queries} queries in {calls} batched calls ({queries / max(1, calls):.2f} per call)")
     if not args.quiet:
-        from langgap.report.render import diagnosis_text
+        from langgap.report import diagnosis_text
 
         print(diagnosis_text([summary.run]))
     return 0 if summary.complete else EXIT_GAPS

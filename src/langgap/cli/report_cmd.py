@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-from langgap.report.render import FORMATS
+from langgap.report.formats import FORMATS
 
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser("report", help="tables, diagnoses and plots from one or more runs")
     parser.add_argument("run", metavar="RUN", help="run directory")
     parser.add_argument("--compare", nargs="+", default=[], metavar="RUN2", help="more runs, side by side")
-    parser.add_argument("--format", choices=FORMATS, default="md")
+    parser.add_argument("--format", choices=sorted(FORMATS), default="md")
     parser.add_argument(
         "--summary",
         action="store_true",
@@ -21,14 +21,14 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
-    from langgap.report.render import diagnosis_text, load_runs, render
+    from langgap.report import diagnosis_text, load_runs, render, summarize
 
     paths = [args.run, *args.compare]
     print(diagnosis_text(paths) if args.summary else render(paths, args.format), end="")
     if args.plots:
         from langgap.report.plots import write_plots
 
-        for path in write_plots(load_runs(paths), args.plots):
+        for path in write_plots(summarize(load_runs(paths)), args.plots):
             print(f"wrote {path}")
     if args.episodes:
         from langgap.report.export import write_episode_table

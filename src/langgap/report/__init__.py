@@ -1,0 +1,7 @@
+"""Reports from stored runs: load → summarize (every number, once) → tables → a format by name."""
+
+from langgap.report.formats import FORMATS, diagnosis_text, render
+from langgap.report.load import Run, load_runs
+from langgap.report.summary import Summary, summarize
+
+__all__ = ["FORMATS", "Run", "Summary", "diagnosis_text", "load_runs", "render", "summarize"]

@@ -8,9 +8,8 @@ from dataclasses import asdict, fields
 from pathlib import Path
 
 from langgap.errors import DependencyNotInstalled, LangGapError
-from langgap.records import EpisodeRecord
-from langgap.report.aggregate import achieved
-from langgap.report.render import load_runs
+from langgap.records import EpisodeRecord, achieved
+from langgap.report.load import load_runs
 
 COLUMNS = ["run", *(f.name for f in fields(EpisodeRecord)), "achieved"]
 

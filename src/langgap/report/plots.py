@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from langgap.report import aggregate as agg
-from langgap.report.render import Run
+from langgap.catalog.labels import DIMENSION_LABEL, EXTENDED_DIMENSIONS
+from langgap.report.summary import RunResults, Summary
 
 
 def _pyplot():
@@ -17,25 +17,27 @@ def _pyplot():
     return plt
 
 
-def dimension_plot(runs: list[Run], out: Path) -> Path:
+def dimension_plot(summary: Summary, out: Path) -> Path:
+    """Success per dimension (and on the originals) with 95 % intervals, runs side by side."""
     plt = _pyplot()
-    groups = ["Original", *(agg.DIMENSION_LABEL[d] for d in agg.DIMENSION_ORDER)]
+    groups = ["original", *EXTENDED_DIMENSIONS]
     fig, ax = plt.subplots(figsize=(8, 4))
+    runs = summary.runs
     width = 0.8 / max(1, len(runs))
     for i, run in enumerate(runs):
-        rates = {agg.DIMENSION_LABEL[r.group]: r for r in agg.by_dimension(run.records)}
-        rates["Original"] = agg.by_source(run.records)[0]
+        rates = {r.group: r for r in run.by_dimension} | {"original": run.source("original")}
         xs, ys, errs = [], [], [[], []]
         for j, name in enumerate(groups):
             r = rates.get(name)
             if r is None or r.episodes == 0:
                 continue
+            low, high = r.ci
             xs.append(j + (i - (len(runs) - 1) / 2) * width)
             ys.append(100 * r.rate)
-            errs[0].append(100 * (r.rate - r.ci_low))
-            errs[1].append(100 * (r.ci_high - r.rate))
-        ax.bar(xs, ys, width, yerr=errs, capsize=3, label=run.name)
-    ax.set_xticks(range(len(groups)), groups, rotation=15)
+            errs[0].append(100 * (r.rate - low))
+            errs[1].append(100 * (high - r.rate))
+        ax.bar(xs, ys, width, yerr=errs, capsize=3, label=run.label)
+    ax.set_xticks(range(len(groups)), [DIMENSION_LABEL[g] for g in groups], rotation=15)
     ax.set_ylabel("success rate (%), 95% Wilson CI")
     ax.set_ylim(0, 105)
     ax.legend(fontsize=8)
@@ -46,10 +48,11 @@ def dimension_plot(runs: list[Run], out: Path) -> Path:
     return path
 
 
-def confusion_plots(run: Run, out: Path) -> list[Path]:
+def confusion_plots(run: RunResults, out: Path) -> list[Path]:
+    """One heatmap per scene with two or more tasks: intended × achieved episode counts."""
     plt = _pyplot()
     paths = []
-    for rows in agg.confusion(run.records).values():
+    for rows in run.confusion.values():
         intended = sorted(rows)
         if len(intended) < 2:
             continue
@@ -67,7 +70,7 @@ def confusion_plots(run: Run, out: Path) -> list[Path]:
         ax.set_xlabel("achieved")
         ax.set_ylabel("intended")
         label = "_".join(intended[0].split("/")[:2])
-        ax.set_title(f"{run.name}: {label}", fontsize=8)
+        ax.set_title(f"{run.label}: {label}", fontsize=8)
         fig.tight_layout()
         path = out / f"confusion_{label}.png"
         fig.savefig(path, dpi=120)
@@ -76,7 +79,8 @@ def confusion_plots(run: Run, out: Path) -> list[Path]:
     return paths
 
 
-def write_plots(runs: list[Run], out: str | Path) -> list[Path]:
+def write_plots(summary: Summary, out: str | Path) -> list[Path]:
+    """Write the figures of a report to the folder `out`; returns their paths."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    return [dimension_plot(runs, out), *confusion_plots(runs[0], out)]
+    return [dimension_plot(summary, out), *confusion_plots(summary.runs[0], out)]

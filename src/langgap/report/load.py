@@ -1,0 +1,35 @@
+"""Reading runs for reports: the stored spec and every episode record of each run."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from langgap.records import EpisodeRecord
+from langgap.store import RunStore
+
+
+@dataclass
+class Run:
+    """One stored run, as reports see it."""
+
+    name: str  # shown in tables: the policy and the run directory's name
+    path: Path
+    spec: dict  # the run spec (`config` in stores written before run specs)
+    records: list[EpisodeRecord]
+
+    @property
+    def privileged(self) -> bool:
+        """The policy was given the goal or simulator state: a scripted reference, not a policy under test."""
+        return any(r.privileged for r in self.records)
+
+
+def load_runs(paths: list[str | Path]) -> list[Run]:
+    """Read runs from their stores (while they are being written, too)."""
+    runs = []
+    for path in paths:
+        with RunStore.open(path) as store:
+            spec = store.meta("spec") or store.meta("config") or {}
+            records = store.records()
+        runs.append(Run(f"{spec.get('policy', '?')} ({Path(path).name})", Path(path), spec, records))
+    return runs

@@ -1,0 +1,77 @@
+"""The statistics of reports: Wilson intervals for rates, exact McNemar tests for paired episodes."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+Z_95 = 1.959964
+
+
+def wilson(successes: int, n: int, z: float = Z_95) -> tuple[float, float]:
+    """Wilson score 95 % interval for a binomial proportion (0, 0 for n = 0)."""
+    if n == 0:
+        return 0.0, 0.0
+    p = successes / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def mcnemar_exact(only_a: int, only_b: int) -> float:
+    """Two-sided exact McNemar p-value from the two discordant counts (binomial test at 1/2)."""
+    n = only_a + only_b
+    if n == 0:
+        return 1.0
+    k = min(only_a, only_b)
+    tail = sum(math.comb(n, i) for i in range(k + 1)) / 2**n
+    return min(1.0, 2 * tail)
+
+
+@dataclass(frozen=True)
+class Rate:
+    """A group of episodes and its success rate; gaps are counted beside, never as failures."""
+
+    group: str
+    episodes: int  # judged episodes (the rate's denominator)
+    successes: int
+    gaps: int
+    tasks: int
+
+    @property
+    def rate(self) -> float:
+        return self.successes / self.episodes if self.episodes else 0.0
+
+    @property
+    def ci(self) -> tuple[float, float]:
+        return wilson(self.successes, self.episodes)
+
+    def as_dict(self) -> dict:
+        low, high = self.ci
+        return {**asdict(self), "rate": self.rate, "ci_low": low, "ci_high": high}
+
+
+@dataclass(frozen=True)
+class PairedTest:
+    """Two sets of episodes matched one to one, compared with the exact McNemar test."""
+
+    name: str
+    pairs: int
+    successes_a: int
+    successes_b: int
+    only_a: int  # pairs where only the first succeeded
+    only_b: int
+    changed: int  # pairs whose achieved task differs
+
+    @property
+    def p_value(self) -> float:
+        return mcnemar_exact(self.only_a, self.only_b)
+
+    def as_dict(self) -> dict:
+        return {
+            **asdict(self),
+            "rate_a": self.successes_a / self.pairs,
+            "rate_b": self.successes_b / self.pairs,
+            "p_value": self.p_value,
+            "changed_behaviour": self.changed / self.pairs,
+        }

@@ -1,0 +1,221 @@
+"""Every number a report shows, computed once from the stored episodes into one `Summary`.
+
+Tables and every output format read the summary; nothing downstream counts episodes again. Rates
+use the episodes run with the task's own instruction (condition `given`); gaps never count as
+failures, and every row carries the number it left out.
+"""
+
+from __future__ import annotations
+
+from collections import Counter, defaultdict
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+from langgap.catalog.labels import EXTENDED_DIMENSIONS, SPLIT_ORDER, SUITE_ORDER
+from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, achieved
+from langgap.report.load import Run
+from langgap.report.stats import PairedTest, Rate
+
+SOURCES = ("original", "extended", "total")
+KINDS = ("original", "extended")
+
+
+def rate(group: str, records: Iterable[EpisodeRecord]) -> Rate:
+    """The success rate of `records` over their judged episodes."""
+    records = list(records)
+    judged = [r for r in records if r.judged]
+    return Rate(
+        group=group,
+        episodes=len(judged),
+        successes=sum(r.success for r in judged),
+        gaps=len(records) - len(judged),
+        tasks=len({r.task_id for r in records}),
+    )
+
+
+def rates_by(records: Iterable[EpisodeRecord], key: Callable[[EpisodeRecord], str | None], order=()) -> list[Rate]:
+    """One `Rate` per value of `key` (records whose key is None are left out), `order` first, then sorted."""
+    groups: dict[str, list[EpisodeRecord]] = defaultdict(list)
+    for record in records:
+        if (name := key(record)) is not None:
+            groups[name].append(record)
+    names = [n for n in order if n in groups] + sorted(n for n in groups if n not in order)
+    return [rate(n, groups[n]) for n in names]
+
+
+@dataclass(frozen=True)
+class TaskRow:
+    """One task's rate with what the per-task table shows beside it."""
+
+    rate: Rate
+    dimension: str
+    instruction: str
+
+
+@dataclass(frozen=True)
+class OutcomeRow:
+    """What the policy did instead, for one group of episodes: the share of each outcome."""
+
+    group: str  # a dimension, `extended` (all extended tasks) or `original`
+    episodes: int
+    gaps: int
+    shares: dict[str, float]  # outcome -> share of the judged episodes
+
+    def as_dict(self) -> dict:
+        return {"group": self.group, "episodes": self.episodes, "gaps": self.gaps, **self.shares}
+
+
+def outcome_row(group: str, records: list[EpisodeRecord]) -> OutcomeRow:
+    judged = [r for r in records if r.judged]
+    counts = Counter(r.outcome for r in judged)
+    shares = {str(o): counts[o] / len(judged) if judged else 0.0 for o in JUDGED_OUTCOMES}
+    return OutcomeRow(group, len(judged), len(records) - len(judged), shares)
+
+
+def paired(name: str, a: dict[tuple, EpisodeRecord], b: dict[tuple, EpisodeRecord]) -> PairedTest | None:
+    """McNemar over the keys judged in both `a` and `b` (None when there are none)."""
+    keys = [k for k in a if k in b and a[k].judged and b[k].judged]
+    if not keys:
+        return None
+    return PairedTest(
+        name=name,
+        pairs=len(keys),
+        successes_a=sum(a[k].success for k in keys),
+        successes_b=sum(b[k].success for k in keys),
+        only_a=sum(a[k].success and not b[k].success for k in keys),
+        only_b=sum(b[k].success and not a[k].success for k in keys),
+        changed=sum(achieved(a[k]) != achieved(b[k]) for k in keys),
+    )
+
+
+def condition_tests(records: list[EpisodeRecord]) -> list[PairedTest]:
+    """Each language condition against `given`, episode by episode: a policy that reads language changes."""
+    by_condition: dict[str, dict[tuple, EpisodeRecord]] = defaultdict(dict)
+    for r in records:
+        by_condition[r.condition][(r.task_id, r.init_index, r.seed)] = r
+    others = sorted(c for c in by_condition if c != "given")
+    tests = (paired(f"given vs {c}", by_condition["given"], by_condition[c]) for c in others)
+    return [t for t in tests if t is not None]
+
+
+def confusion(records: list[EpisodeRecord]) -> dict[str, dict[str, dict[str, int]]]:
+    """Per scene: intended task -> achieved task -> judged episode count."""
+    matrices: dict[str, dict[str, Counter]] = defaultdict(lambda: defaultdict(Counter))
+    for r in records:
+        if r.judged:
+            matrices[r.scene][r.task_id][achieved(r)] += 1
+    return {scene: {task: dict(row) for task, row in rows.items()} for scene, rows in matrices.items()}
+
+
+@dataclass
+class RunResults:
+    """Everything reports show about one run."""
+
+    name: str
+    path: Path
+    spec: dict
+    privileged: bool
+    episodes: int  # stored episodes, all conditions
+    gaps: int
+    by_source: list[Rate]  # original, extended, total
+    by_dimension: list[Rate]  # extended tasks
+    by_suite: list[Rate]  # `suite/kind`
+    by_split: list[Rate]
+    tasks: list[TaskRow]
+    outcomes: list[OutcomeRow]  # per dimension, all extended, original
+    confusion: dict[str, dict[str, dict[str, int]]]
+    conditions: list[PairedTest]
+
+    @property
+    def label(self) -> str:
+        """The name tables show: privileged runs are marked † (a scripted reference)."""
+        return f"{self.name} †" if self.privileged else self.name
+
+    def source(self, group: str) -> Rate:
+        return next(r for r in self.by_source if r.group == group)
+
+
+def results(run: Run) -> RunResults:
+    """Aggregate one run."""
+    given = [r for r in run.records if r.condition == "given"]
+    extended = [r for r in given if r.kind == "extended"]
+    originals = [r for r in given if r.kind == "original"]
+    order = {d: i for i, d in enumerate(("original", *EXTENDED_DIMENSIONS))}
+    info = {r.task_id: r for r in given}
+    per_task = rates_by(given, lambda r: r.task_id)
+    tasks = [TaskRow(t, info[t.group].dimension, info[t.group].instruction) for t in per_task]
+    tasks.sort(key=lambda row: (order.get(row.dimension, len(order)), row.rate.group))
+    outcome_groups = [(d, [r for r in extended if r.dimension == d]) for d in EXTENDED_DIMENSIONS]
+    outcome_groups += [("extended", extended), ("original", originals)]
+    return RunResults(
+        name=run.name,
+        path=run.path,
+        spec=run.spec,
+        privileged=run.privileged,
+        episodes=len(run.records),
+        gaps=sum(not r.judged for r in run.records),
+        by_source=[rate("original", originals), rate("extended", extended), rate("total", given)],
+        by_dimension=rates_by(extended, lambda r: r.dimension, EXTENDED_DIMENSIONS),
+        by_suite=rates_by(given, lambda r: f"{r.suite}/{r.kind}", [f"{s}/{k}" for s in SUITE_ORDER for k in KINDS]),
+        by_split=rates_by(given, lambda r: r.split, SPLIT_ORDER),
+        tasks=tasks,
+        outcomes=[outcome_row(g, rs) for g, rs in outcome_groups if rs],
+        confusion=confusion(given),
+        conditions=condition_tests(run.records),
+    )
+
+
+@dataclass
+class Summary:
+    """The runs of one report (the first is the reference for comparisons) and their comparisons."""
+
+    runs: list[RunResults]
+    comparisons: list[PairedTest]  # the first run against each other run, on matched episodes
+
+    @property
+    def privileged(self) -> bool:
+        return any(run.privileged for run in self.runs)
+
+    def to_dict(self) -> dict:
+        """The summary as plain data (the JSON report)."""
+        out: dict = {"runs": [], "confusion": {}, "comparisons": [t.as_dict() for t in self.comparisons]}
+        sections = {
+            "by_source": lambda run: run.by_source,
+            "per_dimension": lambda run: run.by_dimension,
+            "per_suite": lambda run: run.by_suite,
+            "per_split": lambda run: run.by_split,
+            "per_task": lambda run: [t.rate for t in run.tasks],
+        }
+        for section in (*sections, "outcomes", "conditions"):
+            out[section] = []
+        for run in self.runs:
+            out["runs"].append(
+                {
+                    "run": run.name,
+                    "path": str(run.path),
+                    "episodes": run.episodes,
+                    "gaps": run.gaps,
+                    "privileged": run.privileged,
+                    "spec": run.spec,
+                }
+            )
+            for section, rows in sections.items():
+                for row in rows(run):
+                    data = row.as_dict()
+                    out[section].append({"run": run.name, "id": data.pop("group"), **data})
+            out["outcomes"] += [{"run": run.name, **o.as_dict()} for o in run.outcomes]
+            out["conditions"] += [{"run": run.name, **t.as_dict()} for t in run.conditions]
+            out["confusion"][run.name] = run.confusion
+        return out
+
+
+def summarize(runs: list[Run]) -> Summary:
+    """Aggregate runs once, for every table and format."""
+    first = runs[0]
+
+    def keyed(run: Run) -> dict[tuple, EpisodeRecord]:
+        return {r.key: r for r in run.records}
+
+    comparisons = [paired(f"{first.name} vs {other.name}", keyed(first), keyed(other)) for other in runs[1:]]
+    return Summary([results(run) for run in runs], [t for t in comparisons if t is not None])

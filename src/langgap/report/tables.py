@@ -1,0 +1,198 @@
+"""The paper's table layouts (and LangGap's diagnoses), built from a `Summary` as neutral tables."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from langgap.catalog.labels import DIMENSION_LABEL, EXTENDED_DIMENSIONS, SPLIT_LABEL, SUITE_LABEL, SUITE_ORDER, label
+from langgap.records import JUDGED_OUTCOMES, Outcome
+from langgap.report.stats import PairedTest, Rate
+from langgap.report.summary import RunResults, Summary
+
+SOURCE_LABEL = {"original": "Original (LIBERO)", "extended": "Extended (LangGap)", "total": "Total"}
+OUTCOME_LABEL = {
+    Outcome.SUCCESS: "Success %",
+    Outcome.DID_SOURCE_TASK: "Did source task %",
+    Outcome.DID_OTHER_TASK: "Did other task %",
+    Outcome.NO_GOAL_REACHED: "No goal %",
+    Outcome.POLICY_ERROR: "Policy error %",
+}
+OUTCOME_GROUP_LABEL = {**DIMENSION_LABEL, "extended": "All extended"}
+PRIVILEGED_NOTE = (
+    "† privileged policy (given the goal or simulator state): a scripted reference, not a policy under test"
+)
+
+
+@dataclass
+class Table:
+    """A titled grid of strings; formats decide how it looks."""
+
+    title: str
+    headers: list[str]
+    rows: list[list[str]]
+
+
+def pct(x: float) -> str:
+    return f"{100 * x:.1f}"
+
+
+def ci(r: Rate) -> str:
+    low, high = r.ci
+    return f"[{pct(low)}, {pct(high)}]"
+
+
+def rate_cell(r: Rate | None) -> str:
+    if r is None or r.episodes == 0:
+        return "–"
+    return f"{pct(r.rate)} {ci(r)}" + (f" ({r.gaps} gaps)" if r.gaps else "")
+
+
+_RATE_HEADERS = ["Category", "Tasks", "Episodes", "Success", "Rate %", "95% CI", "Gaps"]
+
+
+def _rate_rows(rates: list[Rate], names: dict[str, str]) -> list[list[str]]:
+    return [
+        [label(names, r.group), str(r.tasks), str(r.episodes), str(r.successes), pct(r.rate), ci(r), str(r.gaps)]
+        for r in rates
+    ]
+
+
+def source_table(run: RunResults) -> Table:
+    """Table II: by data source and by perturbation dimension."""
+    rows = [["*By data source*", *[""] * 6], *_rate_rows(run.by_source, SOURCE_LABEL)]
+    rows += [["*By perturbation dimension*", *[""] * 6], *_rate_rows(run.by_dimension, DIMENSION_LABEL)]
+    return Table(f"Table II — {run.label}: by data source and dimension", _RATE_HEADERS, rows)
+
+
+def suite_table(summary: Summary) -> Table:
+    """Table VI: per suite, original vs extended, one row per run (libero_10 has no extended tasks)."""
+    keys = [(s, k) for s in SUITE_ORDER for k in ("original", "extended") if (s, k) != ("libero_10", "extended")]
+    headers = ["Method", *(f"{SUITE_LABEL[s]} {'Orig' if k == 'original' else 'Ext'}" for s, k in keys)]
+    rows = []
+    for run in summary.runs:
+        by_key = {r.group: r for r in run.by_suite}
+        cells = [rate_cell(by_key.get(f"{s}/{k}")) for s, k in keys]
+        rows.append([run.label, *cells, rate_cell(run.source("original")), rate_cell(run.source("extended"))])
+    return Table("Table VI — per suite (success %, 95% CI)", [*headers, "Total Orig", "Total Ext"], rows)
+
+
+def dimension_table(summary: Summary) -> Table:
+    """Table VII: extended tasks by dimension, one row per run."""
+    headers = ["Method", *(DIMENSION_LABEL[d] for d in EXTENDED_DIMENSIONS), "Total"]
+    rows = []
+    for run in summary.runs:
+        by_dim = {r.group: r for r in run.by_dimension}
+        cells = [rate_cell(r) + f" ({r.tasks})" if (r := by_dim.get(d)) else "–" for d in EXTENDED_DIMENSIONS]
+        total = run.source("extended")
+        rows.append([run.label, *cells, rate_cell(total) + f" ({total.tasks})"])
+    return Table("Table VII — extended tasks by dimension (success %, 95% CI, (tasks))", headers, rows)
+
+
+def split_table(run: RunResults) -> Table:
+    return Table(f"Training vs held-out — {run.label}", _RATE_HEADERS, _rate_rows(run.by_split, SPLIT_LABEL))
+
+
+def outcome_table(run: RunResults) -> Table:
+    """What the policy did instead, per dimension (`did source task` is the default-task rate)."""
+    headers = ["Dimension", "Episodes", *(OUTCOME_LABEL[o] for o in JUDGED_OUTCOMES), "Gaps"]
+    rows = [
+        [
+            label(OUTCOME_GROUP_LABEL, o.group),
+            str(o.episodes),
+            *(pct(o.shares[outcome]) for outcome in JUDGED_OUTCOMES),
+            str(o.gaps),
+        ]
+        for o in run.outcomes
+    ]
+    return Table(f"What the policy did instead — {run.label} (did source task = default-task rate)", headers, rows)
+
+
+def task_table(run: RunResults) -> Table:
+    """The appendix: every task, grouped by dimension."""
+    rows = [
+        [
+            label(DIMENSION_LABEL, t.dimension),
+            t.rate.group,
+            t.instruction,
+            f"{t.rate.successes}/{t.rate.episodes}",
+            pct(t.rate.rate),
+            ci(t.rate),
+            str(t.rate.gaps),
+        ]
+        for t in run.tasks
+    ]
+    headers = ["Dimension", "Task", "Instruction", "Success", "Rate %", "95% CI", "Gaps"]
+    return Table(f"Per task — {run.label}", headers, rows)
+
+
+def _paired_cells(t: PairedTest) -> list[str]:
+    d = t.as_dict()
+    return [t.name, str(t.pairs), pct(d["rate_a"]), pct(d["rate_b"]), str(t.only_a), str(t.only_b), f"{t.p_value:.3g}"]
+
+
+def condition_table(run: RunResults) -> Table | None:
+    """Language conditions against `given`, episode by episode."""
+    if not run.conditions:
+        return None
+    rows = [[*_paired_cells(t), pct(t.changed / t.pairs)] for t in run.conditions]
+    headers = ["Comparison", "Pairs", "Given %", "Condition %", "Only given", "Only condition", "p"]
+    return Table(
+        f"Language conditions, paired episode by episode (McNemar) — {run.label}",
+        [*headers, "Behaviour changed %"],
+        rows,
+    )
+
+
+def comparison_table(summary: Summary) -> Table | None:
+    """The first run against each other run on matched episodes."""
+    if not summary.comparisons:
+        return None
+    headers = ["Comparison", "Pairs", "First %", "Second %", "Only first", "Only second", "p"]
+    return Table(
+        "Runs compared on matched episodes (McNemar)", headers, [_paired_cells(t) for t in summary.comparisons]
+    )
+
+
+def confusion_tables(run: RunResults) -> list[Table]:
+    """Per scene with two or more tasks: intended × achieved episode counts."""
+    tables = []
+    for rows in sorted(run.confusion.values(), key=lambda rows: sorted(rows)[0]):
+        intended = sorted(rows)
+        if len(intended) < 2:
+            continue
+        columns = intended + sorted({a for row in rows.values() for a in row} - set(intended))
+        body = [[task] + [str(rows[task].get(c, 0) or "") for c in columns] for task in intended]
+        suite, scene = intended[0].split("/")[:2]
+        tables.append(
+            Table(
+                f"Confusion (intended × achieved) — scene of {scene} ({suite})",
+                ["intended \\ achieved", *columns],
+                body,
+            )
+        )
+    return tables
+
+
+def full_report(summary: Summary) -> list[Table]:
+    """Every table of `langgap report`."""
+    tables = []
+    for run in summary.runs:
+        tables += [source_table(run), outcome_table(run), split_table(run)]
+        if (conditions := condition_table(run)) is not None:
+            tables.append(conditions)
+    tables += [suite_table(summary), dimension_table(summary)]
+    if (comparison := comparison_table(summary)) is not None:
+        tables.append(comparison)
+    for run in summary.runs:
+        tables += [task_table(run), *confusion_tables(run)]
+    return tables
+
+
+def diagnosis(summary: Summary) -> list[Table]:
+    """The short diagnosis: success by dimension (runs side by side) and what each policy did instead."""
+    tables = [dimension_table(summary)]
+    for run in summary.runs:
+        tables.append(outcome_table(run))
+        if (conditions := condition_table(run)) is not None:
+            tables.append(conditions)
+    return tables

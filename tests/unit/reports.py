@@ -1,0 +1,74 @@
+"""Synthetic run stores for report tests: real SQLite, records made by hand."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from langgap.records import EpisodeRecord, Outcome, Status, classify
+from langgap.store import RunStore
+
+SCENE = "libero_spatial/s0"
+SOURCE = "spatial/s0/bowl-on-plate"
+TASKS = {  # task id -> (kind, dimension, split)
+    SOURCE: ("original", "original", "original"),
+    "spatial/s0/ramekin-on-plate": ("extended", "change_object", "train"),
+    "spatial/s0/bowl-on-stove": ("extended", "change_target", "heldout"),
+}
+
+
+def episode(task_id: str, init_index: int, *, success=False, reached=None, condition="given", gap=False, **kw):
+    """One stored episode of `task_id` (its outcome classified as the engine does)."""
+    kind, dimension, split = TASKS[task_id]
+    reached = reached or {}
+    outcome = Outcome.GAP if gap else classify(task_id, kind, SOURCE, success, reached)
+    return EpisodeRecord(
+        task_id=task_id,
+        init_index=init_index,
+        seed=init_index,
+        condition=condition,
+        status=Status.GAP if gap else Status.DONE,
+        success=success,
+        outcome=outcome,
+        failure_kind=None if success else ("infra" if gap else "policy"),
+        error=None,
+        steps=10,
+        policy_calls=10,
+        instruction=f"do {task_id}",
+        instruction_sha256="0" * 64,
+        t0_hash=str(init_index),
+        reached=reached,
+        suite="libero_spatial",
+        kind=kind,
+        dimension=dimension,
+        split=split,
+        source=SOURCE,
+        scene=SCENE,
+        **kw,
+    )
+
+
+def write_run(directory: Path, policy: str, records: list[EpisodeRecord]) -> Path:
+    """A run store holding `records`, with a spec naming `policy`."""
+    with RunStore.create(directory, {"spec": {"policy": policy, "physics": {"mujoco": "3.2.3"}}}) as store:
+        for record in records:
+            store.write(record)
+    return directory
+
+
+def memoriser(init_indices=range(4), **kw) -> list[EpisodeRecord]:
+    """A policy that does the scene's original task whatever it is asked (one gap on the stove task)."""
+    records = [episode(SOURCE, k, success=True, reached={SOURCE: 5}, **kw) for k in init_indices]
+    records += [episode("spatial/s0/ramekin-on-plate", k, reached={SOURCE: 7}, **kw) for k in init_indices]
+    records += [episode("spatial/s0/bowl-on-stove", k, reached={SOURCE: 9}, **kw) for k in init_indices[:-1]]
+    records.append(episode("spatial/s0/bowl-on-stove", init_indices[-1], gap=True, **kw))
+    return records
+
+
+def reader(init_indices=range(4), **kw) -> list[EpisodeRecord]:
+    """A policy that does what it is asked, except the stove task at init 0 (where nothing happens)."""
+    records = []
+    for task in TASKS:
+        for k in init_indices:
+            ok = not (task == "spatial/s0/bowl-on-stove" and k == 0)
+            records.append(episode(task, k, success=ok, reached={task: 5} if ok else {}, **kw))
+    return records

@@ -1,0 +1,64 @@
+"""Every output format renders the one summary: same numbers in JSON, CSV, Markdown and LaTeX."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+
+import pytest
+
+from langgap.report import FORMATS, load_runs, render, summarize
+from tests.conftest import run_cli
+from tests.unit.reports import memoriser, reader, write_run
+
+
+@pytest.fixture
+def runs(tmp_path):
+    return [
+        write_run(tmp_path / "blind", "blind", memoriser(privileged=True)),
+        write_run(tmp_path / "vla", "my-vla", reader()),
+    ]
+
+
+def test_json_is_the_summary(runs):
+    summary = summarize(load_runs(runs))
+    report = json.loads(render(runs, "json"))
+    assert report == json.loads(json.dumps(summary.to_dict()))
+    blind_dims = {row["id"]: row for row in report["per_dimension"] if row["run"] == "blind (blind)"}
+    assert blind_dims["change_target"]["gaps"] == 1 and blind_dims["change_target"]["episodes"] == 3
+    assert report["comparisons"][0]["pairs"] == 11
+
+
+def test_csv_rows_are_the_json_rate_rows(runs):
+    report = json.loads(render(runs, "json"))
+    rows = list(csv.DictReader(io.StringIO(render(runs, "csv"))))
+    expected = [(s, r) for s in ("by_source", "per_dimension", "per_suite", "per_split", "per_task") for r in report[s]]
+    assert len(rows) == len(expected)
+    for row, (section, source) in zip(rows, expected, strict=True):
+        assert (row["table"], row["group"], int(row["successes"]), int(row["gaps"])) == (
+            section,
+            source["id"],
+            source["successes"],
+            source["gaps"],
+        )
+        assert float(row["ci_high"]) == pytest.approx(source["ci_high"], abs=1e-4)
+    assert {row["run"]: row["privileged"] for row in rows} == {"blind (blind)": "1", "my-vla (vla)": "0"}
+
+
+def test_markdown_and_latex_hold_the_papers_tables_and_mark_privileged_runs(runs):
+    markdown = render(runs, "md")
+    for title in ("Table II", "Table VI", "Table VII", "What the policy did instead", "Per task", "Confusion"):
+        assert title in markdown
+    assert "| blind (blind) † |" in markdown and markdown.rstrip().endswith("not a policy under test")
+    assert "| 0.0 [0.0, 56.1] (1 gaps) (1) |" in markdown  # change target: 0/3, one gap, one task
+    assert "†" not in render(runs[1:], "md")
+    latex = render(runs, "latex")
+    assert r"\toprule" in latex and r"blind (blind) $^\dagger$" in latex
+    assert sorted(FORMATS) == ["csv", "json", "latex", "md"]
+
+
+def test_a_directory_without_a_run_is_one_error_line(tmp_path):
+    result = run_cli("report", str(tmp_path))
+    assert result.returncode == 2
+    assert result.stderr == f"error: no run store at {tmp_path} (expected {tmp_path / 'episodes.sqlite'})\n"

@@ -1,0 +1,69 @@
+"""The report's one aggregation, on synthetic stores: every number a table shows is computed here."""
+
+from __future__ import annotations
+
+import pytest
+
+from langgap.report import load_runs, summarize
+from tests.unit.reports import SOURCE, memoriser, reader, write_run
+
+
+@pytest.fixture
+def summary(tmp_path):
+    blind = write_run(tmp_path / "blind", "blind", memoriser(privileged=True))
+    vla = write_run(tmp_path / "vla", "my-vla", reader() + reader(condition="empty"))
+    return summarize(load_runs([blind, vla]))
+
+
+def test_rates_leave_gaps_out_but_count_them(summary):
+    blind = summary.runs[0]
+    extended = blind.source("extended")
+    assert (extended.episodes, extended.successes, extended.gaps, extended.tasks) == (7, 0, 1, 2)
+    assert blind.source("original").rate == 1.0 and blind.gaps == 1 and blind.episodes == 12
+    stove = next(r for r in blind.by_dimension if r.group == "change_target")
+    assert (stove.episodes, stove.gaps) == (3, 1)
+    assert [r.group for r in blind.by_split] == ["original", "train", "heldout"]
+    assert [r.group for r in blind.by_suite] == ["libero_spatial/original", "libero_spatial/extended"]
+
+
+def test_only_the_given_instruction_makes_the_benchmark_numbers(summary):
+    vla = summary.runs[1]
+    assert vla.source("total").episodes == 12  # the `empty` condition's 12 episodes are not in the rates
+    assert [t.rate.group for t in vla.tasks] == [SOURCE, "spatial/s0/ramekin-on-plate", "spatial/s0/bowl-on-stove"]
+    assert vla.tasks[2].rate.successes == 3 and vla.tasks[2].dimension == "change_target"
+
+
+def test_what_the_policy_did_instead(summary):
+    blind, vla = summary.runs
+    shares = {o.group: o.shares for o in blind.outcomes}
+    assert shares["extended"]["did_source_task"] == 1.0 and shares["original"]["success"] == 1.0
+    assert [o.group for o in blind.outcomes] == ["change_object", "change_target", "extended", "original"]
+    vla_shares = {o.group: o.shares for o in vla.outcomes}
+    assert vla_shares["change_target"] == pytest.approx(
+        {"success": 0.75, "did_source_task": 0, "did_other_task": 0, "no_goal_reached": 0.25, "policy_error": 0}
+    )
+
+
+def test_confusion_counts_intended_against_achieved(summary):
+    (matrix,) = summary.runs[0].confusion.values()
+    assert matrix["spatial/s0/ramekin-on-plate"] == {SOURCE: 4}
+    assert matrix["spatial/s0/bowl-on-stove"] == {SOURCE: 3}  # the gap is not an achievement
+    assert summary.runs[1].confusion["libero_spatial/s0"]["spatial/s0/bowl-on-stove"] == {
+        "spatial/s0/bowl-on-stove": 3,
+        "none": 1,
+    }
+
+
+def test_condition_and_run_comparisons_are_paired(summary):
+    (condition,) = summary.runs[1].conditions
+    assert condition.name == "given vs empty" and condition.pairs == 12 and condition.only_a == 0
+    (comparison,) = summary.comparisons
+    assert comparison.pairs == 11  # the gap has no partner
+    assert (comparison.successes_a, comparison.successes_b) == (4, 10)
+    assert comparison.as_dict()["p_value"] == pytest.approx(0.03125)
+
+
+def test_privileged_runs_are_marked(summary):
+    assert [run.privileged for run in summary.runs] == [True, False]
+    assert summary.runs[0].label == "blind (blind) †" and summary.runs[1].label == "my-vla (vla)"
+    assert [run["privileged"] for run in summary.to_dict()["runs"]] == [True, False]
