@@ -3,6 +3,8 @@
 Modes:
   openpi-langgap  openpi's own `WebsocketPolicyServer` (PyPI `openpi-server`) hosting a LangGap policy
                   through `ServedPolicy`, i.e. announcing LangGap's extension in its metadata.
+  langgap-record  `openpi-langgap`, also saving what every request carries beyond the observation (the
+                  context and whether privileged state came) to RECORD_DIR/requests.jsonl: the wire.
   openpi-record   openpi's server with plain metadata: a stand-in for an openpi model server that saves
                   every observation it receives to RECORD_DIR/<n>.npz and answers a (10, 7) chunk.
   garbage         a websocket server that answers every request with bytes that are not msgpack.
@@ -36,6 +38,25 @@ class RecordingOpenpiModel:
         pass
 
 
+def _recording(served):
+    """`served` with every request's LangGap context and privileged flag written to RECORD_DIR first."""
+    import json
+
+    from langgap import protocol
+
+    infer = served.infer
+    path = pathlib.Path(os.environ["RECORD_DIR"]) / "requests.jsonl"
+
+    def recorded(request: dict) -> dict:
+        entry = {"context": request.get(protocol.CONTEXT_KEY), "privileged": protocol.PRIVILEGED_KEY in request}
+        with path.open("a") as handle:
+            handle.write(json.dumps(entry) + "\n")
+        return infer(request)
+
+    served.infer = recorded
+    return served
+
+
 def _serve_raw(port: int, reply: bytes) -> None:
     from websockets.sync.server import serve
 
@@ -54,16 +75,16 @@ def _serve_raw(port: int, reply: bytes) -> None:
 def main(mode: str, port: int, *rest: str) -> None:
     from langgap import protocol
 
-    if mode in ("openpi-langgap", "openpi-record"):
+    if mode in ("openpi-langgap", "langgap-record", "openpi-record"):
         from openpi_server import WebsocketPolicyServer
 
-        if mode == "openpi-langgap":
+        if mode != "openpi-record":
             from langgap.policies import make_policy
             from langgap.serve import ServedPolicy
 
             name, pairs = rest[0], rest[1:]
             served = ServedPolicy(make_policy(name, dict(p.split("=", 1) for p in pairs)), name)
-            policy, metadata = served, served.metadata
+            policy, metadata = _recording(served) if mode == "langgap-record" else served, served.metadata
         else:
             policy, metadata = RecordingOpenpiModel(pathlib.Path(os.environ["RECORD_DIR"])), {"model": "recorder"}
         WebsocketPolicyServer(policy, host="127.0.0.1", port=port, metadata=metadata).serve_forever()

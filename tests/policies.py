@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
+import json
 import os
 import time
 from pathlib import Path
@@ -40,7 +43,7 @@ class FlakyPolicy(NoopPolicy):
         self.key = ""
 
     def reset(self, context):
-        self.key = f"{context.task_id.replace('/', '_')}-{context.init_index}"
+        self.key = f"{hashlib.sha256(context.instruction.encode()).hexdigest()[:12]}-{context.init_index}"
 
     def act(self, observation):
         marker = self.marker_dir / self.key
@@ -68,3 +71,20 @@ class ChunkPolicy:
     def act(self, observation):
         self.calls += 1
         return np.tile([0, 0, 0, 0, 0, 0, -1.0], (4, 1))
+
+
+class ContextRecorder(NoopPolicy):
+    """Holds still; appends the context it is reset with to `path` (one JSON line per episode)."""
+
+    def __init__(self, path: str = ""):
+        self.path = Path(path)
+
+    def reset(self, context):
+        with self.path.open("a") as handle:
+            handle.write(json.dumps(dataclasses.asdict(context)) + "\n")
+
+
+class PrivilegedContextRecorder(ContextRecorder):
+    """The same, declaring itself privileged (as the scripted references do)."""
+
+    spec = PolicySpec(privileged=True)

@@ -16,7 +16,7 @@ class ProbePolicy:
 
     def reset(self, context: TaskContext) -> None:
         text = sum(map(ord, context.instruction)) % 1000
-        self._offset = text / 1000.0 + context.seed * 1e-3 + len(context.goal) * 1e-2
+        self._offset = text / 1000.0 + context.seed * 1e-3 + len(context.privileged.goal) * 1e-2
 
     def act(self, observation: Observation) -> np.ndarray:
         features = [observation.state.astype(np.float64).sum()]

@@ -32,7 +32,7 @@ from typing import Any
 import msgpack
 import numpy as np
 
-from langgap.policies.base import PolicySpec, TaskContext
+from langgap.policies.base import PolicySpec, PrivilegedContext, TaskContext
 
 PROTOCOL_VERSION = 1
 HEALTH_PATH = "/healthz"
@@ -124,7 +124,11 @@ def context_from_message(message: Any) -> TaskContext:
     if not isinstance(message, dict):
         raise ProtocolError(f"{CONTEXT_KEY} must be a map, got {type(message).__name__}")
     try:
-        return TaskContext(**{**message, "goal": tuple(message["goal"]), "source_goal": tuple(message["source_goal"])})
+        privileged = message.get("privileged")
+        if privileged is not None:
+            goals = {"goal": tuple(privileged["goal"]), "source_goal": tuple(privileged["source_goal"])}
+            privileged = PrivilegedContext(**{**privileged, **goals})
+        return TaskContext(**{**message, "privileged": privileged})
     except (KeyError, TypeError) as exc:
         raise ProtocolError(f"malformed {CONTEXT_KEY}: {exc}") from None
 

@@ -53,7 +53,9 @@ class ServedPolicy:
                 f"request has no {protocol.EPISODE_KEY}: a LangGap server needs LangGap's `openpi` client"
             )
         if episode != self._episode:
-            self.policy.reset(protocol.context_from_message(request.get(protocol.CONTEXT_KEY)))
+            # Whatever a client sends, a policy that is not privileged never sees the goal.
+            context = protocol.context_from_message(request.get(protocol.CONTEXT_KEY))
+            self.policy.reset(context.for_policy(self.policy.spec))
             self._episode = episode
         spec = self.policy.spec
         try:

@@ -8,6 +8,7 @@ In a full run the other tests have loaded the stack already and the guard stays 
 from __future__ import annotations
 
 import importlib.abc
+import importlib.machinery
 import sys
 from pathlib import Path
 
@@ -15,11 +16,24 @@ HEAVY = ("mujoco", "robosuite", "libero", "torch", "ray")
 _HERE = Path(__file__).parent
 
 
+class _Refuse(importlib.abc.Loader):
+    def create_module(self, spec):
+        raise ImportError(f"the fast test layer may not import {spec.name}")
+
+    def exec_module(self, module):  # never reached: create_module refuses
+        raise ImportError(module.__name__)
+
+
 class _BlockHeavy(importlib.abc.MetaPathFinder):
+    """Finds the simulator stack's packages (so their data files can be located) but refuses to load them."""
+
     def find_spec(self, name, path=None, target=None):
-        if name.split(".")[0] in HEAVY:
-            raise ImportError(f"the fast test layer may not import {name}")
-        return None
+        if name.split(".")[0] not in HEAVY:
+            return None
+        spec = importlib.machinery.PathFinder.find_spec(name, path)
+        if spec is not None:
+            spec.loader = _Refuse()
+        return spec
 
 
 def pytest_collection_modifyitems(session, config, items):

@@ -73,7 +73,7 @@ class ExecutionNoise:
         self._rng = np.random.default_rng(0)
 
     def reset(self, context) -> None:
-        self.policy.reset(context)
+        self.policy.reset(context.for_policy(self.spec))
         self.labels = []
         self._rng = np.random.default_rng([context.seed, 0xDA27])
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from langgap.catalog.catalog import Catalog
 from langgap.catalog.task import DEFAULT_STYLE, Task
-from langgap.policies.base import TaskContext
+from langgap.policies.base import PrivilegedContext, TaskContext
 
 
 def task_context(
@@ -16,17 +16,19 @@ def task_context(
     style: str = DEFAULT_STYLE,
     condition: str = "given",
     instruction: str | None = None,
-    privileged: bool = False,
 ) -> TaskContext:
-    """The context for one episode of `task`; `instruction` overrides the catalog sentence (conditions)."""
+    """The full context for one episode of `task` (privileged part included: the rollout gives each
+    policy only what its spec allows); `instruction` overrides the catalog sentence (conditions)."""
     return TaskContext(
-        task_id=task.id,
-        suite=task.suite,
         instruction=task.instruction(style) if instruction is None else instruction,
-        goal=tuple(task.goal_strings),
-        source_goal=tuple(catalog.get(task.source).goal_strings),
+        suite=task.suite,
         init_index=init_index,
         seed=seed,
         max_steps=task.max_steps,
-        condition=condition,
+        privileged=PrivilegedContext(
+            task_id=task.id,
+            condition=condition,
+            goal=tuple(task.goal_strings),
+            source_goal=tuple(catalog.get(task.source).goal_strings),
+        ),
     )

@@ -82,7 +82,6 @@ def execute_episode(
         style=style,
         condition=key.condition,
         instruction=planned.instruction,
-        privileged=policy.spec.privileged,
     )
     started = time.perf_counter()
     common = dict(

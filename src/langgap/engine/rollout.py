@@ -57,7 +57,7 @@ def run_episode(
     """
     spec = policy.spec
     env.reset(None if sampled_start else context.init_index, seed=context.seed)
-    policy.reset(context)
+    policy.reset(context.for_policy(spec))  # the goal reaches privileged policies only
     env.settle(settle_steps)
     if on_start is not None:
         on_start(env)

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -39,23 +39,37 @@ class PolicySpec:
 
 
 @dataclass(frozen=True)
+class PrivilegedContext:
+    """What only a privileged policy (a scripted reference such as `oracle` or `blind`) is told: the
+    answer. The task id names the goal, and the condition says whether the instruction is the task's
+    own, so both are privileged too."""
+
+    task_id: str
+    condition: str
+    goal: tuple[str, ...]
+    source_goal: tuple[str, ...]
+
+
+@dataclass(frozen=True)
 class TaskContext:
     """What a policy is told at reset.
 
-    `instruction` is the exact string the policy receives (and the one recorded). `goal` and
-    `source_goal` are privileged: only scripted reference policies (oracle, blind) may read them.
+    `instruction` is the exact string the policy receives (and the one recorded). `privileged` is
+    None for every policy whose spec does not declare `privileged`: the engine removes it before
+    `reset` (`for_policy`), so a policy under test cannot read the goal, however it is written.
     """
 
-    task_id: str
-    suite: str
     instruction: str
-    goal: tuple[str, ...]
-    source_goal: tuple[str, ...]
+    suite: str
     init_index: int
     seed: int
     max_steps: int
-    condition: str = "given"
+    privileged: PrivilegedContext | None = None
     extra: dict = field(default_factory=dict, hash=False, compare=False)
+
+    def for_policy(self, spec: PolicySpec) -> TaskContext:
+        """The context a policy with `spec` may see."""
+        return self if spec.privileged else replace(self, privileged=None)
 
 
 @runtime_checkable

@@ -216,7 +216,8 @@ class OpenpiPolicy:
             request[protocol.CAMERA_KEYS[camera]] = image
         if self.served is not None:
             request[protocol.EPISODE_KEY] = self._episode
-            request[protocol.CONTEXT_KEY] = protocol.context_to_message(self._context)
+            # Only what the served spec may see goes on the wire (the rollout already removed the rest).
+            request[protocol.CONTEXT_KEY] = protocol.context_to_message(self._context.for_policy(self.spec))
             if self.spec.privileged:
                 request[protocol.PRIVILEGED_KEY] = observation.privileged
         return request

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from langgap.policies.base import PolicySpec, TaskContext
+from langgap.policies.base import PolicySpec, PrivilegedContext, TaskContext
 from langgap.policies.oracle.motion import Agent, Program
 from langgap.policies.oracle.planner import OracleError, parse_goal, program
 from langgap.policies.oracle.scene import Scene
@@ -34,12 +34,14 @@ class OraclePolicy:
     def config(self) -> dict:
         return {"noise": self.noise}
 
-    def goal_of(self, context: TaskContext) -> tuple[str, ...]:
+    def goal_of(self, context: PrivilegedContext) -> tuple[str, ...]:
         """The goal this policy pursues: the task's own."""
         return context.goal
 
     def reset(self, context: TaskContext) -> None:
-        self._goal = parse_goal(self.goal_of(context))
+        if context.privileged is None:
+            raise OracleError("the oracle needs the privileged context (the task's goal)")
+        self._goal = parse_goal(self.goal_of(context.privileged))
         self._agent = Agent()
         self._program = None
         self._rng = np.random.default_rng([context.seed, context.init_index])
@@ -60,5 +62,5 @@ class OraclePolicy:
 class BlindPolicy(OraclePolicy):
     """The oracle run on the source task's goal whatever the instruction says: a policy that memorised the scene."""
 
-    def goal_of(self, context: TaskContext) -> tuple[str, ...]:
+    def goal_of(self, context: PrivilegedContext) -> tuple[str, ...]:
         return context.source_goal
