@@ -42,7 +42,7 @@ def _recording(served):
     """`served` with every request's LangGap context and privileged flag written to RECORD_DIR first."""
     import json
 
-    from langgap import protocol
+    from langgap.policies import protocol
 
     infer = served.infer
     path = pathlib.Path(os.environ["RECORD_DIR"]) / "requests.jsonl"
@@ -60,7 +60,7 @@ def _recording(served):
 def _serve_raw(port: int, reply: bytes) -> None:
     from websockets.sync.server import serve
 
-    from langgap import protocol
+    from langgap.policies import protocol
     from langgap.serve import health_check
 
     def handle(connection):
@@ -73,7 +73,7 @@ def _serve_raw(port: int, reply: bytes) -> None:
 
 
 def main(mode: str, port: int, *rest: str) -> None:
-    from langgap import protocol
+    from langgap.policies import protocol
 
     if mode in ("openpi-langgap", "langgap-record", "openpi-record"):
         from openpi_server import WebsocketPolicyServer

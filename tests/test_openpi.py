@@ -9,12 +9,11 @@ import numpy as np
 import pytest
 from openpi_client import image_tools, msgpack_numpy
 
-from langgap import protocol
 from langgap.engine.context import task_context
 from langgap.engine.rollout import env_options_for, run_episode
 from langgap.errors import PolicyServerError
 from langgap.imaging import resize_with_pad
-from langgap.policies import make_policy
+from langgap.policies import make_policy, protocol
 from langgap.policies.base import PolicyOutputError
 from langgap.policies.openpi import OpenpiPolicy
 from langgap.sim.env import Observation, TaskEnv

@@ -8,8 +8,8 @@ import subprocess
 
 import numpy as np
 
-from langgap import protocol
 from langgap.engine.context import task_context
+from langgap.policies import protocol
 from langgap.policies.openpi import OpenpiPolicy
 from langgap.serve import ServedPolicy
 from tests.conftest import run_cli, store_rows

@@ -1,4 +1,4 @@
-"""Serving a LangGap policy over openpi's websocket protocol, with LangGap's extension (`langgap.protocol`).
+"""Serving a LangGap policy over openpi's websocket protocol, with LangGap's extension (`langgap.policies.protocol`).
 
 `ServedPolicy` adapts one LangGap policy to openpi's server-side policy interface (`infer(obs) ->
 {"actions": ...}` plus `metadata`), so it can also be hosted by openpi's own `WebsocketPolicyServer`.
@@ -21,9 +21,8 @@ import websockets
 from websockets.sync.server import Request, Response, ServerConnection
 from websockets.sync.server import serve as websocket_serve
 
-from langgap import protocol
 from langgap.errors import PolicyServerError
-from langgap.policies import make_policy
+from langgap.policies import make_policy, protocol
 from langgap.policies.base import Policy, policy_config
 from langgap.sim.env import Observation
 

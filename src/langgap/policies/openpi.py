@@ -5,7 +5,7 @@ Against a plain openpi server it sends exactly what openpi's LIBERO example send
 rendered at 256x256, upright (LIBERO's raw render rotated 180 degrees, which `TaskEnv` images
 already are), resized with padding to 224x224; the 8-D state; the instruction as `prompt`. It
 executes the first `replan_steps` actions of each chunk. Against a LangGap server (see
-`langgap.protocol`) it follows the served policy's spec instead and sends the episode context.
+`langgap.policies.protocol`) it follows the served policy's spec instead and sends the episode context.
 
 Every failure (no server within `connect_timeout`, no reply within `timeout`, a closed connection,
 an error report or a malformed reply) raises `PolicyServerError` with a one-line message. After a
@@ -23,9 +23,9 @@ import numpy as np
 import websockets
 from websockets.sync.client import ClientConnection, connect
 
-from langgap import protocol
 from langgap.errors import PolicyServerError
 from langgap.imaging import resize_with_pad
+from langgap.policies import protocol
 from langgap.policies.base import PolicySpec, TaskContext
 from langgap.sim.env import CAMERAS, Observation
 
