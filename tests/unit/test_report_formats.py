@@ -50,7 +50,7 @@ def test_markdown_and_latex_hold_the_papers_tables_and_mark_privileged_runs(runs
     markdown = render(runs, "md")
     for title in ("Table II", "Table VI", "Table VII", "What the policy did instead", "Per task", "Confusion"):
         assert title in markdown
-    assert "| blind (blind) † |" in markdown and markdown.rstrip().endswith("not a policy under test")
+    assert "| blind (blind) † |" in markdown and "not a policy under test" in markdown
     assert "| 0.0 [0.0, 56.1] (1 gaps) (1) |" in markdown  # change target: 0/3, one gap, one task
     assert "†" not in render(runs[1:], "md")
     latex = render(runs, "latex")
@@ -62,3 +62,19 @@ def test_a_directory_without_a_run_is_one_error_line(tmp_path):
     result = run_cli("report", str(tmp_path))
     assert result.returncode == 2
     assert result.stderr == f"error: no run store at {tmp_path} (expected {tmp_path / 'episodes.sqlite'})\n"
+
+
+def test_the_papers_published_rows_are_shown_beside_the_runs_and_can_be_left_out(runs):
+    markdown = render(runs, "md")
+    assert "| π0 (published: LangGap paper, Table VII) | 10.8 | 0.0 | 20.0 | 0.0 | 8.6 |" in markdown
+    assert (
+        "| SmolVLA (published: LangGap paper, Table VI) | 17.0 | 3.2 | 44.0 | 0.0 | 50.0 | 13.2 | 41.0 | 38.0 | 6.4 |"
+        in markdown
+    )
+    assert "| Original (LIBERO) | 40 | 800 | 750 | 93.8 | [91.9, 95.2] | 0 |" in markdown  # Table II, published counts
+    assert "not re-run" in markdown and "(published: LangGap paper" in render(runs, "latex")
+    assert "(published:" not in render(runs, "md", published=False)
+    assert "(published:" not in render(runs, "json")  # the JSON holds this report's numbers only
+    cli = run_cli("report", str(runs[1]), "--no-published", "--summary")
+    assert cli.returncode == 0 and "Table VII" in cli.stdout and "(published:" not in cli.stdout
+    assert "(published: LangGap paper, Table VII)" in run_cli("report", str(runs[1]), "--summary").stdout

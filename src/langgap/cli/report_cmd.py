@@ -15,6 +15,11 @@ def add_parser(subparsers) -> None:
         action="store_true",
         help="only the diagnosis: success by dimension and what the policy did instead",
     )
+    parser.add_argument(
+        "--no-published",
+        action="store_true",
+        help="leave out the paper's published results (shown by default as reference rows, not re-run)",
+    )
     parser.add_argument("--plots", metavar="DIR", help="write PNG figures to DIR")
     parser.add_argument("--episodes", metavar="FILE", help="write the per-episode table (.csv or .parquet)")
     parser.set_defaults(handler=run)
@@ -24,7 +29,11 @@ def run(args) -> int:
     from langgap.report import diagnosis_text, load_runs, render, summarize
 
     paths = [args.run, *args.compare]
-    print(diagnosis_text(paths) if args.summary else render(paths, args.format), end="")
+    published = not args.no_published
+    text = (
+        diagnosis_text(paths, published=published) if args.summary else render(paths, args.format, published=published)
+    )
+    print(text, end="")
     if args.plots:
         from langgap.report.plots import write_plots
 

@@ -9,8 +9,9 @@ from collections.abc import Callable
 from pathlib import Path
 
 from langgap.report.load import load_runs
+from langgap.report.published import Published, load_published
 from langgap.report.summary import Summary, summarize
-from langgap.report.tables import PRIVILEGED_NOTE, Table, diagnosis, full_report
+from langgap.report.tables import PRIVILEGED_NOTE, PUBLISHED_NOTE, Table, diagnosis, full_report
 
 
 def markdown_table(table: Table) -> str:
@@ -68,29 +69,30 @@ def _header(summary: Summary) -> str:
     )
 
 
-def _footnote(summary: Summary, render: Callable[[str], str]) -> str:
-    return render(PRIVILEGED_NOTE) if summary.privileged else ""
+def _notes(summary: Summary, published: Published | None) -> list[str]:
+    return [note for note, shown in ((PRIVILEGED_NOTE, summary.privileged), (PUBLISHED_NOTE, published)) if shown]
 
 
-def to_markdown(summary: Summary, tables: list[Table] | None = None) -> str:
-    body = "\n".join(markdown_table(t) for t in (full_report(summary) if tables is None else tables))
+def to_markdown(summary: Summary, published: Published | None = None, tables: list[Table] | None = None) -> str:
+    body = "\n".join(markdown_table(t) for t in (full_report(summary, published) if tables is None else tables))
     head = _header(summary) if tables is None else ""
-    return head + body + _footnote(summary, lambda note: f"\n{note}\n")
+    return head + body + "".join(f"\n{note}\n" for note in _notes(summary, published))
 
 
-def to_latex(summary: Summary) -> str:
-    body = "\n".join(latex_table(t) for t in full_report(summary))
-    return body + _footnote(summary, lambda note: f"\n% {note}\n\\noindent {_latex_escape(note)}\n")
+def to_latex(summary: Summary, published: Published | None = None) -> str:
+    body = "\n".join(latex_table(t) for t in full_report(summary, published))
+    return body + "".join(f"\n\\noindent {_latex_escape(note)}\n" for note in _notes(summary, published))
 
 
-def to_json(summary: Summary) -> str:
+def to_json(summary: Summary, published: Published | None = None) -> str:
+    """The summary's data; published figures are left out (they are not this report's numbers)."""
     return json.dumps(summary.to_dict(), indent=1)
 
 
 CSV_SECTIONS = ("by_source", "per_dimension", "per_suite", "per_split", "per_task")
 
 
-def to_csv(summary: Summary) -> str:
+def to_csv(summary: Summary, published: Published | None = None) -> str:
     """Tidy CSV: one row per (run, table, group), the JSON report's rate rows."""
     data = summary.to_dict()
     privileged = {run["run"]: run["privileged"] for run in data["runs"]}
@@ -105,15 +107,22 @@ def to_csv(summary: Summary) -> str:
     return buffer.getvalue()
 
 
-FORMATS: dict[str, Callable[[Summary], str]] = {"md": to_markdown, "csv": to_csv, "latex": to_latex, "json": to_json}
+FORMATS: dict[str, Callable[[Summary, Published | None], str]] = {
+    "md": to_markdown,
+    "csv": to_csv,
+    "latex": to_latex,
+    "json": to_json,
+}
 
 
-def render(paths: list[str | Path], fmt: str = "md") -> str:
-    """The full report of one or more runs (the first is the reference for comparisons)."""
-    return FORMATS[fmt](summarize(load_runs(paths)))
+def render(paths: list[str | Path], fmt: str = "md", *, published: bool = True) -> str:
+    """The full report of one or more runs (the first is the reference for comparisons); `published`
+    adds the paper's results as reference rows to the formats that show tables."""
+    return FORMATS[fmt](summarize(load_runs(paths)), load_published() if published else None)
 
 
-def diagnosis_text(paths: list[str | Path]) -> str:
+def diagnosis_text(paths: list[str | Path], *, published: bool = False) -> str:
     """The short diagnosis (Markdown): success by dimension and what each policy did instead."""
     summary = summarize(load_runs(paths))
-    return to_markdown(summary, diagnosis(summary))
+    reference = load_published() if published else None
+    return to_markdown(summary, reference, diagnosis(summary, reference))

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 from langgap.catalog.labels import DIMENSION_LABEL, EXTENDED_DIMENSIONS, SPLIT_LABEL, SUITE_LABEL, SUITE_ORDER, label
 from langgap.records import JUDGED_OUTCOMES, Outcome
+from langgap.report.published import Published
 from langgap.report.stats import PairedTest, Rate
 from langgap.report.summary import RunResults, Summary
 
@@ -21,6 +22,7 @@ OUTCOME_GROUP_LABEL = {**DIMENSION_LABEL, "extended": "All extended"}
 PRIVILEGED_NOTE = (
     "† privileged policy (given the goal or simulator state): a scripted reference, not a policy under test"
 )
+PUBLISHED_NOTE = "Rows marked published are the LangGap paper's figures as printed (20 episodes per task), not re-run."
 
 
 @dataclass
@@ -64,20 +66,29 @@ def source_table(run: RunResults) -> Table:
     return Table(f"Table II — {run.label}: by data source and dimension", _RATE_HEADERS, rows)
 
 
-def suite_table(summary: Summary) -> Table:
-    """Table VI: per suite, original vs extended, one row per run (libero_10 has no extended tasks)."""
-    keys = [(s, k) for s in SUITE_ORDER for k in ("original", "extended") if (s, k) != ("libero_10", "extended")]
-    headers = ["Method", *(f"{SUITE_LABEL[s]} {'Orig' if k == 'original' else 'Ext'}" for s, k in keys)]
+def _published_cells(values: dict[str, float], keys: list[str]) -> list[str]:
+    return [f"{values[k]:.1f}" if k in values else "–" for k in keys]
+
+
+def suite_table(summary: Summary, published: Published | None = None) -> Table:
+    """Table VI: per suite, original vs extended, one row per run (libero_10 has no extended tasks);
+    the paper's rows below them when `published` is given."""
+    keys = [f"{s}/{k}" for s in SUITE_ORDER for k in ("original", "extended") if (s, k) != ("libero_10", "extended")]
+    headers = ["Method"]
+    headers += [f"{SUITE_LABEL[k.split('/')[0]]} {'Orig' if k.endswith('original') else 'Ext'}" for k in keys]
     rows = []
     for run in summary.runs:
         by_key = {r.group: r for r in run.by_suite}
-        cells = [rate_cell(by_key.get(f"{s}/{k}")) for s, k in keys]
+        cells = [rate_cell(by_key.get(k)) for k in keys]
         rows.append([run.label, *cells, rate_cell(run.source("original")), rate_cell(run.source("extended"))])
+    for row in published.suites if published else []:
+        cells = _published_cells(row.values, [*keys, "original", "extended"])
+        rows.append([published.label(row.method, "Table VI"), *cells])
     return Table("Table VI — per suite (success %, 95% CI)", [*headers, "Total Orig", "Total Ext"], rows)
 
 
-def dimension_table(summary: Summary) -> Table:
-    """Table VII: extended tasks by dimension, one row per run."""
+def dimension_table(summary: Summary, published: Published | None = None) -> Table:
+    """Table VII: extended tasks by dimension, one row per run; the paper's rows below when `published` is given."""
     headers = ["Method", *(DIMENSION_LABEL[d] for d in EXTENDED_DIMENSIONS), "Total"]
     rows = []
     for run in summary.runs:
@@ -85,7 +96,17 @@ def dimension_table(summary: Summary) -> Table:
         cells = [rate_cell(r) + f" ({r.tasks})" if (r := by_dim.get(d)) else "–" for d in EXTENDED_DIMENSIONS]
         total = run.source("extended")
         rows.append([run.label, *cells, rate_cell(total) + f" ({total.tasks})"])
+    for row in published.dimensions if published else []:
+        cells = _published_cells(row.values, [*EXTENDED_DIMENSIONS, "extended"])
+        rows.append([published.label(row.method, "Table VII"), *cells])
     return Table("Table VII — extended tasks by dimension (success %, 95% CI, (tasks))", headers, rows)
+
+
+def published_diagnostic_table(published: Published) -> Table:
+    """Table II as published (its episode counts, with the Wilson intervals they imply)."""
+    names = {**DIMENSION_LABEL, **SOURCE_LABEL}
+    title = f"Table II — {published.label(published.diagnostic_method, 'Table II')}: by data source and dimension"
+    return Table(title, _RATE_HEADERS, _rate_rows(published.diagnostic, names))
 
 
 def split_table(run: RunResults) -> Table:
@@ -173,14 +194,16 @@ def confusion_tables(run: RunResults) -> list[Table]:
     return tables
 
 
-def full_report(summary: Summary) -> list[Table]:
-    """Every table of `langgap report`."""
+def full_report(summary: Summary, published: Published | None = None) -> list[Table]:
+    """Every table of `langgap report` (with the paper's published rows when `published` is given)."""
     tables = []
     for run in summary.runs:
         tables += [source_table(run), outcome_table(run), split_table(run)]
         if (conditions := condition_table(run)) is not None:
             tables.append(conditions)
-    tables += [suite_table(summary), dimension_table(summary)]
+    if published:
+        tables.append(published_diagnostic_table(published))
+    tables += [suite_table(summary, published), dimension_table(summary, published)]
     if (comparison := comparison_table(summary)) is not None:
         tables.append(comparison)
     for run in summary.runs:
@@ -188,9 +211,9 @@ def full_report(summary: Summary) -> list[Table]:
     return tables
 
 
-def diagnosis(summary: Summary) -> list[Table]:
+def diagnosis(summary: Summary, published: Published | None = None) -> list[Table]:
     """The short diagnosis: success by dimension (runs side by side) and what each policy did instead."""
-    tables = [dimension_table(summary)]
+    tables = [dimension_table(summary, published)]
     for run in summary.runs:
         tables.append(outcome_table(run))
         if (conditions := condition_table(run)) is not None:
