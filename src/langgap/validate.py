@@ -90,7 +90,7 @@ def settle_drift(task: Task, inits: int = SETTLE_INITS) -> float:
 
 
 def _row(task: Task, catalog: Catalog, records: list[EpisodeRecord], drift: float) -> TaskValidation:
-    done = [r for r in records if r.status == "done"]
+    done = [r for r in records if r.judged]
     wins = [r for r in done if r.success]
     source = catalog.get(task.source)
     exclusive = task.kind == "extended" and goals_exclude(task.goal, source.goal)
