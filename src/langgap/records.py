@@ -84,9 +84,12 @@ class EpisodeRecord:
     source: str = ""
     scene: str = ""
     max_steps: int = 0
+    settle_steps: int = 0  # idle steps after reset, before the policy acts
     policy: str = ""
     policy_config_hash: str = ""
     privileged: bool = False  # the policy was given the goal and simulator state (a scripted reference)
+    cameras: list[str] = field(default_factory=list)  # the cameras the policy saw
+    image_size: int = 0  # their size in pixels (0: no images)
     physics: dict = field(default_factory=dict)
     code_version: str = ""
     attempts: int = 1

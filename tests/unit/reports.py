@@ -38,6 +38,8 @@ def episode(task_id: str, init_index: int, *, success=False, reached=None, condi
         t0_hash=str(init_index),
         reached=reached,
         suite="libero_spatial",
+        max_steps=220,
+        settle_steps=10,
         kind=kind,
         dimension=dimension,
         split=split,
@@ -47,9 +49,10 @@ def episode(task_id: str, init_index: int, *, success=False, reached=None, condi
     )
 
 
-def write_run(directory: Path, policy: str, records: list[EpisodeRecord]) -> Path:
-    """A run store holding `records`, with a spec naming `policy`."""
-    with RunStore.create(directory, {"spec": {"policy": policy, "physics": {"mujoco": "3.2.3"}}}) as store:
+def write_run(directory: Path, policy: str, records: list[EpisodeRecord], **spec) -> Path:
+    """A run store holding `records`, with a spec naming `policy` (and `spec`'s other fields)."""
+    spec = {"policy": policy, "physics": {"mujoco": "3.2.3"}, "seed": 0, "style": "libero", **spec}
+    with RunStore.create(directory, {"spec": spec}) as store:
         for record in records:
             store.write(record)
     return directory

@@ -74,7 +74,8 @@ def _schema_1_store(directory, version="1"):
     db.execute("INSERT INTO meta VALUES ('schema_version', ?)", (version,))
     db.execute("INSERT INTO meta VALUES ('config', ?)", (json.dumps({"policy": "oracle"}),))
     old = record(privileged=False)
-    row = {f.name: getattr(old, f.name) for f in fields(EpisodeRecord) if f.name != "privileged"}
+    schema_1 = {row[1] for row in db.execute("PRAGMA table_info(episodes)")}
+    row = {f.name: getattr(old, f.name) for f in fields(EpisodeRecord) if f.name in schema_1}
     for name in ("reached", "goals_at_start", "goals_at_end", "physics"):
         row[name] = json.dumps(row[name])
     db.execute(f"INSERT INTO episodes ({', '.join(row)}) VALUES ({', '.join('?' * len(row))})", list(row.values()))

@@ -67,3 +67,22 @@ def test_privileged_runs_are_marked(summary):
     assert [run.privileged for run in summary.runs] == [True, False]
     assert summary.runs[0].label == "blind (blind) †" and summary.runs[1].label == "my-vla (vla)"
     assert [run["privileged"] for run in summary.to_dict()["runs"]] == [True, False]
+
+
+def test_the_protocol_card_says_what_determines_the_numbers(summary):
+    blind, vla = summary.runs
+    assert blind.card["step limits"] == "libero_spatial 220" and blind.card["settle steps"] == "10"
+    assert blind.card["init states"] == "0–3" and blind.card["seeds"] == "run seed 0 + init index"
+    assert blind.card["physics"] == "mujoco 3.2.3" and blind.card["privileged"].startswith("yes")
+    assert vla.card["privileged"] == "no" and vla.card["policy"] == "my-vla"
+    assert summary.mismatches == {} and not summary.refused
+
+
+def test_runs_whose_protocols_differ_are_not_paired_unless_allowed(tmp_path):
+    first = write_run(tmp_path / "a", "blind", memoriser())
+    other = write_run(tmp_path / "b", "my-vla", reader(), physics={"mujoco": "3.3.0"}, seed=7)
+    refused = summarize(load_runs([first, other]))
+    assert refused.mismatches == {"my-vla (b)": ["seeds", "physics"]} and refused.refused
+    assert refused.comparisons == []
+    allowed = summarize(load_runs([first, other]), allow_mismatch=True)
+    assert not allowed.refused and allowed.comparisons[0].pairs == 11

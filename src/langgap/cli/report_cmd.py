@@ -20,6 +20,11 @@ def add_parser(subparsers) -> None:
         action="store_true",
         help="leave out the paper's published results (shown by default as reference rows, not re-run)",
     )
+    parser.add_argument(
+        "--allow-mismatch",
+        action="store_true",
+        help="pair runs episode by episode even when their protocol cards differ",
+    )
     parser.add_argument("--plots", metavar="DIR", help="write PNG figures to DIR")
     parser.add_argument("--episodes", metavar="FILE", help="write the per-episode table (.csv or .parquet)")
     parser.set_defaults(handler=run)

@@ -24,7 +24,7 @@ from langgap.engine.plan import PlannedEpisode
 from langgap.engine.rollout import StepHook, run_episode
 from langgap.policies.base import Policy, PolicyOutputError
 from langgap.records import EpisodeRecord, FailureKind, Outcome, Status, classify
-from langgap.sim.env import TaskEnv
+from langgap.sim.env import SETTLE_STEPS, TaskEnv
 from langgap.version import code_version
 
 
@@ -50,6 +50,7 @@ def _record(planned: PlannedEpisode, task: Task, **values) -> EpisodeRecord:
         source=task.source,
         scene=scene_key(task),
         max_steps=task.max_steps,
+        settle_steps=SETTLE_STEPS,
         physics=stack.physics_stack(),
         code_version=code_version(),
         finished_at=datetime.now(UTC).isoformat(timespec="seconds"),
@@ -88,6 +89,8 @@ def execute_episode(
         policy=policy_name,
         policy_config_hash=policy_hash,
         privileged=policy.spec.privileged,
+        cameras=list(policy.spec.cameras),
+        image_size=policy.spec.image_size if policy.spec.cameras else 0,
         worker=worker,
         attempts=attempts,
     )

@@ -115,14 +115,16 @@ FORMATS: dict[str, Callable[[Summary, Published | None], str]] = {
 }
 
 
-def render(paths: list[str | Path], fmt: str = "md", *, published: bool = True) -> str:
+def render(paths: list[str | Path], fmt: str = "md", *, published: bool = True, allow_mismatch: bool = False) -> str:
     """The full report of one or more runs (the first is the reference for comparisons); `published`
-    adds the paper's results as reference rows to the formats that show tables."""
-    return FORMATS[fmt](summarize(load_runs(paths)), load_published() if published else None)
+    adds the paper's results as reference rows to the formats that show tables; `allow_mismatch`
+    pairs runs whose protocols differ."""
+    summary = summarize(load_runs(paths), allow_mismatch=allow_mismatch)
+    return FORMATS[fmt](summary, load_published() if published else None)
 
 
 def diagnosis_text(paths: list[str | Path], *, published: bool = False) -> str:
-    """The short diagnosis (Markdown): success by dimension and what each policy did instead."""
+    """The short diagnosis (Markdown): the protocol card, success by dimension, what each policy did instead."""
     summary = summarize(load_runs(paths))
     reference = load_published() if published else None
     return to_markdown(summary, reference, diagnosis(summary, reference))

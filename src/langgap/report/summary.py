@@ -20,6 +20,68 @@ from langgap.report.stats import PairedTest, Rate
 SOURCES = ("original", "extended", "total")
 KINDS = ("original", "extended")
 
+# What determines a run's numbers besides the policy: runs compared episode by episode must agree on these.
+PROTOCOL_ITEMS = (
+    "catalog",
+    "catalog hash",
+    "instruction style",
+    "step limits",
+    "settle steps",
+    "init states",
+    "seeds",
+    "physics",
+)
+# The protocol card: the protocol, then what the policy was and saw.
+CARD_ITEMS = (
+    *PROTOCOL_ITEMS,
+    "conditions",
+    "policy",
+    "policy arguments",
+    "policy config hash",
+    "privileged",
+    "cameras",
+    "code version",
+)
+
+
+def _joined(values: Iterable) -> str:
+    return ", ".join(str(v) for v in values) or "–"
+
+
+def _indices(values: list[int]) -> str:
+    """`0–19` for a contiguous range, else the list."""
+    values = sorted(values)
+    if values and values == list(range(values[0], values[-1] + 1)) and len(values) > 2:
+        return f"{values[0]}–{values[-1]}"
+    return _joined(values)
+
+
+def protocol_card(run: Run) -> dict[str, str]:
+    """What determines a run's numbers, as shown at the top of its report (from its spec and records)."""
+    spec, records = run.spec, [r for r in run.records if r.judged] or run.records
+    inits = spec.get("inits") or sorted({r.init_index for r in records})
+    steps = {r.suite: r.max_steps for r in records}
+    cameras = {(tuple(r.cameras), r.image_size) for r in records}
+    return {
+        "catalog": str(spec.get("catalog", "?")),
+        "catalog hash": str(spec.get("catalog_hash", "?"))[:12],
+        "instruction style": str(spec.get("style", "?")),
+        "step limits": _joined(f"{suite} {n}" for suite, n in sorted(steps.items())),
+        "settle steps": _joined(sorted({r.settle_steps or "?" for r in records}, key=str)),  # 0: not recorded
+        "init states": _indices(list(inits)),
+        "seeds": f"run seed {spec['seed']} + init index" if "seed" in spec else "?",
+        "physics": _joined(f"{k} {v}" for k, v in sorted(spec.get("physics", {}).items())),
+        "conditions": _joined(spec.get("conditions") or sorted({r.condition for r in records})),
+        "policy": str(spec.get("policy", "?")),
+        "policy arguments": _joined(f"{k}={v}" for k, v in sorted(spec.get("policy_args", {}).items())),
+        "policy config hash": _joined(sorted({r.policy_config_hash for r in records if r.policy_config_hash})),
+        "privileged": "yes (a scripted reference)" if run.privileged else "no",
+        "cameras": _joined(
+            f"{', '.join(c) or 'none'}" + (f" at {size} px" if size else "") for c, size in sorted(cameras)
+        ),
+        "code version": _joined(sorted({r.code_version for r in records})),
+    }
+
 
 def rate(group: str, records: Iterable[EpisodeRecord]) -> Rate:
     """The success rate of `records` over their judged episodes."""
@@ -126,6 +188,7 @@ class RunResults:
     outcomes: list[OutcomeRow]  # per dimension, all extended, original
     confusion: dict[str, dict[str, dict[str, int]]]
     conditions: list[PairedTest]
+    card: dict[str, str]  # the protocol card (`CARD_ITEMS`)
 
     @property
     def label(self) -> str:
@@ -163,6 +226,7 @@ def results(run: Run) -> RunResults:
         outcomes=[outcome_row(g, rs) for g, rs in outcome_groups if rs],
         confusion=confusion(given),
         conditions=condition_tests(run.records),
+        card=protocol_card(run),
     )
 
 
@@ -172,6 +236,8 @@ class Summary:
 
     runs: list[RunResults]
     comparisons: list[PairedTest]  # the first run against each other run, on matched episodes
+    mismatches: dict[str, list[str]]  # other run -> protocol items in which it differs from the first
+    refused: bool = False  # paired tests left out because protocols differ (and no `allow_mismatch`)
 
     @property
     def privileged(self) -> bool:
@@ -179,7 +245,13 @@ class Summary:
 
     def to_dict(self) -> dict:
         """The summary as plain data (the JSON report)."""
-        out: dict = {"runs": [], "confusion": {}, "comparisons": [t.as_dict() for t in self.comparisons]}
+        out: dict = {
+            "runs": [],
+            "confusion": {},
+            "comparisons": [t.as_dict() for t in self.comparisons],
+            "protocol_mismatches": self.mismatches,
+            "comparisons_refused": self.refused,
+        }
         sections = {
             "by_source": lambda run: run.by_source,
             "per_dimension": lambda run: run.by_dimension,
@@ -198,6 +270,7 @@ class Summary:
                     "gaps": run.gaps,
                     "privileged": run.privileged,
                     "spec": run.spec,
+                    "card": run.card,
                 }
             )
             for section, rows in sections.items():
@@ -210,12 +283,22 @@ class Summary:
         return out
 
 
-def summarize(runs: list[Run]) -> Summary:
-    """Aggregate runs once, for every table and format."""
-    first = runs[0]
+def summarize(runs: list[Run], *, allow_mismatch: bool = False) -> Summary:
+    """Aggregate runs once, for every table and format. Runs whose protocols differ from the first
+    run's are not paired episode by episode unless `allow_mismatch` is given."""
+    results_ = [results(run) for run in runs]
+    first = results_[0]
+    mismatches = {
+        other.name: [item for item in PROTOCOL_ITEMS if other.card[item] != first.card[item]] for other in results_[1:]
+    }
+    mismatches = {name: items for name, items in mismatches.items() if items}
+    refused = bool(mismatches) and not allow_mismatch
 
     def keyed(run: Run) -> dict[tuple, EpisodeRecord]:
         return {r.key: r for r in run.records}
 
-    comparisons = [paired(f"{first.name} vs {other.name}", keyed(first), keyed(other)) for other in runs[1:]]
-    return Summary([results(run) for run in runs], [t for t in comparisons if t is not None])
+    comparisons = []
+    if not refused:
+        tests = (paired(f"{runs[0].name} vs {other.name}", keyed(runs[0]), keyed(other)) for other in runs[1:])
+        comparisons = [t for t in tests if t is not None]
+    return Summary(results_, comparisons, mismatches, refused)

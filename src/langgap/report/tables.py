@@ -8,7 +8,7 @@ from langgap.catalog.labels import DIMENSION_LABEL, EXTENDED_DIMENSIONS, SPLIT_L
 from langgap.records import JUDGED_OUTCOMES, Outcome
 from langgap.report.published import Published
 from langgap.report.stats import PairedTest, Rate
-from langgap.report.summary import RunResults, Summary
+from langgap.report.summary import CARD_ITEMS, RunResults, Summary
 
 SOURCE_LABEL = {"original": "Original (LIBERO)", "extended": "Extended (LangGap)", "total": "Total"}
 OUTCOME_LABEL = {
@@ -165,13 +165,24 @@ def condition_table(run: RunResults) -> Table | None:
 
 
 def comparison_table(summary: Summary) -> Table | None:
-    """The first run against each other run on matched episodes."""
+    """The first run against each other run on matched episodes; refused when their protocols differ."""
+    if summary.refused:
+        rows = [[name, ", ".join(items)] for name, items in summary.mismatches.items()]
+        title = "Runs not compared: their protocols differ from the first run's (--allow-mismatch pairs them anyway)"
+        return Table(title, ["Run", "Differs in"], rows)
     if not summary.comparisons:
         return None
     headers = ["Comparison", "Pairs", "First %", "Second %", "Only first", "Only second", "p"]
-    return Table(
-        "Runs compared on matched episodes (McNemar)", headers, [_paired_cells(t) for t in summary.comparisons]
-    )
+    title = "Runs compared on matched episodes (McNemar)"
+    if summary.mismatches:
+        title += " — protocols differ: " + "; ".join(f"{n}: {', '.join(i)}" for n, i in summary.mismatches.items())
+    return Table(title, headers, [_paired_cells(t) for t in summary.comparisons])
+
+
+def protocol_table(summary: Summary) -> Table:
+    """The protocol card: what determines each run's numbers."""
+    rows = [[item, *(run.card[item] for run in summary.runs)] for item in CARD_ITEMS]
+    return Table("Protocol card", ["", *(run.label for run in summary.runs)], rows)
 
 
 def confusion_tables(run: RunResults) -> list[Table]:
@@ -196,7 +207,7 @@ def confusion_tables(run: RunResults) -> list[Table]:
 
 def full_report(summary: Summary, published: Published | None = None) -> list[Table]:
     """Every table of `langgap report` (with the paper's published rows when `published` is given)."""
-    tables = []
+    tables = [protocol_table(summary)]
     for run in summary.runs:
         tables += [source_table(run), outcome_table(run), split_table(run)]
         if (conditions := condition_table(run)) is not None:
@@ -213,7 +224,9 @@ def full_report(summary: Summary, published: Published | None = None) -> list[Ta
 
 def diagnosis(summary: Summary, published: Published | None = None) -> list[Table]:
     """The short diagnosis: success by dimension (runs side by side) and what each policy did instead."""
-    tables = [dimension_table(summary, published)]
+    tables = [protocol_table(summary), dimension_table(summary, published)]
+    if (comparison := comparison_table(summary)) is not None and summary.refused:
+        tables.append(comparison)
     for run in summary.runs:
         tables.append(outcome_table(run))
         if (conditions := condition_table(run)) is not None:
