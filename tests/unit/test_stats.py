@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
-from langgap.report.stats import PairedTest, Rate, mcnemar_exact, wilson
+from langgap.report.stats import PairedTest, Rate, mcnemar_exact, minimum_detectable_effect, wilson
 
 
 @pytest.mark.parametrize(
@@ -35,3 +37,27 @@ def test_a_paired_test_reports_rates_and_p_value():
     row = t.as_dict()
     assert (row["rate_a"], row["rate_b"], row["changed_behaviour"]) == (0.6, 0.15, 0.5)
     assert row["p_value"] == pytest.approx(0.00390625)
+
+
+def _power(p1: float, p2: float, n: int) -> float:
+    """R's power.prop.test (two-sided, α = 0.05), written out independently."""
+    from statistics import NormalDist
+
+    q1, q2, z = 1 - p1, 1 - p2, NormalDist().inv_cdf(0.975)
+    return NormalDist().cdf(
+        (math.sqrt(n * (p1 - p2) ** 2) - z * math.sqrt((p1 + p2) * (q1 + q2) / 2)) / math.sqrt(p1 * q1 + p2 * q2)
+    )
+
+
+@pytest.mark.parametrize(("rate", "n"), [(0.0, 20), (0.3, 760), (0.95, 800), (0.5, 100), (0.1, 260)])
+def test_the_minimum_detectable_effect_has_80_percent_power(rate, n):
+    mde = minimum_detectable_effect(rate, n)
+    other = rate + mde if rate <= 0.5 else rate - mde
+    assert _power(rate, other, n) == pytest.approx(0.8, abs=0.002)
+    assert Rate("g", n, round(rate * n), 0, 1).as_dict()["mde"] == pytest.approx(mde)
+
+
+def test_more_episodes_detect_smaller_effects():
+    assert (
+        minimum_detectable_effect(0.3, 20) > minimum_detectable_effect(0.3, 200) > minimum_detectable_effect(0.3, 2000)
+    )

@@ -6,6 +6,7 @@ import math
 from dataclasses import asdict, dataclass
 
 Z_95 = 1.959964
+Z_POWER_80 = 0.841621
 
 
 def wilson(successes: int, n: int, z: float = Z_95) -> tuple[float, float]:
@@ -28,6 +29,31 @@ def mcnemar_exact(only_a: int, only_b: int) -> float:
     return min(1.0, 2 * tail)
 
 
+def minimum_detectable_effect(rate: float, n: int, z_alpha: float = Z_95, z_power: float = Z_POWER_80) -> float:
+    """The smallest change in success rate (towards 1/2) that a second run of `n` episodes would detect
+    against a rate of `rate` over `n` episodes, with 80 % power at α = 0.05 (two-sided z-test for two
+    proportions, normal approximation); 1.0 for n = 0."""
+    if n == 0:
+        return 1.0
+    direction = 1.0 if rate <= 0.5 else -1.0
+    room = 1.0 - rate if direction > 0 else rate
+
+    def detectable(delta: float) -> bool:
+        other = rate + direction * delta
+        mean = (rate + other) / 2
+        null = z_alpha * math.sqrt(2 * mean * (1 - mean) / n)
+        alternative = z_power * math.sqrt((rate * (1 - rate) + other * (1 - other)) / n)
+        return null + alternative <= delta
+
+    if not detectable(room):
+        return room
+    low, high = 0.0, room
+    for _ in range(50):  # bisection to well below a rounding step of the tables
+        middle = (low + high) / 2
+        low, high = (low, middle) if detectable(middle) else (middle, high)
+    return high
+
+
 @dataclass(frozen=True)
 class Rate:
     """A group of episodes and its success rate; gaps are counted beside, never as failures."""
@@ -46,9 +72,14 @@ class Rate:
     def ci(self) -> tuple[float, float]:
         return wilson(self.successes, self.episodes)
 
+    @property
+    def mde(self) -> float:
+        """The minimum detectable effect at this group's size (see `minimum_detectable_effect`)."""
+        return minimum_detectable_effect(self.rate, self.episodes)
+
     def as_dict(self) -> dict:
         low, high = self.ci
-        return {**asdict(self), "rate": self.rate, "ci_low": low, "ci_high": high}
+        return {**asdict(self), "rate": self.rate, "ci_low": low, "ci_high": high, "mde": self.mde}
 
 
 @dataclass(frozen=True)

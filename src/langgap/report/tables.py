@@ -113,6 +113,15 @@ def split_table(run: RunResults) -> Table:
     return Table(f"Training vs held-out — {run.label}", _RATE_HEADERS, _rate_rows(run.by_split, SPLIT_LABEL))
 
 
+def mde_table(run: RunResults) -> Table:
+    """Per dimension: the smallest change in success rate another run of this size would detect."""
+    rates = [run.source("original"), *run.by_dimension, run.source("extended")]
+    names = {**DIMENSION_LABEL, **SOURCE_LABEL}
+    rows = [[label(names, r.group), str(r.episodes), pct(r.rate), pct(r.mde)] for r in rates if r.episodes]
+    title = f"Minimum detectable effect — {run.label} (80 % power, α = 0.05, against a run of the same size)"
+    return Table(title, ["Category", "Episodes", "Rate %", "MDE (points)"], rows)
+
+
 def outcome_table(run: RunResults) -> Table:
     """What the policy did instead, per dimension (`did source task` is the default-task rate)."""
     headers = ["Dimension", "Episodes", *(OUTCOME_LABEL[o] for o in JUDGED_OUTCOMES), "Gaps"]
@@ -209,7 +218,7 @@ def full_report(summary: Summary, published: Published | None = None) -> list[Ta
     """Every table of `langgap report` (with the paper's published rows when `published` is given)."""
     tables = [protocol_table(summary)]
     for run in summary.runs:
-        tables += [source_table(run), outcome_table(run), split_table(run)]
+        tables += [source_table(run), outcome_table(run), split_table(run), mde_table(run)]
         if (conditions := condition_table(run)) is not None:
             tables.append(conditions)
     if published:
