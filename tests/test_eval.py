@@ -400,3 +400,12 @@ def test_the_shared_policy_server_waits_max_wait_ms_for_a_batch():
 
     assert asyncio.run(two_queries_50_ms_apart(500)) == 1
     assert asyncio.run(two_queries_50_ms_apart(5)) == 2
+
+
+def test_repeats_run_every_episode_with_more_seeds_and_reports_the_spread(short_catalog, tmp_path):
+    run = tmp_path / "run"
+    result = _cli_eval(short_catalog, run, "random", "--episodes", "2", "--repeats", "2", "--tasks", "spatial/s0/open*")
+    assert result.returncode == 0, result.stderr
+    assert sorted((r["init_index"], r["seed"]) for r in store_rows(run)) == [(0, 0), (0, 1000), (1, 1), (1, 1001)]
+    report = run_cli("report", str(run), "--no-published")
+    assert "Between-seed spread" in report.stdout and "run seed 0 + init index, 2 repeats" in report.stdout

@@ -7,7 +7,7 @@ import dataclasses
 import pytest
 
 from langgap.catalog.catalog import load_catalog
-from langgap.engine.plan import build_plan, condition_instruction, episode_seed
+from langgap.engine.plan import build_plan, condition_instruction, episode_seed, repeat_of
 from langgap.engine.spec import ExecutionOptions, RunSpec, SpecError
 from langgap.errors import LangGapError
 
@@ -74,7 +74,7 @@ def test_execution_defaults():
 def test_a_spec_names_every_field_that_differs():
     spec = RunSpec(
         policy="noop", policy_args={}, catalog="langgap99", catalog_hash="abc", selection=None, tasks=("a", "b"),
-        inits=(0, 1), seed=0, conditions=("given",), style="libero", physics={"mujoco": "3.2.3"},
+        inits=(0, 1), seed=0, repeats=1, conditions=("given",), style="libero", physics={"mujoco": "3.2.3"},
     )  # fmt: skip
     stored = spec.to_dict()
     assert spec.differences(stored) == []
@@ -82,3 +82,12 @@ def test_a_spec_names_every_field_that_differs():
     assert other.differences(stored) == ["inits", "seed"]
     assert other.describe_differences(stored, ["seed"]) == "seed: stored 0, given 5"
     assert stored["tasks"] == ["a", "b"]  # stored as JSON lists
+
+
+def test_repeats_run_each_init_state_with_other_seeds(catalog):
+    tasks = catalog.select("spatial/s0/black-bowl-1-on-plate")
+    plan = build_plan(tasks, catalog, episodes=2, seed=3, repeats=3)
+    assert sorted((p.key.init_index, p.key.seed) for p in plan) == [
+        (0, 3), (0, 1003), (0, 2003), (1, 4), (1, 1004), (1, 2004)
+    ]  # fmt: skip
+    assert {repeat_of(p.key.seed, p.key.init_index, 3) for p in plan} == {0, 1, 2}

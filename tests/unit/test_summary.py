@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from langgap.report import load_runs, summarize
@@ -86,3 +88,21 @@ def test_runs_whose_protocols_differ_are_not_paired_unless_allowed(tmp_path):
     assert refused.comparisons == []
     allowed = summarize(load_runs([first, other]), allow_mismatch=True)
     assert not allowed.refused and allowed.comparisons[0].pairs == 11
+
+
+def test_repeats_give_the_between_seed_spread(tmp_path):
+    # Two repeats on init states 0..3: the second repeat's seeds are 1000 + k.
+    first = reader()
+    second = [dataclasses.replace(r, seed=1000 + r.init_index, success=r.kind == "original") for r in reader()]
+    run = write_run(tmp_path / "r", "my-vla", first + second, repeats=2)
+    (results,) = summarize(load_runs([run])).runs
+    rows = {row.group: row for row in results.spread}
+    assert [r.rate for r in rows["extended"].rates] == [7 / 8, 0.0]
+    assert rows["extended"].mean == pytest.approx(7 / 16) and rows["extended"].std == pytest.approx(0.61872, abs=1e-4)
+    assert [r.rate for r in rows["original"].rates] == [1.0, 1.0] and rows["original"].std == 0
+    assert results.card["seeds"] == "run seed 0 + init index, 2 repeats"
+    assert results.source("extended").episodes == 16  # the pooled rate counts every episode
+
+
+def test_a_single_seed_run_has_no_spread(summary):
+    assert summary.runs[1].spread == []

@@ -63,6 +63,14 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument("--seed", type=int, default=0, help="run seed; episode k uses env seed SEED+k")
     parser.add_argument(
+        "--repeats",
+        type=int,
+        default=1,
+        metavar="R",
+        help="run every planned episode with R seeds on the same init state (repeat r: seed SEED+1000r+k); "
+        "reports give the between-seed spread",
+    )
+    parser.add_argument(
         "--timeout",
         type=float,
         metavar="S",
@@ -114,6 +122,7 @@ def run(args) -> int:
         tasks=args.tasks,
         episodes=args.episodes,
         seed=args.seed,
+        repeats=args.repeats,
         conditions=tuple(args.condition or ("given",)),
         style=args.style,
     )

@@ -48,6 +48,7 @@ def plan_of(spec: RunSpec) -> list[PlannedEpisode]:
         episodes=len(spec.inits),
         first_init=spec.inits[0],
         seed=spec.seed,
+        repeats=spec.repeats,
         conditions=spec.conditions,
         style=spec.style,
     )

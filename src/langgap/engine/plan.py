@@ -32,10 +32,19 @@ class PlannedEpisode:
         return hashlib.sha256(self.instruction.encode("utf-8")).hexdigest()
 
 
-def episode_seed(run_seed: int, init_index: int) -> int:
-    """The env seed of an episode. It depends on the init index only (not the task), so sibling tasks
-    start from the identical scene: same init state and same fixture placement."""
-    return run_seed + init_index
+# Repeat r of a run uses run seed + r * REPEAT_STRIDE: above any init index, so seeds never collide.
+REPEAT_STRIDE = 1000
+
+
+def episode_seed(run_seed: int, init_index: int, repeat: int = 0) -> int:
+    """The env seed of an episode. It depends on the init index (and the repeat) only, not the task, so
+    sibling tasks start from the identical scene: same init state and same fixture placement."""
+    return run_seed + repeat * REPEAT_STRIDE + init_index
+
+
+def repeat_of(seed: int, init_index: int, run_seed: int) -> int:
+    """Which repeat an episode's seed belongs to (the inverse of `episode_seed`)."""
+    return (seed - init_index - run_seed) // REPEAT_STRIDE
 
 
 def condition_instruction(task: Task, catalog: Catalog, condition: str, style: str, init_index: int) -> str:
@@ -68,8 +77,10 @@ def build_plan(
     conditions: tuple[str, ...] = ("given",),
     style: str = "libero",
     first_init: int = 0,
+    repeats: int = 1,
 ) -> list[PlannedEpisode]:
-    """Episodes `first_init .. first_init+episodes-1` (init state k = episode k) of every task × condition."""
+    """Episodes `first_init .. first_init+episodes-1` (init state k = episode k) of every task × condition,
+    each `repeats` times with its own seed (same init state)."""
     if episodes < 1:
         raise CatalogError(f"--episodes must be at least 1, got {episodes}")
     unknown = [c for c in conditions if c not in CONDITIONS]
@@ -88,7 +99,8 @@ def build_plan(
             )
         for condition in conditions:
             for init_index in range(first_init, first_init + episodes):
-                key = EpisodeKey(task.id, init_index, episode_seed(seed, init_index), condition)
                 instruction = condition_instruction(task, catalog, condition, style, init_index)
-                plan.append(PlannedEpisode(key, instruction, scene=scene_key(task)))
+                for repeat in range(repeats):
+                    key = EpisodeKey(task.id, init_index, episode_seed(seed, init_index, repeat), condition)
+                    plan.append(PlannedEpisode(key, instruction, scene=scene_key(task)))
     return plan

@@ -15,7 +15,7 @@ from dataclasses import asdict, dataclass, fields
 from langgap import stack
 from langgap.catalog.catalog import DEFAULT_CATALOG, catalog_hash, load_catalog
 from langgap.catalog.task import DEFAULT_STYLE, INSTRUCTION_STYLES
-from langgap.engine.plan import CONDITION_HELP, CONDITIONS
+from langgap.engine.plan import CONDITION_HELP, CONDITIONS, REPEAT_STRIDE
 from langgap.errors import LangGapError
 from langgap.policies import policy_kwargs
 
@@ -24,7 +24,7 @@ DEFAULT_TIMEOUT_S = 900.0
 DEFAULT_MAX_ATTEMPTS = 3
 DEFAULT_FAILURE_STREAK = 3
 # The fields that only say which episodes a run holds: `--extend` lets a resumed run grow them.
-PLAN_FIELDS = ("selection", "tasks", "inits", "conditions")
+PLAN_FIELDS = ("selection", "tasks", "inits", "conditions", "repeats")
 
 
 class SpecError(LangGapError):
@@ -42,7 +42,8 @@ class RunSpec:
     selection: str | None  # the task selection as given (None: the catalog's default selection)
     tasks: tuple[str, ...]  # the task ids it resolved to
     inits: tuple[int, ...]  # the init-state indices every task runs (episode k uses init state k)
-    seed: int  # episode k's env seed is seed + k
+    seed: int  # episode k's env seed is seed + k (repeat r: seed + r * REPEAT_STRIDE + k)
+    repeats: int  # seeds per init state
     conditions: tuple[str, ...]
     style: str
     physics: dict[str, str]  # the installed physics stack
@@ -57,6 +58,7 @@ class RunSpec:
         tasks: str | None = None,
         episodes: int = PAPER_EPISODES,
         seed: int = 0,
+        repeats: int = 1,
         conditions: tuple[str, ...] = ("given",),
         style: str = DEFAULT_STYLE,
     ) -> RunSpec:
@@ -68,6 +70,8 @@ class RunSpec:
         policy_kwargs(policy, policy_args)
         if episodes < 1:
             raise SpecError(f"--episodes must be at least 1, got {episodes}")
+        if not 1 <= repeats <= REPEAT_STRIDE:
+            raise SpecError(f"--repeats must be between 1 and {REPEAT_STRIDE}, got {repeats}")
         if style not in INSTRUCTION_STYLES:
             raise SpecError(f"unknown instruction style {style!r} (known: {', '.join(INSTRUCTION_STYLES)})")
         conditions = tuple(dict.fromkeys(conditions))
@@ -84,6 +88,7 @@ class RunSpec:
             tasks=tuple(t.id for t in selected),
             inits=tuple(range(episodes)),
             seed=seed,
+            repeats=repeats,
             conditions=conditions,
             style=style,
             physics=stack.physics_stack(),

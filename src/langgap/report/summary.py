@@ -7,12 +7,14 @@ failures, and every row carries the number it left out.
 
 from __future__ import annotations
 
+import statistics
 from collections import Counter, defaultdict
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
 from langgap.catalog.labels import EXTENDED_DIMENSIONS, SPLIT_ORDER, SUITE_ORDER
+from langgap.engine.plan import repeat_of
 from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, achieved
 from langgap.report.load import Run
 from langgap.report.stats import PairedTest, Rate
@@ -56,6 +58,13 @@ def _indices(values: list[int]) -> str:
     return _joined(values)
 
 
+def _seeds(spec: dict) -> str:
+    if "seed" not in spec:
+        return "?"
+    repeats = spec.get("repeats", 1)
+    return f"run seed {spec['seed']} + init index" + (f", {repeats} repeats" if repeats > 1 else "")
+
+
 def protocol_card(run: Run) -> dict[str, str]:
     """What determines a run's numbers, as shown at the top of its report (from its spec and records)."""
     spec, records = run.spec, [r for r in run.records if r.judged] or run.records
@@ -69,7 +78,7 @@ def protocol_card(run: Run) -> dict[str, str]:
         "step limits": _joined(f"{suite} {n}" for suite, n in sorted(steps.items())),
         "settle steps": _joined(sorted({r.settle_steps or "?" for r in records}, key=str)),  # 0: not recorded
         "init states": _indices(list(inits)),
-        "seeds": f"run seed {spec['seed']} + init index" if "seed" in spec else "?",
+        "seeds": _seeds(spec),
         "physics": _joined(f"{k} {v}" for k, v in sorted(spec.get("physics", {}).items())),
         "conditions": _joined(spec.get("conditions") or sorted({r.condition for r in records})),
         "policy": str(spec.get("policy", "?")),
@@ -113,6 +122,42 @@ class TaskRow:
     rate: Rate
     dimension: str
     instruction: str
+
+
+@dataclass(frozen=True)
+class SpreadRow:
+    """One group's success rate in each repeat of a run (same init states, other seeds)."""
+
+    group: str
+    rates: list[Rate]  # one per repeat
+
+    @property
+    def mean(self) -> float:
+        return statistics.fmean(r.rate for r in self.rates)
+
+    @property
+    def std(self) -> float:
+        """The sample standard deviation across repeats (0 with one repeat)."""
+        return statistics.stdev(r.rate for r in self.rates) if len(self.rates) > 1 else 0.0
+
+    def as_dict(self) -> dict:
+        return {"group": self.group, "rates": [r.rate for r in self.rates], "mean": self.mean, "std": self.std}
+
+
+def spread(records: list[EpisodeRecord], run_seed: int) -> list[SpreadRow]:
+    """Per source and dimension, the rate in each repeat; empty for a run with one repeat."""
+    repeats = sorted({repeat_of(r.seed, r.init_index, run_seed) for r in records})
+    if len(repeats) < 2:
+        return []
+    groups = [("original", lambda r: r.kind == "original"), ("extended", lambda r: r.kind == "extended")]
+    groups += [(d, lambda r, d=d: r.kind == "extended" and r.dimension == d) for d in EXTENDED_DIMENSIONS]
+    rows = []
+    for name, member in groups:
+        chosen = [r for r in records if member(r)]
+        if chosen:
+            by_repeat = [[r for r in chosen if repeat_of(r.seed, r.init_index, run_seed) == k] for k in repeats]
+            rows.append(SpreadRow(name, [rate(name, rs) for rs in by_repeat]))
+    return rows
 
 
 @dataclass(frozen=True)
@@ -189,6 +234,7 @@ class RunResults:
     confusion: dict[str, dict[str, dict[str, int]]]
     conditions: list[PairedTest]
     card: dict[str, str]  # the protocol card (`CARD_ITEMS`)
+    spread: list[SpreadRow]  # between-seed spread (runs with --repeats)
 
     @property
     def label(self) -> str:
@@ -227,6 +273,7 @@ def results(run: Run) -> RunResults:
         confusion=confusion(given),
         conditions=condition_tests(run.records),
         card=protocol_card(run),
+        spread=spread(given, int(run.spec.get("seed", 0))),
     )
 
 
@@ -259,7 +306,7 @@ class Summary:
             "per_split": lambda run: run.by_split,
             "per_task": lambda run: [t.rate for t in run.tasks],
         }
-        for section in (*sections, "outcomes", "conditions"):
+        for section in (*sections, "outcomes", "conditions", "spread"):
             out[section] = []
         for run in self.runs:
             out["runs"].append(
@@ -279,6 +326,7 @@ class Summary:
                     out[section].append({"run": run.name, "id": data.pop("group"), **data})
             out["outcomes"] += [{"run": run.name, **o.as_dict()} for o in run.outcomes]
             out["conditions"] += [{"run": run.name, **t.as_dict()} for t in run.conditions]
+            out["spread"] += [{"run": run.name, **row.as_dict()} for row in run.spread]
             out["confusion"][run.name] = run.confusion
         return out
 

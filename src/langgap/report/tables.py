@@ -122,6 +122,26 @@ def mde_table(run: RunResults) -> Table:
     return Table(title, ["Category", "Episodes", "Rate %", "MDE (points)"], rows)
 
 
+def spread_table(run: RunResults) -> Table | None:
+    """Between-seed spread: each repeat's rate beside the pooled rate and its episode interval."""
+    if not run.spread:
+        return None
+    pooled = {r.group: r for r in [*run.by_source, *run.by_dimension]}
+    names = {**DIMENSION_LABEL, **SOURCE_LABEL}
+    rows = [
+        [
+            label(names, row.group),
+            ", ".join(pct(r.rate) for r in row.rates),
+            pct(row.mean),
+            pct(row.std),
+            rate_cell(pooled.get(row.group)),
+        ]
+        for row in run.spread
+    ]
+    headers = ["Category", "Rate % per seed", "Mean %", "Std across seeds (points)", "Pooled %, 95% CI"]
+    return Table(f"Between-seed spread — {run.label} (same init states, other seeds)", headers, rows)
+
+
 def outcome_table(run: RunResults) -> Table:
     """What the policy did instead, per dimension (`did source task` is the default-task rate)."""
     headers = ["Dimension", "Episodes", *(OUTCOME_LABEL[o] for o in JUDGED_OUTCOMES), "Gaps"]
@@ -219,6 +239,8 @@ def full_report(summary: Summary, published: Published | None = None) -> list[Ta
     tables = [protocol_table(summary)]
     for run in summary.runs:
         tables += [source_table(run), outcome_table(run), split_table(run), mde_table(run)]
+        if (seeds := spread_table(run)) is not None:
+            tables.append(seeds)
         if (conditions := condition_table(run)) is not None:
             tables.append(conditions)
     if published:
