@@ -78,3 +78,17 @@ def test_the_papers_published_rows_are_shown_beside_the_runs_and_can_be_left_out
     cli = run_cli("report", str(runs[1]), "--no-published", "--summary")
     assert cli.returncode == 0 and "Table VII" in cli.stdout and "(published:" not in cli.stdout
     assert "(published: LangGap paper, Table VII)" in run_cli("report", str(runs[1]), "--summary").stdout
+
+
+def test_the_published_appendix_adds_up_to_table_ii_and_sits_beside_the_runs(runs):
+    from langgap.report.published import load_published
+
+    published = load_published()
+    table_ii = {r.group: (r.successes, r.episodes) for r in published.diagnostic}
+    for dimension in ("change_object", "change_target", "spatial_description", "drawer_action"):
+        groups = [g.published for g in published.appendix if g.dimension == dimension]
+        assert (sum(g.successes for g in groups), sum(g.episodes for g in groups)) == table_ii[dimension]
+        assert (
+            sum(len(g.task_ids) for g in published.appendix if g.dimension == dimension) * 20 == table_ii[dimension][1]
+        )
+    assert "| Drawer Action | open the middle drawer | 13/20 (65.0%) | – | – |" in render(runs, "md")

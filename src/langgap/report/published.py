@@ -13,6 +13,7 @@ from pathlib import Path
 
 import yaml
 
+from langgap.catalog.catalog import load_catalog
 from langgap.report.stats import Rate
 
 _DATA = Path(__file__).with_name("published") / "langgap_paper.yaml"
@@ -27,6 +28,16 @@ class PublishedRow:
 
 
 @dataclass(frozen=True)
+class AppendixGroup:
+    """A row of the paper's per-task appendix: a task or group of tasks and its published count."""
+
+    dimension: str
+    label: str
+    task_ids: frozenset[str]  # the group's tasks in the langgap99 catalog
+    published: Rate
+
+
+@dataclass(frozen=True)
 class Published:
     """The published tables a report can show beside its runs."""
 
@@ -35,6 +46,8 @@ class Published:
     dimensions: list[PublishedRow]  # Table VII
     diagnostic_method: str  # Table II's model
     diagnostic: list[Rate]  # Table II: by data source, then by dimension (the published counts)
+    appendix_method: str
+    appendix: list[AppendixGroup]  # the appendix's per-task detail
 
     def label(self, method: str, table: str) -> str:
         return f"{method} (published: {self.source}, {table})"
@@ -58,6 +71,22 @@ def load_published() -> Published:
         for section in ("by_source", "by_dimension")
         for group, (tasks, episodes, successes) in table_ii[section].items()
     ]
+    catalog = load_catalog("langgap99")
+    appendix = [
+        AppendixGroup(
+            g["dimension"],
+            g["label"],
+            frozenset(t.id for t in catalog.select(g["tasks"])),
+            Rate(g["label"], episodes=g["episodes"], successes=g["successes"], gaps=0, tasks=g["episodes"] // 20),
+        )
+        for g in tables["appendix"]["groups"]
+    ]
     return Published(
-        data["source"], _rows(tables["table_vi"]), _rows(tables["table_vii"]), table_ii["method"], diagnostic
+        source=data["source"],
+        suites=_rows(tables["table_vi"]),
+        dimensions=_rows(tables["table_vii"]),
+        diagnostic_method=table_ii["method"],
+        diagnostic=diagnostic,
+        appendix_method=tables["appendix"]["method"],
+        appendix=appendix,
     )

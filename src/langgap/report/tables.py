@@ -102,6 +102,25 @@ def dimension_table(summary: Summary, published: Published | None = None) -> Tab
     return Table("Table VII — extended tasks by dimension (success %, 95% CI, (tasks))", headers, rows)
 
 
+def _count_cell(successes: int, episodes: int) -> str:
+    return f"{successes}/{episodes} ({pct(successes / episodes)}%)" if episodes else "–"
+
+
+def published_appendix_table(summary: Summary, published: Published) -> Table:
+    """The paper's per-task appendix for π0.5, beside each run's result on the same tasks."""
+    rows = []
+    for group in published.appendix:
+        row = [label(DIMENSION_LABEL, group.dimension), group.label]
+        row.append(_count_cell(group.published.successes, group.published.episodes))
+        for run in summary.runs:
+            mine = [t.rate for t in run.tasks if t.rate.group in group.task_ids]
+            row.append(_count_cell(sum(r.successes for r in mine), sum(r.episodes for r in mine)))
+        rows.append(row)
+    method = published.label(published.appendix_method, "appendix")
+    headers = ["Dimension", "Tasks", method, *(run.label for run in summary.runs)]
+    return Table(f"Per-task detail — {method} beside your runs (same tasks)", headers, rows)
+
+
 def published_diagnostic_table(published: Published) -> Table:
     """Table II as published (its episode counts, with the Wilson intervals they imply)."""
     names = {**DIMENSION_LABEL, **SOURCE_LABEL}
@@ -248,6 +267,8 @@ def full_report(summary: Summary, published: Published | None = None) -> list[Ta
     tables += [suite_table(summary, published), dimension_table(summary, published)]
     if (comparison := comparison_table(summary)) is not None:
         tables.append(comparison)
+    if published:
+        tables.append(published_appendix_table(summary, published))
     for run in summary.runs:
         tables += [task_table(run), *confusion_tables(run)]
     return tables
