@@ -60,12 +60,9 @@ def latex_table(table: Table) -> str:
 
 
 def _header(summary: Summary) -> str:
-    """One line per run: where it is, its size, its physics stack."""
+    """One line per run: where it is and its size (the protocol card follows)."""
     return "".join(
-        f"**{run.label}** — {run.path}: {run.episodes} episodes, {run.gaps} gaps; physics "
-        + ", ".join(f"{k} {v}" for k, v in run.spec.get("physics", {}).items())
-        + "\n\n"
-        for run in summary.runs
+        f"**{run.label}** — {run.path}: {run.episodes} episodes, {run.gaps} gaps\n\n" for run in summary.runs
     )
 
 

@@ -6,9 +6,10 @@ from dataclasses import dataclass
 
 from langgap.catalog.labels import DIMENSION_LABEL, EXTENDED_DIMENSIONS, SPLIT_LABEL, SUITE_LABEL, SUITE_ORDER, label
 from langgap.records import JUDGED_OUTCOMES, Outcome
+from langgap.report.card import CARD_ITEMS
 from langgap.report.published import Published
 from langgap.report.stats import PairedTest, Rate
-from langgap.report.summary import CARD_ITEMS, RunResults, Summary
+from langgap.report.summary import RunResults, Summary
 
 SOURCE_LABEL = {"original": "Original (LIBERO)", "extended": "Extended (LangGap)", "total": "Total"}
 OUTCOME_LABEL = {
