@@ -330,6 +330,7 @@ def test_a_run_that_ends_with_gaps_exits_3(short_catalog, tmp_path):
         "10",
     )
     assert result.returncode == 3 and "(0 successes, 3 gaps)" in result.stdout
+    assert [r["attempts"] for r in store_rows(tmp_path / "run")] == [1, 1, 1]  # --max-attempts 1 reached the loop
 
 
 def test_every_flag_of_a_run_reaches_its_effect(short_catalog, tmp_path):
