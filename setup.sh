@@ -3,7 +3,8 @@
 #   ./.venv          Python 3.11: LangGap, its pinned simulation stack, Ray, PyTorch (CPU, for small-bc), h5py
 #                    (export-hdf5), the test tools;
 #   ./.venv-lerobot  Python 3.12: LeRobot 0.6.1 with torch, LangGap and the `--env.type=langgap` plugin
-#                    (skip it with --core; set PYTHON312 to choose the interpreter).
+#                    (skip it with --core; set PYTHON312 to choose the interpreter);
+#   Debian chromium  the headless browser the HTML report is tested in (needs apt-get and root).
 # Safe to re-run: existing environments are updated in place, and the main job skips stored episodes.
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -49,6 +50,15 @@ fi
 .venv/bin/python -m pip install --quiet --no-deps openpi-client==0.1.2 openpi-server==0.1.0
 private_macros .venv/bin/python
 
+# The HTML report's tests open it in a real headless browser.
+if ! command -v chromium >/dev/null; then
+    if command -v apt-get >/dev/null && [ "$(id -u)" = 0 ]; then
+        apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
+    else
+        echo "setup.sh: install Debian's chromium for the HTML report's browser test (apt-get install chromium)" >&2
+    fi
+fi
+
 if [ "$WITH_LEROBOT" = "1" ]; then
     PY312="$(python312)" || { echo "setup.sh: the LeRobot environment needs Python 3.12; set PYTHON312=/path/to/python3.12, or pass --core" >&2; exit 1; }
     [ -x .venv-lerobot/bin/python ] || "$PY312" -m venv .venv-lerobot
@@ -70,4 +80,4 @@ for policy in oracle blind; do
     .venv/bin/langgap eval --policy "$policy" --tasks "$QUICK_TASKS" --episodes 3 --workers 2 \
         --run "runs/quickstart/$policy" --resume --quiet
 done
-.venv/bin/langgap report runs/quickstart/oracle --compare runs/quickstart/blind --summary
+.venv/bin/langgap report runs/quickstart/oracle --compare runs/quickstart/blind --summary --html runs/quickstart/report

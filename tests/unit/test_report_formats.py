@@ -92,3 +92,14 @@ def test_the_published_appendix_adds_up_to_table_ii_and_sits_beside_the_runs(run
             sum(len(g.task_ids) for g in published.appendix if g.dimension == dimension) * 20 == table_ii[dimension][1]
         )
     assert "| Drawer Action | open the middle drawer | 13/20 (65.0%) | – | – |" in render(runs, "md")
+
+
+def test_allow_mismatch_on_the_command_line_pairs_runs_whose_protocols_differ(tmp_path):
+    first = write_run(tmp_path / "a", "blind", memoriser())
+    other = write_run(tmp_path / "b", "my-vla", reader(), physics={"mujoco": "3.3.0"})
+    refused = run_cli("report", str(first), "--compare", str(other), "--no-published")
+    assert (
+        "Runs not compared: their protocols differ" in refused.stdout and "| my-vla (b) | physics |" in refused.stdout
+    )
+    allowed = run_cli("report", str(first), "--compare", str(other), "--no-published", "--allow-mismatch")
+    assert "Runs compared on matched episodes (McNemar) — protocols differ: my-vla (b): physics" in allowed.stdout

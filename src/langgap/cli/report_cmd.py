@@ -25,6 +25,7 @@ def add_parser(subparsers) -> None:
         action="store_true",
         help="pair runs episode by episode even when their protocol cards differ",
     )
+    parser.add_argument("--html", metavar="DIR", help="write the report as one self-contained page, DIR/index.html")
     parser.add_argument("--plots", metavar="DIR", help="write PNG figures to DIR")
     parser.add_argument("--episodes", metavar="FILE", help="write the per-episode table (.csv or .parquet)")
     parser.set_defaults(handler=run)
@@ -35,14 +36,22 @@ def run(args) -> int:
 
     paths = [args.run, *args.compare]
     published = not args.no_published
-    text = (
-        diagnosis_text(paths, published=published) if args.summary else render(paths, args.format, published=published)
-    )
+    if args.summary:
+        text = diagnosis_text(paths, published=published)
+    else:
+        text = render(paths, args.format, published=published, allow_mismatch=args.allow_mismatch)
     print(text, end="")
+    if args.html or args.plots:
+        summary = summarize(load_runs(paths), allow_mismatch=args.allow_mismatch)
+    if args.html:
+        from langgap.report.html import write_html
+        from langgap.report.published import load_published
+
+        print(f"wrote {write_html(summary, load_published() if published else None, args.html)}")
     if args.plots:
         from langgap.report.plots import write_plots
 
-        for path in write_plots(summarize(load_runs(paths)), args.plots):
+        for path in write_plots(summary, args.plots):
             print(f"wrote {path}")
     if args.episodes:
         from langgap.report.export import write_episode_table
