@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import fnmatch
+import json
 from collections import Counter
 from pathlib import Path
 
@@ -15,6 +16,10 @@ from langgap.errors import LangGapError
 REGISTRY = Path(__file__).parents[2] / "src/langgap/catalog/registry/langgap99.yaml"
 ENTRIES = yaml.safe_load(REGISTRY.read_text())["tasks"]
 IDS = [e["id"] for e in ENTRIES]
+# The recorded feasibility verdicts, read directly (the catalog reads them through `read_verdicts`).
+VERDICTS = json.loads(REGISTRY.with_suffix(".gate.json").read_text())["tasks"]
+INFEASIBLE = {i for i, v in VERDICTS.items() if not v["feasible"]}
+SHORT = {"libero_spatial": "spatial", "libero_object": "object", "libero_goal": "goal", "libero_10": "libero10"}
 
 
 @pytest.fixture(scope="module")
@@ -24,6 +29,11 @@ def catalog():
 
 def ids(catalog, expression):
     return [t.id for t in catalog.select(expression)]
+
+
+def where(**attributes) -> list[str]:
+    """The registry's ids whose entries have every given attribute value, in file order."""
+    return [e["id"] for e in ENTRIES if all(e.get(k) == v for k, v in attributes.items())]
 
 
 def test_terms_select_what_the_registry_says(catalog):
@@ -40,6 +50,54 @@ def test_terms_select_what_the_registry_says(catalog):
     assert ids(catalog, "paper:0") == [paper_0]
 
 
+@pytest.mark.parametrize(
+    ("suite", "count"), [("libero_spatial", 38), ("libero_object", 32), ("libero_goal", 19), ("libero_10", 10)]
+)
+def test_a_suite_by_its_long_or_short_name(catalog, suite, count):
+    assert ids(catalog, suite) == ids(catalog, SHORT[suite]) == where(suite=suite)
+    assert len(where(suite=suite)) == count
+
+
+@pytest.mark.parametrize(
+    ("term", "attribute", "count"),
+    [
+        ("original", "kind", 40),
+        ("extended", "kind", 59),
+        ("change_object", "dimension", 38),
+        ("change_target", "dimension", 13),
+        ("spatial_description", "dimension", 5),
+        ("drawer_action", "dimension", 3),
+        ("train", "split", 16),
+        ("heldout", "split", 43),
+    ],
+)
+def test_a_kind_dimension_or_split_is_the_registry_field(catalog, term, attribute, count):
+    assert ids(catalog, term) == where(**{attribute: term})
+    assert len(ids(catalog, term)) == count
+
+
+def test_ids_globs_and_paper_numbers(catalog):
+    assert ids(catalog, "goal/s7/turn-on-stove") == ["goal/s7/turn-on-stove"]
+    for pattern in ("spatial/s?/*", "*/s0/*-on-plate", "object/s[0-2]/*", "*drawer*"):
+        expected = [i for i in IDS if fnmatch.fnmatchcase(i, pattern)]
+        assert expected and ids(catalog, pattern) == expected
+    for number in (0, 17, 40, 98):
+        (expected,) = [e["id"] for e in ENTRIES if e.get("paper_id") == number]
+        assert ids(catalog, f"paper:{number}") == [expected]
+    assert ids(catalog, "langgap99") == IDS  # every task of the paper's own catalog
+
+
+def test_the_default_is_the_tasks_the_gate_did_not_reject(catalog):
+    assert len(INFEASIBLE) == 7
+    feasible = [i for i in IDS if i not in INFEASIBLE]
+    assert ids(catalog, "feasible") == feasible and len(feasible) == 92
+    assert ids(catalog, None) == ids(catalog, "") == ids(catalog, "  ") == feasible
+    assert ids(catalog, "infeasible") == [i for i in IDS if i in INFEASIBLE]
+    # an infeasible task is still selectable by id or by a term that does not ask about feasibility
+    chosen = sorted(INFEASIBLE)[0]
+    assert ids(catalog, chosen) == [chosen] and chosen in ids(catalog, "all")
+
+
 def test_union_intersection_and_exclusion(catalog):
     spatial = set(ids(catalog, "spatial"))
     heldout = set(ids(catalog, "heldout"))
@@ -53,23 +111,55 @@ def test_union_intersection_and_exclusion(catalog):
     ]
 
 
-def test_results_keep_catalog_order_and_the_default_is_the_feasible_tasks(catalog):
+def test_combined_terms_against_the_registry(catalog):
+    assert ids(catalog, "spatial&heldout") == where(suite="libero_spatial", split="heldout")
+    assert ids(catalog, "goal&extended&change_object") == where(
+        suite="libero_goal", kind="extended", dimension="change_object"
+    )
+    assert ids(catalog, "original&!spatial/s0/*") == [
+        i for i in where(kind="original") if not fnmatch.fnmatchcase(i, "spatial/s0/*")
+    ]
+    assert ids(catalog, "!original&!heldout") == where(split="train")  # two exclusions from all tasks
+    assert ids(catalog, "feasible&!infeasible") == ids(catalog, "feasible")
+    # spaces around terms and operators are ignored, an empty union member is skipped
+    assert ids(catalog, " spatial & heldout , , libero10 ") == [
+        i for i in IDS if i in set(where(suite="libero_spatial", split="heldout")) | set(where(suite="libero_10"))
+    ]
+
+
+def test_results_keep_catalog_order_without_duplicates(catalog):
     chosen = ids(catalog, "heldout,original")
     assert chosen == [i for i in IDS if i in set(chosen)]
-    assert ids(catalog, None) == ids(catalog, "") == ids(catalog, "feasible")
+    assert ids(catalog, "libero10,spatial/s0/*,paper:0,spatial/s0/black-bowl-1-on-plate") == [
+        i for i in IDS if i.startswith("spatial/s0/") or i.startswith("libero10/")
+    ]
+    both = [e["id"] for e in ENTRIES if e["suite"] in ("libero_goal", "libero_10")]  # interleaved in the file
+    assert ids(catalog, "libero10,goal") == ids(catalog, "goal,libero10") == both
+    assert both != where(suite="libero_goal") + where(suite="libero_10")
     assert set(ids(catalog, "feasible")) | set(ids(catalog, "infeasible")) == set(IDS)
 
 
 @pytest.mark.parametrize(
     ("expression", "message"),
     [
-        ("spatial/s0/levitate", "spatial/s0/levitate"),
-        ("nothing*", "matches no task"),
-        ("paper:x", "paper id must be a number"),
-        ("spatial&libero10", "matches no task"),
+        ("spatial/s0/levitate", "unknown task 'spatial/s0/levitate'"),
+        ("nothing*", "selection term 'nothing\\*' matches no task"),
+        ("paper:x", "paper id must be a number: 'paper:x'"),
+        ("paper:500", "selection term 'paper:500' matches no task"),
+        ("spatial&libero10", "selection 'spatial&libero10' matches no task"),
+        ("spatial,frobnicate", "unknown task 'frobnicate'"),
+        ("spatial&!spatial", "selection 'spatial&!spatial' matches no task"),
+        ("!all", "selection '!all' matches no task"),
     ],
 )
 def test_a_term_that_matches_nothing_is_one_clear_error(catalog, expression, message):
     with pytest.raises(LangGapError, match=message) as info:
         catalog.select(expression)
     assert "\n" not in str(info.value)
+
+
+def test_a_near_miss_id_gets_suggestions(catalog):
+    with pytest.raises(LangGapError, match="did you mean spatial/s0/ramekin-on-plate"):
+        catalog.select("spatial/s0/ramekin-on-plat")
+    with pytest.raises(LangGapError, match="all, feasible, infeasible, langgap99"):  # the keywords are listed
+        catalog.select("spatial/s9/*-on-moon")
