@@ -3,13 +3,21 @@
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 
 import pytest
 
-from langgap.catalog.catalog import load_catalog
+from langgap import stack
+from langgap.catalog.catalog import catalog_hash, load_catalog
 from langgap.engine.plan import build_plan, condition_instruction, episode_seed, repeat_of
+from langgap.engine.pools import make_pool
 from langgap.engine.spec import ExecutionOptions, RunSpec, SpecError
 from langgap.errors import LangGapError
+from langgap.records import EpisodeKey
+
+BOWL_1 = "spatial/s0/black-bowl-1-on-plate"
+RAMEKIN = "spatial/s0/ramekin-on-plate"
+STOVE = "goal/s7/turn-on-stove"
 
 
 @pytest.fixture(scope="module")
@@ -46,6 +54,42 @@ def test_init_indices_past_the_fifty_states_are_an_error(catalog):
         build_plan(catalog.select("spatial/s0/black-bowl-1-on-plate"), catalog, episodes=6, first_init=45)
     with pytest.raises(LangGapError, match="unknown condition"):
         build_plan(catalog.select("spatial/s0/black-bowl-1-on-plate"), catalog, episodes=1, conditions=("loud",))
+    with pytest.raises(LangGapError, match="init indices -1..0 are out of range"):
+        build_plan(catalog.select(BOWL_1), catalog, episodes=2, first_init=-1)
+    with pytest.raises(LangGapError, match="--episodes must be at least 1, got 0"):
+        build_plan(catalog.select(BOWL_1), catalog, episodes=0)
+    assert len(build_plan(catalog.select(BOWL_1), catalog, episodes=5, first_init=45)) == 5  # 45..49: the last five
+
+
+def test_the_plan_order_is_task_then_condition_then_init_then_repeat(catalog):
+    tasks = [catalog.get(RAMEKIN), catalog.get(STOVE)]
+    plan = build_plan(tasks, catalog, episodes=2, seed=7, conditions=("empty", "given"), first_init=4, repeats=2)
+    assert [p.key for p in plan] == [
+        EpisodeKey(task, init, 7 + repeat * 1000 + init, condition)
+        for task in (RAMEKIN, STOVE)
+        for condition in ("empty", "given")
+        for init in (4, 5)
+        for repeat in (0, 1)
+    ]
+
+
+def test_every_episode_knows_its_scene(catalog):
+    plan = build_plan(catalog.select("spatial/s0/*,spatial/s1/*,goal/s1/*,goal/s7/*"), catalog, episodes=1)
+    scenes = {}
+    for p in plan:
+        scenes.setdefault(p.scene, set()).add(p.key.task_id.rsplit("/", 1)[0])
+    # one scene per spatial layout; every libero_goal task shares one layout
+    assert sorted(scenes.values(), key=sorted) == [{"goal/s1", "goal/s7"}, {"spatial/s0"}, {"spatial/s1"}]
+    assert all(len(scene) == 16 for scene in scenes)
+
+
+def test_the_instruction_style_reaches_the_plan(catalog):
+    task = catalog.get(BOWL_1)
+    (libero,) = build_plan([task], catalog, episodes=1, style="libero")
+    (paper,) = build_plan([task], catalog, episodes=1, style="paper")
+    assert libero.instruction == "pick up the black bowl between the plate and the ramekin and place it on the plate"
+    assert paper.instruction == "Pick the akita black bowl between the plate and the ramekin and place it on the plate"
+    assert libero.instruction_sha256 == hashlib.sha256(libero.instruction.encode()).hexdigest()
 
 
 @pytest.mark.parametrize(
@@ -59,6 +103,15 @@ def test_init_indices_past_the_fifty_states_are_an_error(catalog):
         ({"backend": "ray", "shared_policy": True, "max_batch": 0}, "--max-batch"),
         ({"max_attempts": 0}, "--max-attempts"),
         ({"max_failure_streak": 0}, "--max-failure-streak"),
+        ({"videos": -1}, "--video must be at least 0, got -1"),
+        ({"ray_address": "10.0.0.1:6379"}, "--ray-address needs --backend ray"),
+        ({"shared_policy": True}, "--shared-policy needs --backend ray"),
+        (
+            {"backend": "ray", "max_wait_ms": 2.0, "policy_gpus": 1.0},
+            "--max-wait-ms, --policy-gpus only apply to a shared",
+        ),
+        ({"backend": "ray", "shared_policy": True, "max_wait_ms": -1.0}, "must not be negative"),
+        ({"backend": "ray", "shared_policy": True, "policy_gpus": -0.5}, "must not be negative"),
     ],
 )
 def test_execution_options_are_validated(options, message):
@@ -69,6 +122,58 @@ def test_execution_options_are_validated(options, message):
 def test_execution_defaults():
     assert ExecutionOptions().episode_timeout_s == 900 and ExecutionOptions(workers=0).episode_timeout_s is None
     assert ExecutionOptions(timeout_s=30).episode_timeout_s == 30
+    assert ExecutionOptions(backend="ray", workers=2).episode_timeout_s == 900
+    defaults = ExecutionOptions()
+    assert (defaults.backend, defaults.workers, defaults.max_attempts, defaults.max_failure_streak) == (
+        "local",
+        1,
+        3,
+        3,
+    )
+    # what a valid shared-policy configuration looks like
+    shared = ExecutionOptions(backend="ray", workers=4, shared_policy=True, max_batch=8, max_wait_ms=0, policy_gpus=0)
+    assert shared.max_batch == 8
+
+
+def test_an_unknown_backend_is_refused_by_the_pool_registry():
+    with pytest.raises(LangGapError, match="unknown backend 'slurm' \\(known: local, ray\\)"):
+        make_pool(None, ExecutionOptions(backend="slurm", workers=2))
+
+
+def test_a_spec_resolves_its_selection_and_records_what_determines_results():
+    spec = RunSpec.create("random", policy_args={"scale": 0.5}, tasks="spatial/s0/*&original,goal/s7/*", episodes=3,
+                          seed=4, repeats=2, conditions=("given", "empty", "given"), style="paper")  # fmt: skip
+    assert spec.tasks == (BOWL_1, STOVE)
+    assert spec.selection == "spatial/s0/*&original,goal/s7/*"
+    assert (spec.inits, spec.seed, spec.repeats, spec.style) == ((0, 1, 2), 4, 2, "paper")
+    assert spec.conditions == ("given", "empty")  # duplicates dropped, order kept
+    assert spec.policy_args == {"scale": "0.5"}  # stored as the strings given
+    assert spec.catalog == "langgap99" and spec.catalog_hash == catalog_hash("langgap99")
+    assert spec.physics == stack.physics_stack() and "mujoco" in spec.physics
+    default = RunSpec.create("noop", episodes=1)
+    assert default.selection is None and len(default.tasks) == 92  # the feasible tasks
+
+
+@pytest.mark.parametrize(
+    ("arguments", "error", "message"),
+    [
+        ({"episodes": 0}, SpecError, "--episodes must be at least 1, got 0"),
+        ({"repeats": 0}, SpecError, "--repeats must be between 1 and 1000, got 0"),
+        ({"repeats": 1001}, SpecError, "--repeats must be between 1 and 1000, got 1001"),
+        ({"style": "shouting"}, SpecError, "unknown instruction style 'shouting' \\(known: libero, paper\\)"),
+        ({"conditions": ("given", "loud")}, SpecError, "unknown condition\\(s\\) \\['loud'\\]"),
+        ({"conditions": ()}, SpecError, "unknown condition\\(s\\) \\[\\]"),
+        ({"tasks": "spatial&libero10"}, LangGapError, "selection 'spatial&libero10' matches no task"),
+        ({"catalog": "langgap100"}, LangGapError, "langgap100"),
+        ({"policy": "levitate"}, LangGapError, "unknown policy 'levitate'"),
+        ({"policy_args": {"speed": "2"}}, LangGapError, "policy 'random' has no argument 'speed'"),
+        ({"policy_args": {"scale": "fast"}}, LangGapError, "policy 'random' argument scale"),
+    ],
+)
+def test_a_spec_is_validated(arguments, error, message):
+    arguments = {"policy": "random", "tasks": BOWL_1, "episodes": 2} | arguments
+    with pytest.raises(error, match=message):
+        RunSpec.create(arguments.pop("policy"), **arguments)
 
 
 def test_a_spec_names_every_field_that_differs():
@@ -82,6 +187,16 @@ def test_a_spec_names_every_field_that_differs():
     assert other.differences(stored) == ["inits", "seed"]
     assert other.describe_differences(stored, ["seed"]) == "seed: stored 0, given 5"
     assert stored["tasks"] == ["a", "b"]  # stored as JSON lists
+    assert spec.differences({k: v for k, v in stored.items() if k != "style"}) == ["style"]  # a missing field differs
+    assert spec.differences(stored | {"physics": {"mujoco": "3.3.0"}}) == ["physics"]
+    assert (
+        other.describe_differences(stored, ["seed", "inits"])
+        == "seed: stored 0, given 5; inits: stored [0, 1], given [0, 1, 2]"
+    )
+    longer = dataclasses.replace(spec, tasks=tuple(f"spatial/s0/task-{k}" for k in range(10)))
+    described = longer.describe_differences(stored, ["tasks"])
+    given = described.split(", given ")[1]
+    assert len(given) == 60 and given.endswith("...") and given.startswith("['spatial/s0/task-0'")
 
 
 def test_repeats_run_each_init_state_with_other_seeds(catalog):
