@@ -143,3 +143,150 @@ def test_one_cause_on_three_different_episodes_in_a_row_stops_the_run():
 def test_failures_that_are_not_one_outage_do_not_stop_the_run(script):
     records = run(plan(), ScriptedPool(script), workers=1)
     assert len(records) == len(plan())
+
+
+def test_a_success_between_failures_resets_the_streak():
+    episodes = plan(tasks=("s0/a",), episodes=6)  # one worker: units k0-k2, then k3-k5
+    keys = [p.key for p in episodes]
+
+    def failing(*indices):
+        return lambda p, attempt: "fail:down" if attempt == 1 and keys.index(p.key) in indices else "done"
+
+    records = run(episodes, ScriptedPool(failing(0, 1, 3, 4)), workers=1)  # k2 and k5 succeed in between
+    assert sorted(r.key for r in records) == keys and all(r.status == Status.DONE for r in records)
+    assert {r.key: r.attempts for r in records} == {k: 2 if keys.index(k) in (0, 1, 3, 4) else 1 for k in keys}
+    with pytest.raises(RunStopped):  # the same failures without a success in between stop the run
+        run(episodes, ScriptedPool(failing(0, 1, 2)), workers=1)
+
+
+def test_one_episode_failing_again_and_again_is_not_an_outage():
+    (only,) = plan(tasks=("s0/a",), episodes=1)
+    pool = ScriptedPool(lambda p, attempt: "fail:segfault in the renderer")
+    (the_gap,) = run([only], pool, workers=1, max_attempts=5, max_failure_streak=2)
+    assert [a for _, _, a in pool.submitted] == [1, 2, 3, 4, 5]
+    assert (the_gap.status, the_gap.attempts, the_gap.error) == (Status.GAP, 5, "segfault in the renderer")
+
+
+def test_a_single_attempt_makes_a_gap_at_the_first_failure():
+    episodes = plan()
+    pool = ScriptedPool(lambda p, attempt: "fail:boom" if p.key == episodes[3].key else "done")
+    records = run(episodes, pool, max_attempts=1)
+    assert [k for _, k, _ in pool.submitted].count(episodes[3].key) == 1
+    assert [(r.key, r.status) for r in records if r.status == Status.GAP] == [(episodes[3].key, Status.GAP)]
+
+
+def test_the_records_before_a_stop_are_yielded():
+    episodes = plan()
+    pool = ScriptedPool(lambda p, attempt: "done" if p.key in (episodes[0].key, episodes[1].key) else "fail:down")
+    records = []
+    with pytest.raises(RunStopped, match="3 episodes in a row failed with: down"):
+        for r in schedule(
+            episodes, pool, workers=1, make_gap=gap, max_attempts=3, max_failure_streak=3, timeout_s=None
+        ):
+            records.append(r)
+    assert [r.key for r in records] == [episodes[0].key, episodes[1].key]
+
+
+def test_a_lost_worker_gives_back_the_rest_of_its_unit():
+    episodes = plan(tasks=("s0/a",), episodes=4)  # one worker: units k0-k1, k2-k3
+    k0, k1, k2, k3 = (p.key for p in episodes)
+    pool = ScriptedPool(lambda p, attempt: "lost" if p.key == k0 and attempt == 1 else "done")
+    records = run(episodes, pool, workers=1)
+    # the replacement (worker 1) first runs what worker 0 had not started, the charged episode last
+    assert pool.submitted == [(0, k0, 1), (1, k1, 1), (1, k2, 1), (1, k3, 1), (1, k0, 2)]
+    assert sorted(r.key for r in records) == [k0, k1, k2, k3] and pool.spawned == [0, 1]
+
+
+def test_a_worker_lost_on_every_attempt_leaves_a_gap_with_its_reason():
+    episodes = plan()
+    doomed = episodes[1].key
+    pool = ScriptedPool(lambda p, attempt: "lost" if p.key == doomed else "done")
+    records = run(episodes, pool, max_failure_streak=10)
+    (the_gap,) = [r for r in records if r.status == Status.GAP]
+    assert (the_gap.key, the_gap.attempts, the_gap.error) == (doomed, 3, "worker process died (exit code 9)")
+    # a replacement for each loss while work remains (the third loss was the last episode left)
+    assert pool.spawned == [0, 1, 2, 3] and len(records) == len(episodes)
+
+
+class LateReportingPool(ScriptedPool):
+    """A killed worker's episode still reports afterwards (a race the scheduler must ignore)."""
+
+    def __init__(self, script):
+        super().__init__(script)
+        self.running: dict[int, tuple[PlannedEpisode, int]] = {}
+
+    def submit(self, worker, planned, attempt):
+        self.running[worker] = (planned, attempt)
+        super().submit(worker, planned, attempt)
+
+    def kill(self, worker):
+        super().kill(worker)
+        planned, attempt = self.running[worker]
+        self._events.append(EpisodeDone(worker, record(planned, worker, attempt)))
+
+
+def test_a_timeout_kills_that_worker_replaces_it_and_ignores_what_it_says_later():
+    now = [0.0]
+
+    def clock():
+        now[0] += 5.0
+        return now[0]
+
+    episodes = plan()
+    stuck = episodes[0].key  # two workers, six units of one episode: worker 0 gets it first
+    pool = LateReportingPool(lambda p, attempt: "hang" if p.key == stuck else "done")
+    records = run(episodes, pool, clock=clock, timeout_s=12, max_failure_streak=10)
+    # each stuck worker is killed, and replaced while work remains (the third attempt was the last episode)
+    assert [(w, a) for w, k, a in pool.submitted if k == stuck] == [(0, 1), (2, 2), (1, 3)]
+    assert pool.killed == [0, 2, 1] and pool.spawned == [0, 1, 2, 3]
+    assert sorted(r.key for r in records) == sorted(p.key for p in episodes)  # the late reports were dropped
+    (the_gap,) = [r for r in records if r.status == Status.GAP]
+    assert (the_gap.key, the_gap.attempts, the_gap.error) == (stuck, 3, "episode timed out after 12s")
+
+
+def test_no_timeout_without_a_limit():
+    now = [0.0]
+
+    def clock():
+        now[0] += 1000.0
+        return now[0]
+
+    slow = ScriptedPool()
+    run(plan(), slow, clock=clock, timeout_s=None)
+    assert slow.killed == []
+
+
+def test_units_group_a_scene_whatever_the_plan_order():
+    episodes = plan(tasks=("s1/c", "s0/a", "s1/d", "s0/b"), episodes=2)
+    units = make_units(episodes, workers=1)  # 4 tasks, 2 pieces wanted per worker: one unit per task
+    assert [[(p.key.task_id, p.key.init_index) for p in u] for u in units] == [
+        [("s0/a", 0), ("s0/a", 1)], [("s0/b", 0), ("s0/b", 1)], [("s1/c", 0), ("s1/c", 1)], [("s1/d", 0), ("s1/d", 1)]
+    ]  # fmt: skip
+
+
+def test_units_split_evenly_for_more_workers():
+    units = make_units(plan(tasks=("s0/a", "s0/b"), episodes=5), workers=3)  # 2 tasks, 6 pieces wanted
+    assert [[(p.key.task_id, p.key.init_index) for p in u] for u in units] == [
+        [("s0/a", 0), ("s0/a", 1)], [("s0/a", 2), ("s0/a", 3)], [("s0/a", 4)],
+        [("s0/b", 0), ("s0/b", 1)], [("s0/b", 2), ("s0/b", 3)], [("s0/b", 4)],
+    ]  # fmt: skip
+    assert [len(u) for u in make_units(plan(tasks=("s0/a", "s0/b", "s1/c", "s1/d"), episodes=3), workers=2)] == [3] * 4
+
+
+def test_no_more_workers_than_units():
+    pool = ScriptedPool()
+    records = run(plan(tasks=("s0/a",), episodes=1), pool, workers=4)
+    assert pool.spawned == [0] and len(records) == 1
+    empty = ScriptedPool()
+    assert run([], empty, workers=4) == [] and empty.spawned == []
+
+
+def test_many_workers_and_mixed_trouble_still_give_one_record_per_episode():
+    episodes = plan(tasks=("s0/a", "s0/b", "s1/c", "s2/d"), episodes=5)
+    trouble = {0: "fail:x", 3: "lost", 7: "fail:y", 11: "lost", 15: "fail:z"}
+    index = {p.key: n for n, p in enumerate(episodes)}
+    pool = ScriptedPool(lambda p, attempt: trouble.get(index[p.key], "done") if attempt == 1 else "done")
+    records = run(episodes, pool, workers=3)
+    assert sorted(r.key for r in records) == sorted(index)
+    assert {r.key: r.attempts for r in records} == {k: 2 if n in trouble else 1 for k, n in index.items()}
+    assert len(pool.spawned) == 3 + 2 and not pool.closed
