@@ -34,6 +34,9 @@ TASK = "spatial/s0/ramekin-on-plate"
         # An original task's source is itself: doing another scene task is "other", never "source".
         (SOURCE, "original", False, {TASK: 5}, Outcome.DID_OTHER_TASK),
         (SOURCE, "original", False, {}, Outcome.NO_GOAL_REACHED),
+        # ...even when its own goal (= its source's) held for a while: only extended tasks "do the source task"
+        (SOURCE, "original", False, {SOURCE: 5}, Outcome.NO_GOAL_REACHED),
+        (SOURCE, "original", False, {SOURCE: 5, TASK: 9}, Outcome.DID_OTHER_TASK),
         (SOURCE, "original", True, {SOURCE: 7}, Outcome.SUCCESS),
         # success decides even when nothing was recorded as reached
         (TASK, "extended", True, {}, Outcome.SUCCESS),
