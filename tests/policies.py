@@ -88,3 +88,25 @@ class PrivilegedContextRecorder(ContextRecorder):
     """The same, declaring itself privileged (as the scripted references do)."""
 
     spec = PolicySpec(privileged=True)
+
+
+class ErrsOnInitsPolicy(NoopPolicy):
+    """Holds still, but sends a malformed action at its 5th call on the init states in `inits` (outcome
+    `policy_error`); with `once_dir`, only the first time each episode runs (state kept in files)."""
+
+    def __init__(self, inits: str = "", once_dir: str = ""):
+        self.inits = {int(i) for i in inits.split(",") if i}
+        self.once_dir = Path(once_dir) if once_dir else None
+        self.erring = False
+
+    def reset(self, context):
+        self.calls = 0
+        self.erring = context.init_index in self.inits
+        if self.erring and self.once_dir is not None:
+            marker = self.once_dir / f"{context.init_index}-{context.seed}"
+            self.erring = not marker.exists()
+            marker.touch()
+
+    def act(self, observation):
+        self.calls += 1
+        return np.full(7, np.nan) if self.erring and self.calls == 5 else super().act(observation)

@@ -9,6 +9,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -166,15 +167,61 @@ def test_conditions_send_the_planned_strings(catalog):
     assert [(p.key.condition, p.instruction) for p in plan][-1] == ("empty", "")
 
 
-def test_videos_are_written(short_catalog, tmp_path):
-    options = ExecutionOptions(workers=0, videos=1, progress=False)
-    _eval(short_catalog, tmp_path / "run", tasks="spatial/s0/black-bowl-1-on-plate", episodes=1, options=options)
-    (row,) = store_rows(tmp_path / "run")
+def _clip(run, row) -> tuple[int, int]:
+    """A stored clip's frame count and width/height ratio, as a video decoder reads them."""
     import cv2
 
-    video = cv2.VideoCapture(row["video"])
-    assert video.get(cv2.CAP_PROP_FRAME_COUNT) == SHORT_STEPS
-    assert video.get(cv2.CAP_PROP_FRAME_WIDTH) == 2 * video.get(cv2.CAP_PROP_FRAME_HEIGHT)
+    path = run / row["video"]
+    assert path.suffix == ".webm" and path.is_file()
+    video = cv2.VideoCapture(str(path))
+    frames = 0
+    while video.read()[0]:
+        frames += 1
+    return frames, video.get(cv2.CAP_PROP_FRAME_WIDTH) / video.get(cv2.CAP_PROP_FRAME_HEIGHT)
+
+
+def test_videos_of_the_first_episodes_are_written(short_catalog, tmp_path):
+    options = ExecutionOptions(workers=0, video="first:1", progress=False)
+    summary = _eval(short_catalog, tmp_path / "run", tasks="spatial/s0/black-bowl-1-on-plate", options=options)
+    first, second = store_rows(tmp_path / "run")
+    assert summary.filmed == 1 and second["video"] is None
+    assert first["video"] == "videos/spatial__s0__black-bowl-1-on-plate#0__seed0__given.webm"
+    assert _clip(tmp_path / "run", first) == (SHORT_STEPS, 2.0)  # one frame per step, both cameras side by side
+
+
+def test_per_outcome_videos_replay_the_chosen_episodes(short_catalog, tmp_path):
+    # Init states 2 and 3 end in a policy error, 0 and 1 in no goal: one clip per outcome is of 0 and 2.
+    policy, task = "tests.policies:ErrsOnInitsPolicy", "spatial/s0/black-bowl-1-on-plate"
+    spec = _spec(short_catalog, policy, 4, tasks=task, policy_args={"inits": "2,3"})
+    evaluate(spec, tmp_path / "run", ExecutionOptions(workers=0, progress=False))
+    before = store_rows(tmp_path / "run")
+    assert [r["outcome"] for r in before] == ["no_goal_reached"] * 2 + ["policy_error"] * 2
+    # Filming a finished run: nothing runs again but the two replays, and only their clips are added.
+    options = ExecutionOptions(workers=1, video="per-outcome:1", progress=False)
+    summary = evaluate(spec, tmp_path / "run", options, resume=True)
+    assert (summary.ran, summary.filmed, summary.film_mismatches) == (0, 2, 0)
+    after = store_rows(tmp_path / "run")
+    assert [r["video"] is not None for r in after] == [True, False, True, False]
+    assert [{**r, "video": None} for r in after] == before
+    assert _clip(tmp_path / "run", after[0])[0] == SHORT_STEPS and _clip(tmp_path / "run", after[2])[0] == 4
+    assert sorted(p.name for p in (tmp_path / "run" / "videos").iterdir()) == sorted(
+        Path(r["video"]).name for r in after if r["video"]
+    )
+
+
+def test_a_replay_that_ends_otherwise_gets_no_clip(short_catalog, tmp_path):
+    # The policy errs on init state 1 only the first time it runs it: its replay ends otherwise.
+    policy_args = {"inits": "1", "once_dir": str(tmp_path)}
+    spec = _spec(short_catalog, "tests.policies:ErrsOnInitsPolicy", 2, tasks="spatial/s0/black-bowl-1-on-plate",
+                 policy_args=policy_args)  # fmt: skip
+    options = ExecutionOptions(workers=0, video="per-outcome:1", progress=False)
+    summary = evaluate(spec, tmp_path / "run", options)
+    assert (summary.filmed, summary.film_mismatches) == (1, 1)
+    rows = store_rows(tmp_path / "run")
+    assert [r["outcome"] for r in rows] == ["no_goal_reached", "policy_error"]
+    assert rows[1]["video"] is None and [p.name for p in (tmp_path / "run" / "videos").iterdir()] == [
+        Path(rows[0]["video"]).name
+    ]
 
 
 @pytest.mark.parametrize(

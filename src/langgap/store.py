@@ -17,6 +17,7 @@ import fcntl
 import json
 import os
 import sqlite3
+from dataclasses import astuple
 from pathlib import Path
 
 from langgap.errors import LangGapError
@@ -199,6 +200,12 @@ class RunStore:
         placeholders = ", ".join("?" for _ in COLUMNS)
         with self._db:
             self._db.execute(f"INSERT OR REPLACE INTO episodes ({names}) VALUES ({placeholders})", _to_row(record))
+
+    def attach_video(self, key: EpisodeKey, video: str) -> None:
+        """Record the clip of a stored episode (a path relative to the run directory); nothing else changes."""
+        where = " AND ".join(f"{c} = ?" for c in KEY_COLUMNS)
+        with self._db:
+            self._db.execute(f"UPDATE episodes SET video = ? WHERE {where}", (video, *astuple(key)))
 
     def done_keys(self) -> set[EpisodeKey]:
         """The keys of the judged episodes (a resume re-runs everything else)."""

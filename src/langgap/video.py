@@ -1,22 +1,46 @@
-"""Writing episode videos (mp4) with OpenCV, which the LIBERO stack already installs."""
+"""Writing episode videos with OpenCV, which the LIBERO stack already installs.
+
+Clips are WebM (VP8): OpenCV's wheels encode it without extra libraries and every browser plays it,
+whereas their mp4 writer only has MPEG-4 Part 2, which browsers do not play.
+"""
 
 from __future__ import annotations
 
+import contextlib
+import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 
 CONTROL_HZ = 20
+VIDEO_SUFFIX = ".webm"
+
+
+@contextlib.contextmanager
+def _stderr_silenced() -> Iterator[None]:
+    """Send file descriptor 2 (where C libraries print) to /dev/null for the duration."""
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 def write_video(path: str | Path, frames: list[np.ndarray], fps: int = CONTROL_HZ) -> Path:
-    """Write RGB uint8 frames (H, W, 3) to an mp4 file at the control rate; returns the path."""
+    """Write RGB uint8 frames (H, W, 3) to a WebM file at the control rate; returns the path."""
     import cv2
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     height, width = frames[0].shape[:2]
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), fps, (width, height))
+    with _stderr_silenced():  # OpenCV's FFmpeg prints a harmless line about the WebM tag on every open
+        writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"VP80"), fps, (width, height))
+    if not writer.isOpened():
+        raise RuntimeError(f"OpenCV cannot write a WebM video to {path}")
     try:
         for frame in frames:
             writer.write(cv2.cvtColor(np.ascontiguousarray(frame), cv2.COLOR_RGB2BGR))

@@ -103,7 +103,7 @@ def test_the_instruction_style_reaches_the_plan(catalog):
         ({"backend": "ray", "shared_policy": True, "max_batch": 0}, "--max-batch"),
         ({"max_attempts": 0}, "--max-attempts"),
         ({"max_failure_streak": 0}, "--max-failure-streak"),
-        ({"videos": -1}, "--video must be at least 0, got -1"),
+        ({"video": "-1"}, "--video must film at least 0 episodes"),
         ({"ray_address": "10.0.0.1:6379"}, "--ray-address needs --backend ray"),
         ({"shared_policy": True}, "--shared-policy needs --backend ray"),
         (

@@ -8,6 +8,7 @@ infrastructure failures with one cause; 2 bad input or another error (nothing st
 from __future__ import annotations
 
 from langgap.cli.tasks_cmd import add_catalog_options
+from langgap.engine.filming import DEFAULT_VIDEO, VIDEO_DIR, VIDEO_HELP
 from langgap.engine.plan import CONDITION_HELP, CONDITIONS
 from langgap.engine.pools import BACKENDS
 from langgap.engine.spec import DEFAULT_FAILURE_STREAK, DEFAULT_MAX_ATTEMPTS, DEFAULT_TIMEOUT_S, PAPER_EPISODES
@@ -54,12 +55,11 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument(
         "--video",
-        type=int,
         nargs="?",
-        const=10,
-        default=0,
-        metavar="N",
-        help="save mp4s (agentview | wrist) of the first N planned episodes (default N: 10)",
+        const=DEFAULT_VIDEO,
+        default="",
+        metavar="WHICH",
+        help=VIDEO_HELP,
     )
     parser.add_argument("--seed", type=int, default=0, help="run seed; episode k uses env seed SEED+k")
     parser.add_argument(
@@ -132,7 +132,7 @@ def run(args) -> int:
         timeout_s=args.timeout,
         max_attempts=args.max_attempts,
         max_failure_streak=args.max_failure_streak,
-        videos=args.video,
+        video=args.video,
         progress=not args.no_progress,
         ray_address=args.ray_address,
         shared_policy=args.shared_policy,
@@ -148,6 +148,13 @@ def run(args) -> int:
     if summary.policy_server:
         calls, queries = summary.policy_server["calls"], summary.policy_server["queries"]
         print(f"shared policy: {queries} queries in {calls} batched calls ({queries / max(1, calls):.2f} per call)")
+    if options.video_selection:
+        print(f"videos: {summary.filmed} episodes filmed ({options.video_selection}) in {summary.run / VIDEO_DIR}")
+    if summary.film_mismatches:
+        print(
+            f"warning: {summary.film_mismatches} replayed episodes ended otherwise than stored (a policy that "
+            "is not deterministic given the episode's seed?); they have no clip"
+        )
     if not args.quiet:
         from langgap.report import diagnosis_text
 

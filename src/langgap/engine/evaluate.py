@@ -4,15 +4,16 @@ from __future__ import annotations
 
 import contextlib
 import sys
-from collections.abc import Iterable, Iterator
-from dataclasses import asdict, dataclass, field
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import asdict, dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
 
 from langgap.catalog.catalog import load_catalog
 from langgap.engine.episode import gap_record
+from langgap.engine.filming import VideoSelection, replay_matches
 from langgap.engine.plan import PlannedEpisode, build_plan
-from langgap.engine.pools import make_pool
+from langgap.engine.pools import WorkerPool, make_pool
 from langgap.engine.runner import RunnerSetup
 from langgap.engine.scheduler import schedule
 from langgap.engine.spec import PLAN_FIELDS, ExecutionOptions, RunSpec, SpecError
@@ -32,6 +33,8 @@ class RunSummary:
     successes: int = 0
     gaps: int = 0
     policy_server: dict = field(default_factory=dict)  # a shared policy's counters (Ray): calls, queries
+    filmed: int = 0  # episodes with a clip among those `--video` chose
+    film_mismatches: int = 0  # replays (per-outcome filming) that ended otherwise: no clip attached
 
     @property
     def complete(self) -> bool:
@@ -98,20 +101,33 @@ def evaluate(
     """
     options = options or ExecutionOptions()
     run = Path(run)
+    videos = options.video_selection
     plan = plan_of(spec)
+    firsts = videos.filmed_while_running([p.key for p in plan])
+    plan = [replace(p, film=True) if p.key in firsts else p for p in plan]
     catalog = load_catalog(spec.catalog)
     setup = RunnerSetup(
         catalog=spec.catalog,
         policy=spec.policy,
         policy_args=dict(spec.policy_args),
         style=spec.style,
-        video_dir=str(run / "videos") if options.videos else None,
-        video_keys=frozenset(p.key for p in plan[: options.videos]),
+        run_dir=str(run) if videos else None,
     )
 
-    def make_gap(planned: PlannedEpisode, error: str, attempts: int) -> EpisodeRecord:
-        task = catalog.get(planned.key.task_id)
-        return gap_record(planned, task, policy_name=spec.policy, error=error, attempts=attempts)
+    def run_episodes(todo: list[PlannedEpisode], pool: WorkerPool) -> Iterator[EpisodeRecord]:
+        def make_gap(planned: PlannedEpisode, error: str, attempts: int) -> EpisodeRecord:
+            task = catalog.get(planned.key.task_id)
+            return gap_record(planned, task, policy_name=spec.policy, error=error, attempts=attempts)
+
+        return schedule(
+            todo,
+            pool,
+            workers=max(1, options.workers),
+            make_gap=make_gap,
+            max_attempts=options.max_attempts,
+            max_failure_streak=options.max_failure_streak,
+            timeout_s=options.episode_timeout_s,
+        )
 
     # The pool comes first: options it cannot satisfy (no Ray, too few GPUs) fail before a run
     # directory exists. Workers only start when the scheduler asks for them.
@@ -122,19 +138,52 @@ def evaluate(
         done = store.done_keys()
         todo = [p for p in plan if p.key not in done]
         summary = RunSummary(run, planned=len(plan), skipped=len(plan) - len(todo))
-        records = schedule(
-            todo,
-            pool,
-            workers=max(1, options.workers),
-            make_gap=make_gap,
-            max_attempts=options.max_attempts,
-            max_failure_streak=options.max_failure_streak,
-            timeout_s=options.episode_timeout_s,
-        )
-        for record in _with_progress(records, len(todo), summary, enabled=options.progress):
+        for record in _with_progress(run_episodes(todo, pool), len(todo), summary, enabled=options.progress):
             store.write(record)
     summary.policy_server = dict(getattr(pool, "server_stats", {}))  # set by closing a shared-policy pool
+    if videos:
+
+        def replay(todo: list[PlannedEpisode]) -> Iterator[EpisodeRecord]:
+            pool = make_pool(setup, options)
+            try:
+                yield from run_episodes(todo, pool)
+            finally:
+                pool.close()
+
+        _film(plan, videos, run, summary, replay)
     return summary
+
+
+def _film(
+    plan: list[PlannedEpisode],
+    videos: VideoSelection,
+    run: Path,
+    summary: RunSummary,
+    replay: Callable[[list[PlannedEpisode]], Iterator[EpisodeRecord]],
+) -> None:
+    """Give every episode `videos` chooses a clip: replay the chosen judged episodes that have none with the
+    cameras on, and attach each clip whose replay ended as the stored episode did (else delete it)."""
+    with RunStore.open(run, write=True) as store:
+        stored = {r.key: r for r in store.records()}
+        chosen = videos.choose([p.key for p in plan], stored.values())
+        by_key = {p.key: p for p in plan}
+        todo = [replace(by_key[k], film=True) for k in chosen if not stored[k].video]
+        summary.filmed = len(chosen) - len(todo)
+        if not todo:
+            return
+        replays = replay(todo)
+        try:
+            for record in replays:
+                if record.video is None:
+                    continue
+                if replay_matches(stored[record.key], record):
+                    store.attach_video(record.key, record.video)
+                    summary.filmed += 1
+                else:
+                    (run / record.video).unlink(missing_ok=True)
+                    summary.film_mismatches += 1
+        finally:
+            replays.close()
 
 
 def _with_progress(

@@ -26,6 +26,7 @@ class PlannedEpisode:
     key: EpisodeKey
     instruction: str  # the exact string the policy will receive
     scene: str = ""  # the scene it is set in: a worker's environment serves every task of one scene
+    film: bool = False  # record a clip of the episode (the run's `--video` chose it)
 
     @property
     def instruction_sha256(self) -> str:

@@ -8,17 +8,18 @@ After an infrastructure failure everything is rebuilt, since a crash may leave e
 from __future__ import annotations
 
 import contextlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from langgap.catalog.catalog import load_catalog
 from langgap.engine.episode import execute_episode, video_hook
+from langgap.engine.filming import VIDEO_DIR
 from langgap.engine.plan import PlannedEpisode
 from langgap.engine.rollout import env_options_for
 from langgap.policies import make_policy
 from langgap.policies.base import config_hash, policy_config
-from langgap.records import EpisodeKey, EpisodeRecord
+from langgap.records import EpisodeRecord
 from langgap.sim.env import CAMERAS, TaskEnv
 
 
@@ -30,8 +31,7 @@ class RunnerSetup:
     policy: str
     policy_args: dict[str, str]
     style: str
-    video_dir: str | None = None
-    video_keys: frozenset[EpisodeKey] = field(default_factory=frozenset)
+    run_dir: str | None = None  # set when the run films episodes: clips go to its `videos` folder
     policy_server: Any = None  # a shared policy actor (Ray); None: each runner builds its own policy
 
 
@@ -75,7 +75,7 @@ class EpisodeRunner:
             self._env = TaskEnv(task, self._env_options())
         frames: list = []
         hook = None
-        if planned.key in self.setup.video_keys:
+        if planned.film:
             hook = video_hook(self._env, frames, CAMERAS)
         record = execute_episode(
             planned,
@@ -91,14 +91,15 @@ class EpisodeRunner:
             on_step=hook,
         )
         if frames:
-            from langgap.video import write_video
+            from langgap.video import VIDEO_SUFFIX, write_video
 
-            path = Path(self.setup.video_dir or ".") / f"{planned.key.label().replace('/', '__')}.mp4"
-            record.video = str(write_video(path, frames))
+            clip = Path(VIDEO_DIR) / f"{planned.key.label().replace('/', '__')}{VIDEO_SUFFIX}"
+            write_video(Path(self.setup.run_dir or ".") / clip, frames)
+            record.video = clip.as_posix()
         return record
 
     def _env_options(self):
-        if self.setup.video_keys:
+        if self.setup.run_dir is not None:
             # Videos show both cameras; enabling them costs nothing until a frame is rendered.
             size = self._policy.spec.image_size if self._policy.spec.cameras else 256
             return env_options_for(self._policy, cameras=CAMERAS, image_size=size)

@@ -15,6 +15,7 @@ from dataclasses import asdict, dataclass, fields
 from langgap import stack
 from langgap.catalog.catalog import DEFAULT_CATALOG, catalog_hash, load_catalog
 from langgap.catalog.task import DEFAULT_STYLE, INSTRUCTION_STYLES
+from langgap.engine.filming import VideoSelection
 from langgap.engine.plan import CONDITION_HELP, CONDITIONS, REPEAT_STRIDE
 from langgap.errors import LangGapError
 from langgap.policies import policy_kwargs
@@ -124,7 +125,7 @@ class ExecutionOptions:
     timeout_s: float | None = None  # per episode; None: DEFAULT_TIMEOUT_S where it can be enforced
     max_attempts: int = DEFAULT_MAX_ATTEMPTS
     max_failure_streak: int = DEFAULT_FAILURE_STREAK  # consecutive infrastructure failures (same cause) that stop
-    videos: int = 0  # film the first N planned episodes
+    video: str = ""  # which episodes to film (`langgap.engine.filming.VideoSelection`): first:N, per-outcome:N
     progress: bool = True
     ray_address: str | None = None
     shared_policy: bool = False  # ray: one policy actor batching the queries of all environment actors
@@ -144,8 +145,10 @@ class ExecutionOptions:
             raise SpecError(f"--max-attempts must be at least 1, got {self.max_attempts}")
         if self.max_failure_streak < 1:
             raise SpecError(f"--max-failure-streak must be at least 1, got {self.max_failure_streak}")
-        if self.videos < 0:
-            raise SpecError(f"--video must be at least 0, got {self.videos}")
+        try:
+            VideoSelection.parse(self.video)
+        except LangGapError as exc:
+            raise SpecError(str(exc)) from None
         if self.ray_address is not None and self.backend != "ray":
             raise SpecError("--ray-address needs --backend ray")
         if self.shared_policy and self.backend != "ray":
@@ -158,6 +161,10 @@ class ExecutionOptions:
             raise SpecError(f"--max-batch must be at least 1, got {self.max_batch}")
         if (self.max_wait_ms or 0) < 0 or (self.policy_gpus or 0) < 0:
             raise SpecError("--max-wait-ms and --policy-gpus must not be negative")
+
+    @property
+    def video_selection(self) -> VideoSelection:
+        return VideoSelection.parse(self.video)
 
     @property
     def episode_timeout_s(self) -> float | None:
