@@ -77,8 +77,11 @@ fi
 .venv/bin/langgap doctor
 QUICK_TASKS="spatial/s0/black-bowl-1-on-plate,spatial/s0/black-bowl-2-on-plate,spatial/s0/black-bowl-1-on-stove"
 QUICK_TASKS="$QUICK_TASKS,spatial/s0/ramekin-on-plate,spatial/s0/open-cabinet-top-drawer"
+# blind's run also films one episode per task and outcome: the page shows what it did instead.
 for policy in oracle blind; do
+    videos=()
+    [ "$policy" = blind ] && videos=(--video per-outcome:1)
     .venv/bin/langgap eval --policy "$policy" --tasks "$QUICK_TASKS" --episodes 3 --workers 2 \
-        --run "runs/quickstart/$policy" --resume --quiet
+        --run "runs/quickstart/$policy" --resume --quiet "${videos[@]}"
 done
 .venv/bin/langgap report runs/quickstart/oracle --compare runs/quickstart/blind --summary --html runs/quickstart/report

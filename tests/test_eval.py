@@ -17,6 +17,7 @@ from langgap.engine.evaluate import evaluate
 from langgap.engine.plan import build_plan, condition_instruction, episode_seed
 from langgap.engine.spec import ExecutionOptions, RunSpec, SpecError
 from langgap.store import RunStore, StoreError
+from langgap.video import FRAME_EVERY
 from tests.conftest import REPO, SHORT_STEPS, run_cli, store_rows
 
 
@@ -185,8 +186,9 @@ def test_videos_of_the_first_episodes_are_written(short_catalog, tmp_path):
     summary = _eval(short_catalog, tmp_path / "run", tasks="spatial/s0/black-bowl-1-on-plate", options=options)
     first, second = store_rows(tmp_path / "run")
     assert summary.filmed == 1 and second["video"] is None
-    assert first["video"] == "videos/spatial__s0__black-bowl-1-on-plate#0__seed0__given.webm"
-    assert _clip(tmp_path / "run", first) == (SHORT_STEPS, 2.0)  # one frame per step, both cameras side by side
+    assert first["video"] == "videos/spatial__s0__black-bowl-1-on-plate__init0__seed0__given.webm"
+    # One frame every FRAME_EVERY steps, both cameras side by side.
+    assert _clip(tmp_path / "run", first) == (SHORT_STEPS // FRAME_EVERY, 2.0)
 
 
 def test_per_outcome_videos_replay_the_chosen_episodes(short_catalog, tmp_path):
@@ -203,7 +205,8 @@ def test_per_outcome_videos_replay_the_chosen_episodes(short_catalog, tmp_path):
     after = store_rows(tmp_path / "run")
     assert [r["video"] is not None for r in after] == [True, False, True, False]
     assert [{**r, "video": None} for r in after] == before
-    assert _clip(tmp_path / "run", after[0])[0] == SHORT_STEPS and _clip(tmp_path / "run", after[2])[0] == 4
+    assert _clip(tmp_path / "run", after[0])[0] == SHORT_STEPS // FRAME_EVERY
+    assert _clip(tmp_path / "run", after[2])[0] == 4 // FRAME_EVERY  # the policy erred at its 5th action
     assert sorted(p.name for p in (tmp_path / "run" / "videos").iterdir()) == sorted(
         Path(r["video"]).name for r in after if r["video"]
     )

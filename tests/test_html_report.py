@@ -4,15 +4,18 @@ report's, sorting and filtering work, no console error, no request beyond the pa
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 from langgap.report import load_runs, summarize
 from langgap.report.published import load_published
 from langgap.report.tables import full_report
+from langgap.video import VIDEO_FPS, write_video
 from tests.browser import CHROMIUM, chromium
 from tests.conftest import run_cli
-from tests.unit.reports import memoriser, reader, write_run
+from tests.unit.reports import SOURCE, memoriser, reader, write_run
 
 pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="needs Debian's chromium (./setup.sh installs it)")
 
@@ -35,9 +38,22 @@ _FACTS = (
 )
 
 
+def _filmed(run: Path, records: list, filmed: dict[tuple[str, int], int]) -> list:
+    """`records` with real WebM clips (a moving bar, `frames` long) for the (task, init) pairs in `filmed`."""
+    for record in records:
+        if (frames := filmed.get((record.task_id, record.init_index))) is not None:
+            record.video = f"videos/{record.task_id.replace('/', '__')}#{record.init_index}.webm"
+            images = [np.zeros((64, 128, 3), np.uint8) for _ in range(frames)]
+            for step, image in enumerate(images):
+                image[:, 4 * step : 4 * step + 8] = 255
+            write_video(run / record.video, images)
+    return records
+
+
 def test_the_html_report_in_a_real_browser(tmp_path):
+    clips = {("spatial/s0/ramekin-on-plate", 1): 30, (SOURCE, 0): 20, ("spatial/s0/bowl-on-stove", 0): 25}
     runs = [
-        write_run(tmp_path / "blind", "blind", memoriser(privileged=True)),
+        write_run(tmp_path / "blind", "blind", _filmed(tmp_path / "blind", memoriser(privileged=True), clips)),
         write_run(tmp_path / "vla", "my-vla", reader()),
     ]
     result = run_cli("report", str(runs[0]), "--compare", str(runs[1]), "--html", str(tmp_path / "html"))
@@ -60,7 +76,7 @@ def test_the_html_report_in_a_real_browser(tmp_path):
 """ + _SECTION + """
           const tasks = section("Per task — my-vla");
           const header = [...tasks.querySelectorAll("th")].find(th => th.textContent === "Rate %");
-          const read = () => [...tasks.querySelectorAll("tbody tr")].map(r => parseFloat(r.cells[4].textContent));
+          const read = () => [...tasks.querySelectorAll("tbody tr")].map(r => parseFloat(r.cells[6].textContent));
           header.click(); const up = read(); header.click(); return [up, read()];
         })()""")  # fmt: skip
         assert column[0] == sorted(column[0]) and column[1] == sorted(column[0], reverse=True)
@@ -73,7 +89,49 @@ def test_the_html_report_in_a_real_browser(tmp_path):
         assert [row[0] for row in page.evaluate(_FACTS)["table_vii"]] == [
             "SmolVLA (published: LangGap paper, Table VII)"
         ]
+        # Per-column filters: the drop-downs of the per-task table combine (and with the text box).
+        shown = page.evaluate("""(() => {
+""" + _SECTION + """
+          const tasks = section("Per task — blind");
+          const choose = (name, value) => {
+            const select = tasks.querySelector(`select[aria-label="${name}"]`); select.value = value;
+            select.dispatchEvent(new Event("input"));
+            return [...tasks.querySelectorAll("tbody tr")].filter(r => !r.hidden).map(r => r.cells[3].textContent);
+          };
+          return [choose("Mostly did instead", "did source task"), choose("Dimension", "Change Object"),
+                  choose("Mostly did instead", "")];
+        })()""")  # fmt: skip
+        did_source = ["spatial/s0/ramekin-on-plate", "spatial/s0/bowl-on-stove"]
+        assert shown == [did_source, did_source[:1], did_source[:1]]
+        # Confusion heatmaps: the intended task's cell green, another task's red, shaded by row share.
+        heat = page.evaluate("""(() => {
+""" + _SECTION + """
+          const rows = [...section("Confusion").querySelectorAll("tbody tr")];
+          return Object.fromEntries(rows.map(r => [r.cells[0].textContent,
+            [...r.cells].slice(1).map(c => getComputedStyle(c).backgroundColor)]));
+        })()""")  # fmt: skip
+        assert heat[SOURCE][0] == "rgb(44, 160, 44)"  # four of four episodes on the diagonal
+        assert heat["spatial/s0/ramekin-on-plate"][0] == "rgb(214, 39, 40)"  # did the source task every time
+        # The gallery: did-source-task clips first, each under the instruction it was sent, playable.
+        gallery = page.evaluate("""(async () => {
+""" + _SECTION + """
+          const part = section("Filmed episodes — blind");
+          const videos = [...part.querySelectorAll("video")];
+          const duration = v => v.readyState >= 1 ? v.duration
+            : new Promise(done => { v.addEventListener("loadedmetadata", () => done(v.duration));
+                                    v.addEventListener("error", () => done(null)); });
+          return {groups: [...part.querySelectorAll("h3")].map(h => h.textContent),
+                  captions: [...part.querySelectorAll("figcaption")].map(c => c.textContent),
+                  durations: await Promise.all(videos.map(duration)),
+                  errors: videos.map(v => v.error && v.error.code)};
+        })()""")  # fmt: skip
+        assert gallery["groups"] == ["did source task (2)", "success (1)"]
+        assert gallery["captions"][0].startswith("“do spatial/s0/bowl-on-stove”")
+        assert gallery["errors"] == [None] * 3
+        assert [round(d * VIDEO_FPS) for d in gallery["durations"]] == [25, 30, 20]  # frames, at VIDEO_FPS
         shot = page.screenshot(tmp_path / "report.png")
         assert page.errors == []
-        assert page.requests and all(url.startswith("file://") for url in page.requests)
+        # Nothing beyond the page's own files (the video controls' icons are inline data: URLs).
+        assert all(url.startswith(("file://", "data:")) for url in page.requests)
+        assert sum(url.startswith("file://") and url.endswith(".webm") for url in page.requests) == 3
     assert shot.stat().st_size > 10_000

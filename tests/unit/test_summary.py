@@ -106,3 +106,26 @@ def test_repeats_give_the_between_seed_spread(tmp_path):
 
 def test_a_single_seed_run_has_no_spread(summary):
     assert summary.runs[1].spread == []
+
+
+def test_each_task_says_what_it_mostly_did_instead(summary):
+    blind, vla = summary.runs
+    assert [t.instead for t in blind.tasks] == [None, ("did_source_task", 4), ("did_source_task", 3)]
+    assert [t.instead for t in vla.tasks] == [None, None, ("no_goal_reached", 1)]
+    assert (vla.tasks[1].suite, vla.tasks[1].split) == ("libero_spatial", "train")
+
+
+def test_filmed_episodes_show_did_source_task_first_with_their_instruction(tmp_path):
+    records = memoriser()
+    for r in records:
+        if r.init_index == 0 and r.judged:
+            r.video = f"videos/{r.task_id.replace('/', '_')}.webm"
+    run = write_run(tmp_path / "blind", "blind", records)
+    (blind,) = summarize(load_runs([run])).runs
+    assert [(c.outcome, c.task_id) for c in blind.clips] == [
+        ("did_source_task", "spatial/s0/bowl-on-stove"),
+        ("did_source_task", "spatial/s0/ramekin-on-plate"),
+        ("success", SOURCE),
+    ]
+    assert blind.clips[0].instruction == "do spatial/s0/bowl-on-stove"
+    assert blind.clips[0].path == run / "videos" / "spatial_s0_bowl-on-stove.webm"

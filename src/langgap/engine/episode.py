@@ -151,10 +151,11 @@ def gap_record(planned: PlannedEpisode, task: Task, *, policy_name: str, error: 
     )
 
 
-def video_hook(env: TaskEnv, frames: list[np.ndarray], cameras: tuple[str, ...]) -> Callable:
-    """A step hook that appends one frame (the cameras side by side) per step."""
+def video_hook(env: TaskEnv, frames: list[np.ndarray], cameras: tuple[str, ...], every: int = 1) -> Callable:
+    """A step hook that appends one frame (the cameras side by side) every `every` steps."""
 
-    def hook(_env: TaskEnv, _step: int, _action: np.ndarray) -> None:
-        frames.append(np.concatenate([env.render(c) for c in cameras], axis=1))
+    def hook(_env: TaskEnv, step: int, _action: np.ndarray) -> None:
+        if step % every == 0:
+            frames.append(np.concatenate([env.render(c) for c in cameras], axis=1))
 
     return hook

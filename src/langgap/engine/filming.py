@@ -28,6 +28,11 @@ VIDEO_HELP = (
 )
 
 
+def clip_name(key: EpisodeKey) -> str:
+    """The file name (without suffix) of an episode's clip: safe in paths and URLs."""
+    return f"{key.task_id.replace('/', '__')}__init{key.init_index}__seed{key.seed}__{key.condition}"
+
+
 @dataclass(frozen=True)
 class VideoSelection:
     """Which episodes to film: `mode` in `MODES` and a count (0: film nothing)."""

@@ -14,13 +14,14 @@ from typing import Any
 
 from langgap.catalog.catalog import load_catalog
 from langgap.engine.episode import execute_episode, video_hook
-from langgap.engine.filming import VIDEO_DIR
+from langgap.engine.filming import VIDEO_DIR, clip_name
 from langgap.engine.plan import PlannedEpisode
 from langgap.engine.rollout import env_options_for
 from langgap.policies import make_policy
 from langgap.policies.base import config_hash, policy_config
 from langgap.records import EpisodeRecord
 from langgap.sim.env import CAMERAS, TaskEnv
+from langgap.video import FRAME_EVERY, VIDEO_SUFFIX
 
 
 @dataclass(frozen=True)
@@ -76,7 +77,7 @@ class EpisodeRunner:
         frames: list = []
         hook = None
         if planned.film:
-            hook = video_hook(self._env, frames, CAMERAS)
+            hook = video_hook(self._env, frames, CAMERAS, every=FRAME_EVERY)
         record = execute_episode(
             planned,
             task,
@@ -91,18 +92,21 @@ class EpisodeRunner:
             on_step=hook,
         )
         if frames:
-            from langgap.video import VIDEO_SUFFIX, write_video
+            from langgap.video import write_video
 
-            clip = Path(VIDEO_DIR) / f"{planned.key.label().replace('/', '__')}{VIDEO_SUFFIX}"
+            clip = Path(VIDEO_DIR) / f"{clip_name(planned.key)}{VIDEO_SUFFIX}"
             write_video(Path(self.setup.run_dir or ".") / clip, frames)
             record.video = clip.as_posix()
         return record
 
     def _env_options(self):
         if self.setup.run_dir is not None:
-            # Videos show both cameras; enabling them costs nothing until a frame is rendered.
-            size = self._policy.spec.image_size if self._policy.spec.cameras else 256
-            return env_options_for(self._policy, cameras=CAMERAS, image_size=size)
+            # Videos show both cameras; enabling them costs nothing until a frame is rendered. A policy
+            # that reads no images sees none of them, so its clips skip the reflection pass (~40 % of a
+            # render); a policy's own images keep the renderer settings it was declared with.
+            if self._policy.spec.cameras:
+                return env_options_for(self._policy, cameras=CAMERAS)
+            return env_options_for(self._policy, cameras=CAMERAS, image_size=256, reflection=False)
         return env_options_for(self._policy)
 
     def _close_env(self) -> None:

@@ -9,12 +9,16 @@ from __future__ import annotations
 
 import html
 import json
+import shutil
+import urllib.parse
 from pathlib import Path
 
 from langgap.catalog.labels import DIMENSION_LABEL, EXTENDED_DIMENSIONS
 from langgap.report.published import Published
 from langgap.report.summary import Summary
 from langgap.report.tables import PRIVILEGED_NOTE, PUBLISHED_NOTE, Table, full_report
+
+MEDIA_DIR = "media"
 
 _STYLE = """
 body { font: 14px/1.4 system-ui, sans-serif; margin: 2em auto; max-width: 1200px; color: #222; }
@@ -26,6 +30,11 @@ th[aria-sort=ascending]::after { content: " ▲"; } th[aria-sort=descending]::af
 input.filter { margin: .25em 0; padding: .2em .4em; width: 20em; }
 .note { color: #555; font-size: .9em; }
 svg text { font: 11px system-ui, sans-serif; }
+select.column-filter { margin: .25em 0 .25em .5em; }
+table.heatmap td { text-align: center; min-width: 2em; }
+.clips { display: flex; flex-wrap: wrap; gap: 1em; }
+figure { margin: 0; width: 370px; } figure video { width: 100%; background: #000; }
+figcaption { font-size: .9em; }
 """
 
 _SCRIPT = """
@@ -48,27 +57,93 @@ document.querySelectorAll("table.report").forEach(table => {
     rows.forEach(row => body.appendChild(row));
   }));
 });
-document.querySelectorAll("input.filter").forEach(input => input.addEventListener("input", () => {
-  const table = document.getElementById(input.dataset.table);
-  const needle = input.value.trim().toLowerCase();
+function applyFilters(ident) {
+  const table = document.getElementById(ident);
+  const box = document.querySelector(`input.filter[data-table="${ident}"]`);
+  const needle = box ? box.value.trim().toLowerCase() : "";
+  const choices = Array.from(document.querySelectorAll(`select.column-filter[data-table="${ident}"]`))
+    .filter(select => select.value !== "").map(select => [Number(select.dataset.column), select.value]);
   Array.from(table.tBodies[0].rows).forEach(row => {
-    row.hidden = needle !== "" && !row.textContent.toLowerCase().includes(needle);
+    row.hidden = (needle !== "" && !row.textContent.toLowerCase().includes(needle))
+      || choices.some(([column, value]) => row.cells[column].textContent !== value);
   });
-}));
+}
+document.querySelectorAll("input.filter, select.column-filter").forEach(control =>
+  control.addEventListener("input", () => applyFilters(control.dataset.table)));
 """
 
 
-def _table(table: Table, index: int) -> str:
-    ident = f"t{index}"
+def _filters(table: Table, ident: str) -> str:
+    """A text box over every row, and one drop-down per categorical column the table names."""
+    parts = [f'<input class="filter" data-table="{ident}" placeholder="filter rows" aria-label="filter rows">']
+    for name in table.filters:
+        column = table.headers.index(name)
+        values = sorted({row[column] for row in table.rows if row[column] not in ("", "–")})
+        options = "".join(f"<option>{html.escape(v)}</option>" for v in values)
+        parts.append(
+            f'<select class="column-filter" data-table="{ident}" data-column="{column}" '
+            f'aria-label="{html.escape(name)}"><option value="">{html.escape(name)}: all</option>{options}</select>'
+        )
+    return "".join(parts)
+
+
+def _heat_cell(text: str, total: int, diagonal: bool) -> str:
+    """A count shaded by its share of the row: green on the diagonal (the intended task), red elsewhere."""
+    count = int(text) if text.isdigit() else 0
+    if not count:
+        return "<td></td>"
+    share = count / total
+    colour = f"rgba(44, 160, 44, {share:.2f})" if diagonal else f"rgba(214, 39, 40, {share:.2f})"
+    return f'<td class="heat" style="background: {colour}" title="{100 * share:.0f} % of the row">{count}</td>'
+
+
+def _rows(table: Table) -> str:
+    if table.kind != "heatmap":
+        return "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>" for row in table.rows)
+    rows = []
+    for row in table.rows:
+        total = sum(int(c) for c in row[1:] if c.isdigit()) or 1
+        cells = [_heat_cell(c, total, table.headers[j + 1] == row[0]) for j, c in enumerate(row[1:])]
+        rows.append(f"<tr><th scope=row>{html.escape(row[0])}</th>{''.join(cells)}</tr>")
+    return "".join(rows)
+
+
+def _table(table: Table, ident: str) -> str:
     heads = "".join(f"<th>{html.escape(h)}</th>" for h in table.headers)
-    rows = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>" for row in table.rows)
-    heat = " confusion" if table.title.startswith("Confusion") else ""
     return (
-        f"<section><h2>{html.escape(table.title)}</h2>"
-        f'<input class="filter" data-table="{ident}" placeholder="filter rows" aria-label="filter rows">'
-        f'<table class="report{heat}" id="{ident}"><thead><tr>{heads}</tr></thead><tbody>{rows}</tbody></table>'
-        "</section>"
+        f"<section><h2>{html.escape(table.title)}</h2>{_filters(table, ident)}"
+        f'<table class="report {table.kind}" id="{ident}"><thead><tr>{heads}</tr></thead>'
+        f"<tbody>{_rows(table)}</tbody></table></section>"
     )
+
+
+def _gallery(table: Table, ident: str, media: dict[str, str]) -> str:
+    """Filmed episodes grouped by outcome (in the table's order), each clip with the instruction it was given."""
+    column = {name: j for j, name in enumerate(table.headers)}
+    groups: dict[str, list[list[str]]] = {}
+    for row in table.rows:
+        groups.setdefault(row[column["Outcome"]], []).append(row)
+    parts = [f"<section class=gallery id={ident}><h2>{html.escape(table.title)}</h2>"]
+    for outcome, rows in groups.items():
+        parts.append(
+            f'<h3 data-outcome="{html.escape(outcome)}">{html.escape(outcome)} ({len(rows)})</h3><div class=clips>'
+        )
+        for row in rows:
+            source = media.get(row[column["Video"]])
+            player = (
+                f'<video controls muted preload="metadata" src="{html.escape(source)}"></video>'
+                if source
+                else '<p class="note">clip not found</p>'
+            )
+            where = f"{row[column['Task']]} · init {row[column['Init']]} · seed {row[column['Seed']]}"
+            if row[column["Condition"]] != "given":
+                where += f" · condition {row[column['Condition']]}"
+            parts.append(
+                f"<figure>{player}<figcaption>“{html.escape(row[column['Instruction']])}”"
+                f"<br><span class=note>{html.escape(where)}</span></figcaption></figure>"
+            )
+        parts.append("</div>")
+    return "".join(parts) + "</section>"
 
 
 _COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b")
@@ -120,9 +195,12 @@ def dimension_chart(summary: Summary) -> str:
     return "".join(parts)
 
 
-def html_page(summary: Summary, published: Published | None = None) -> str:
-    """The whole report as one HTML document."""
-    tables = "".join(_table(t, i) for i, t in enumerate(full_report(summary, published)))
+def html_page(summary: Summary, published: Published | None = None, media: dict[str, str] | None = None) -> str:
+    """The whole report as one HTML document; `media` maps each clip's file to its address from the page."""
+    tables = "".join(
+        _gallery(t, f"t{i}", media or {}) if t.kind == "gallery" else _table(t, f"t{i}")
+        for i, t in enumerate(full_report(summary, published))
+    )
     notes = [note for note, shown in ((PRIVILEGED_NOTE, summary.privileged), (PUBLISHED_NOTE, published)) if shown]
     runs = ", ".join(html.escape(run.label) for run in summary.runs)
     data = json.dumps(summary.to_dict()).replace("</", "<\\/")
@@ -140,9 +218,17 @@ def html_page(summary: Summary, published: Published | None = None) -> str:
 
 
 def write_html(summary: Summary, published: Published | None, directory: str | Path) -> Path:
-    """Write the report to `directory/index.html`; returns its path."""
+    """Write the report to `directory/index.html`, the clips it shows to `directory/media/`; returns its path."""
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
+    media = {}
+    for number, run in enumerate(summary.runs):
+        for clip in run.clips:
+            if clip.path.is_file():
+                target = directory / MEDIA_DIR / str(number) / clip.path.name
+                target.parent.mkdir(parents=True, exist_ok=True)
+                shutil.copyfile(clip.path, target)
+                media[str(clip.path)] = urllib.parse.quote(target.relative_to(directory).as_posix())
     path = directory / "index.html"
-    path.write_text(html_page(summary, published), encoding="utf-8")
+    path.write_text(html_page(summary, published, media), encoding="utf-8")
     return path

@@ -10,12 +10,12 @@ from __future__ import annotations
 import statistics
 from collections import Counter, defaultdict
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 from langgap.catalog.labels import EXTENDED_DIMENSIONS, SPLIT_ORDER, SUITE_ORDER
 from langgap.engine.plan import repeat_of
-from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, achieved
+from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Outcome, achieved
 from langgap.report.card import PROTOCOL_ITEMS, protocol_card
 from langgap.report.load import Run
 from langgap.report.stats import PairedTest, Rate
@@ -54,6 +54,50 @@ class TaskRow:
     rate: Rate
     dimension: str
     instruction: str
+    suite: str = ""
+    split: str = ""
+    outcomes: dict[str, int] = field(default_factory=dict)  # judged episodes per outcome
+
+    @property
+    def instead(self) -> tuple[str, int] | None:
+        """The most frequent outcome other than success and its episode count (None: every episode succeeded)."""
+        failures = [(n, o) for o, n in self.outcomes.items() if o != Outcome.SUCCESS and n]
+        if not failures:
+            return None
+        count, outcome = max(failures, key=lambda item: (item[0], -JUDGED_OUTCOMES.index(item[1])))
+        return outcome, count
+
+
+# The order in which clips are shown: the failures that explain most first, successes last.
+CLIP_ORDER = (Outcome.DID_SOURCE_TASK, Outcome.DID_OTHER_TASK, Outcome.NO_GOAL_REACHED, Outcome.POLICY_ERROR,
+              Outcome.SUCCESS)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Clip:
+    """One filmed episode: what was asked, what happened, and the video file."""
+
+    task_id: str
+    condition: str
+    init_index: int
+    seed: int
+    outcome: str
+    instruction: str
+    path: Path
+
+    def as_dict(self) -> dict:
+        data = {f.name: getattr(self, f.name) for f in fields(self)}
+        return {**data, "path": str(self.path)}
+
+
+def clips(run: Run) -> list[Clip]:
+    """The run's filmed judged episodes, in `CLIP_ORDER`, then by task, condition and init state."""
+    filmed = [r for r in run.records if r.video and r.judged]
+    filmed.sort(key=lambda r: (CLIP_ORDER.index(Outcome(r.outcome)), r.task_id, r.condition, r.init_index, r.seed))
+    return [
+        Clip(r.task_id, r.condition, r.init_index, r.seed, str(r.outcome), r.instruction, run.path / r.video)
+        for r in filmed
+    ]
 
 
 @dataclass(frozen=True)
@@ -167,6 +211,7 @@ class RunResults:
     conditions: list[PairedTest]
     card: dict[str, str]  # the protocol card (`CARD_ITEMS`)
     spread: list[SpreadRow]  # between-seed spread (runs with --repeats)
+    clips: list[Clip]  # filmed episodes (`--video`)
 
     @property
     def label(self) -> str:
@@ -184,8 +229,14 @@ def results(run: Run) -> RunResults:
     originals = [r for r in given if r.kind == "original"]
     order = {d: i for i, d in enumerate(("original", *EXTENDED_DIMENSIONS))}
     info = {r.task_id: r for r in given}
-    per_task = rates_by(given, lambda r: r.task_id)
-    tasks = [TaskRow(t, info[t.group].dimension, info[t.group].instruction) for t in per_task]
+    per_outcome: dict[str, Counter] = defaultdict(Counter)
+    for r in given:
+        if r.judged:
+            per_outcome[r.task_id][str(r.outcome)] += 1
+    tasks = [
+        TaskRow(t, (i := info[t.group]).dimension, i.instruction, i.suite, i.split, dict(per_outcome[t.group]))
+        for t in rates_by(given, lambda r: r.task_id)
+    ]
     tasks.sort(key=lambda row: (order.get(row.dimension, len(order)), row.rate.group))
     outcome_groups = [(d, [r for r in extended if r.dimension == d]) for d in EXTENDED_DIMENSIONS]
     outcome_groups += [("extended", extended), ("original", originals)]
@@ -206,6 +257,7 @@ def results(run: Run) -> RunResults:
         conditions=condition_tests(run.records),
         card=protocol_card(run),
         spread=spread(given, int(run.spec.get("seed", 0))),
+        clips=clips(run),
     )
 
 
@@ -238,7 +290,7 @@ class Summary:
             "per_split": lambda run: run.by_split,
             "per_task": lambda run: [t.rate for t in run.tasks],
         }
-        for section in (*sections, "outcomes", "conditions", "spread"):
+        for section in (*sections, "outcomes", "conditions", "spread", "videos"):
             out[section] = []
         for run in self.runs:
             out["runs"].append(
@@ -259,6 +311,7 @@ class Summary:
             out["outcomes"] += [{"run": run.name, **o.as_dict()} for o in run.outcomes]
             out["conditions"] += [{"run": run.name, **t.as_dict()} for t in run.conditions]
             out["spread"] += [{"run": run.name, **row.as_dict()} for row in run.spread]
+            out["videos"] += [{"run": run.name, **clip.as_dict()} for clip in run.clips]
             out["confusion"][run.name] = run.confusion
         return out
 

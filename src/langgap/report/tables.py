@@ -9,7 +9,7 @@ from langgap.records import JUDGED_OUTCOMES, Outcome
 from langgap.report.card import CARD_ITEMS
 from langgap.report.published import Published
 from langgap.report.stats import PairedTest, Rate
-from langgap.report.summary import RunResults, Summary
+from langgap.report.summary import RunResults, Summary, TaskRow
 
 SOURCE_LABEL = {"original": "Original (LIBERO)", "extended": "Extended (LangGap)", "total": "Total"}
 OUTCOME_LABEL = {
@@ -19,6 +19,7 @@ OUTCOME_LABEL = {
     Outcome.NO_GOAL_REACHED: "No goal %",
     Outcome.POLICY_ERROR: "Policy error %",
 }
+OUTCOME_NAME = {o: o.replace("_", " ") for o in Outcome}
 OUTCOME_GROUP_LABEL = {**DIMENSION_LABEL, "extended": "All extended"}
 PRIVILEGED_NOTE = (
     "† privileged policy (given the goal or simulator state): a scripted reference, not a policy under test"
@@ -28,11 +29,18 @@ PUBLISHED_NOTE = "Rows marked published are the LangGap paper's figures as print
 
 @dataclass
 class Table:
-    """A titled grid of strings; formats decide how it looks."""
+    """A titled grid of strings; formats decide how it looks.
+
+    `filters` names the categorical columns a page can filter on; `kind` tells a page what the grid
+    is: a `table`, a `heatmap` (counts, shaded by their share of the row) or a `gallery` (filmed
+    episodes, the last column the clip's file).
+    """
 
     title: str
     headers: list[str]
     rows: list[list[str]]
+    filters: tuple[str, ...] = ()
+    kind: str = "table"
 
 
 def pct(x: float) -> str:
@@ -177,22 +185,46 @@ def outcome_table(run: RunResults) -> Table:
     return Table(f"What the policy did instead — {run.label} (did source task = default-task rate)", headers, rows)
 
 
+def _instead_cells(t: TaskRow) -> list[str]:
+    if (instead := t.instead) is None:
+        return ["–", ""]
+    outcome, count = instead
+    return [OUTCOME_NAME[outcome], str(count)]
+
+
 def task_table(run: RunResults) -> Table:
-    """The appendix: every task, grouped by dimension."""
+    """The appendix: every task, grouped by dimension, with what it most often ended in instead."""
     rows = [
         [
+            label(SUITE_LABEL, t.suite),
             label(DIMENSION_LABEL, t.dimension),
+            label(SPLIT_LABEL, t.split),
             t.rate.group,
             t.instruction,
             f"{t.rate.successes}/{t.rate.episodes}",
             pct(t.rate.rate),
             ci(t.rate),
             str(t.rate.gaps),
+            *_instead_cells(t),
         ]
         for t in run.tasks
     ]
-    headers = ["Dimension", "Task", "Instruction", "Success", "Rate %", "95% CI", "Gaps"]
-    return Table(f"Per task — {run.label}", headers, rows)
+    headers = ["Suite", "Dimension", "Split", "Task", "Instruction", "Success", "Rate %", "95% CI", "Gaps"]
+    headers += ["Mostly did instead", "Episodes"]
+    filters = ("Suite", "Dimension", "Split", "Mostly did instead")
+    return Table(f"Per task — {run.label}", headers, rows, filters)
+
+
+def video_table(run: RunResults) -> Table | None:
+    """The filmed episodes, `did source task` first, with the instruction each was given."""
+    if not run.clips:
+        return None
+    rows = [
+        [OUTCOME_NAME[c.outcome], c.task_id, c.condition, str(c.init_index), str(c.seed), c.instruction, str(c.path)]
+        for c in run.clips
+    ]
+    headers = ["Outcome", "Task", "Condition", "Init", "Seed", "Instruction", "Video"]
+    return Table(f"Filmed episodes — {run.label}", headers, rows, ("Outcome",), kind="gallery")
 
 
 def _paired_cells(t: PairedTest) -> list[str]:
@@ -246,9 +278,10 @@ def confusion_tables(run: RunResults) -> list[Table]:
         suite, scene = intended[0].split("/")[:2]
         tables.append(
             Table(
-                f"Confusion (intended × achieved) — scene of {scene} ({suite})",
+                f"Confusion (intended × achieved) — {run.label}, scene {suite}/{scene}",
                 ["intended \\ achieved", *columns],
                 body,
+                kind="heatmap",
             )
         )
     return tables
@@ -258,7 +291,10 @@ def full_report(summary: Summary, published: Published | None = None) -> list[Ta
     """Every table of `langgap report` (with the paper's published rows when `published` is given)."""
     tables = [protocol_table(summary)]
     for run in summary.runs:
-        tables += [source_table(run), outcome_table(run), split_table(run), mde_table(run)]
+        tables += [source_table(run), outcome_table(run)]
+        if (videos := video_table(run)) is not None:
+            tables.append(videos)
+        tables += [split_table(run), mde_table(run)]
         if (seeds := spread_table(run)) is not None:
             tables.append(seeds)
         if (conditions := condition_table(run)) is not None:
