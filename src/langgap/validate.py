@@ -58,9 +58,18 @@ class TaskValidation:
     feasible: bool
     reason: str = ""
     checks: dict[str, bool] = field(default_factory=dict)
+    failed_inits: list[int] = field(default_factory=list)  # judged episodes the oracle failed
 
-    def verdict(self) -> GateResult:
-        return GateResult(episodes=self.episodes, successes=self.successes, feasible=self.feasible, reason=self.reason)
+    def verdict(self, inits: int) -> GateResult:
+        """The verdict to record, for a gate that ran init states 0..`inits`-1."""
+        return GateResult(
+            episodes=self.episodes,
+            successes=self.successes,
+            feasible=self.feasible,
+            reason=self.reason,
+            inits=inits,
+            failed_inits=tuple(self.failed_inits),
+        )
 
 
 def goals_exclude(a: tuple[Predicate, ...], b: tuple[Predicate, ...]) -> bool:
@@ -125,6 +134,7 @@ def _row(task: Task, catalog: Catalog, records: list[EpisodeRecord], drift: floa
         feasible=not failed,
         reason=reason,
         checks=checks,
+        failed_inits=sorted(r.init_index for r in done if not r.success),
     )
 
 
@@ -170,7 +180,7 @@ def record(catalog_name: str, rows: list[TaskValidation], *, inits: int, policy:
         "physics": physics_stack(),
         "code_version": code_version(),
     }
-    return record_verdicts(registry_path(catalog_name), {r.id: r.verdict() for r in rows}, about)
+    return record_verdicts(registry_path(catalog_name), {r.id: r.verdict(inits) for r in rows}, about)
 
 
 def report_rows(rows: list[TaskValidation]) -> list[dict]:

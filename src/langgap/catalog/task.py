@@ -14,23 +14,52 @@ INSTRUCTION_STYLES = ("libero", "paper")
 DEFAULT_STYLE = "libero"
 
 
+# An oracle below this rate on a task's init states marks the task's results as capped by the task.
+CEILING_TARGET = 0.95
+
+
 @dataclass(frozen=True)
 class GateResult:
-    """A feasibility gate's verdict on one task: how a scripted oracle did, and whether the task is kept."""
+    """A feasibility gate's verdict on one task: how a scripted oracle did, and whether the task is kept.
+
+    The gate runs init states 0..`inits`-1; `failed_inits` lists those the oracle failed (None in
+    verdicts recorded before per-init results were kept), so the oracle's ceiling can be given for
+    exactly the init states a run used. `certificate` is the evidence, from the simulator, that a
+    task no robot can do within its step limit (empty when none was made).
+    """
 
     episodes: int
     successes: int
     feasible: bool
     reason: str = ""
+    inits: int = 0
+    failed_inits: tuple[int, ...] | None = None
+    certificate: str = ""
 
     def __post_init__(self) -> None:
         if not 0 <= self.successes <= self.episodes:
             raise CatalogError(f"gate result: {self.successes} successes in {self.episodes} episodes")
+        if self.failed_inits is not None:
+            object.__setattr__(self, "failed_inits", tuple(self.failed_inits))  # JSON gives a list
 
     @property
     def rate(self) -> float:
         """Oracle success rate (0 when no episode ran)."""
         return self.successes / self.episodes if self.episodes else 0.0
+
+    def oracle_on(self, inits: list[int] | tuple[int, ...]) -> tuple[int, int]:
+        """(successes, episodes) of the oracle on the init states `inits` that the gate ran; the gate's
+        whole result when it kept no per-init results or ran none of them."""
+        covered = [i for i in inits if i < self.inits]
+        if self.failed_inits is None or not covered:
+            return self.successes, self.episodes
+        failed = set(self.failed_inits)
+        return sum(i not in failed for i in covered), len(covered)
+
+    @property
+    def capped(self) -> bool:
+        """True when the task caps what a policy can show: certified infeasible or an oracle below the target."""
+        return bool(self.certificate) or self.rate < CEILING_TARGET
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 import os
 import tempfile
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 
 from langgap.catalog.task import GateResult
@@ -38,7 +38,12 @@ def read_verdicts(registry: str | Path) -> dict[str, GateResult]:
 def record_verdicts(registry: str | Path, verdicts: dict[str, GateResult], about: dict) -> Path:
     """Merge `verdicts` into the registry's verdict file (atomically); `about` describes how they were made."""
     path = verdicts_path(registry)
-    merged = read_verdicts(registry) | verdicts
+    old = read_verdicts(registry)
+    # A certificate is evidence made once, apart from the gate: re-running the gate keeps it.
+    merged = old | {
+        k: v if v.certificate or k not in old else replace(v, certificate=old[k].certificate)
+        for k, v in verdicts.items()
+    }
     data = {"about": about, "tasks": {k: asdict(merged[k]) for k in sorted(merged)}}
     path.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp", encoding="utf-8") as tmp:

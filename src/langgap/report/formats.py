@@ -11,7 +11,7 @@ from pathlib import Path
 from langgap.report.load import load_runs
 from langgap.report.published import Published, load_published
 from langgap.report.summary import Summary, summarize
-from langgap.report.tables import PRIVILEGED_NOTE, PUBLISHED_NOTE, Table, diagnosis, full_report
+from langgap.report.tables import Table, diagnosis, full_report, notes, selection_text
 
 
 def markdown_table(table: Table) -> str:
@@ -59,26 +59,25 @@ def latex_table(table: Table) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _header(summary: Summary) -> str:
-    """One line per run: where it is and its size (the protocol card follows)."""
-    return "".join(
-        f"**{run.label}** — {run.path}: {run.episodes} episodes, {run.gaps} gaps\n\n" for run in summary.runs
+def _header(summary: Summary, published: Published | None) -> str:
+    """One line per run (where it is, its size, its tasks), then the notes; the protocol card follows."""
+    runs = "".join(
+        f"**{run.label}** — {run.path}: {run.episodes} episodes, {run.gaps} gaps; {selection_text(run)}\n\n"
+        for run in summary.runs
     )
-
-
-def _notes(summary: Summary, published: Published | None) -> list[str]:
-    return [note for note, shown in ((PRIVILEGED_NOTE, summary.privileged), (PUBLISHED_NOTE, published)) if shown]
+    return runs + "".join(f"{note}\n\n" for note in notes(summary, published))
 
 
 def to_markdown(summary: Summary, published: Published | None = None, tables: list[Table] | None = None) -> str:
     body = "\n".join(markdown_table(t) for t in (full_report(summary, published) if tables is None else tables))
-    head = _header(summary) if tables is None else ""
-    return head + body + "".join(f"\n{note}\n" for note in _notes(summary, published))
+    if tables is None:
+        return _header(summary, published) + body
+    return body + "".join(f"\n{note}\n" for note in notes(summary, published, ceiling=False))
 
 
 def to_latex(summary: Summary, published: Published | None = None) -> str:
     body = "\n".join(latex_table(t) for t in full_report(summary, published))
-    return body + "".join(f"\n\\noindent {_latex_escape(note)}\n" for note in _notes(summary, published))
+    return body + "".join(f"\n\\noindent {_latex_escape(note)}\n" for note in notes(summary, published))
 
 
 def to_json(summary: Summary, published: Published | None = None) -> str:
@@ -95,11 +94,21 @@ def to_csv(summary: Summary, published: Published | None = None) -> str:
     privileged = {run["run"]: run["privileged"] for run in data["runs"]}
     buffer = io.StringIO()
     writer = csv.writer(buffer)
-    columns = ["tasks", "episodes", "successes", "rate", "ci_low", "ci_high", "gaps"]
+    columns = [
+        "tasks",
+        "episodes",
+        "successes",
+        "rate",
+        "ci_low",
+        "ci_high",
+        "gaps",
+        "oracle_rate",
+        "relative_to_oracle",
+    ]
     writer.writerow(["run", "privileged", "table", "group", *columns])
     for section in CSV_SECTIONS:
         for row in data[section]:
-            values = [f"{row[c]:.4f}" if isinstance(row[c], float) else row[c] for c in columns]
+            values = [f"{v:.4f}" if isinstance(v := row[c], float) else ("" if v is None else v) for c in columns]
             writer.writerow([row["run"], int(privileged[row["run"]]), section, row["id"], *values])
     return buffer.getvalue()
 

@@ -16,7 +16,7 @@ from pathlib import Path
 from langgap.catalog.labels import DIMENSION_LABEL, EXTENDED_DIMENSIONS
 from langgap.report.published import Published
 from langgap.report.summary import Summary
-from langgap.report.tables import PRIVILEGED_NOTE, PUBLISHED_NOTE, Table, full_report
+from langgap.report.tables import Table, full_report, notes, selection_text
 
 MEDIA_DIR = "media"
 
@@ -201,14 +201,14 @@ def html_page(summary: Summary, published: Published | None = None, media: dict[
         _gallery(t, f"t{i}", media or {}) if t.kind == "gallery" else _table(t, f"t{i}")
         for i, t in enumerate(full_report(summary, published))
     )
-    notes = [note for note, shown in ((PRIVILEGED_NOTE, summary.privileged), (PUBLISHED_NOTE, published)) if shown]
     runs = ", ".join(html.escape(run.label) for run in summary.runs)
+    selections = "".join(f"<li>{html.escape(f'{run.label} — {selection_text(run)}')}</li>" for run in summary.runs)
     data = json.dumps(summary.to_dict()).replace("</", "<\\/")
     return (
         '<!doctype html><html lang="en"><head><meta charset="utf-8">'
         f"<title>LangGap report — {runs}</title><style>{_STYLE}</style></head><body>"
-        f"<h1>LangGap report</h1><p>{runs}</p>"
-        + "".join(f'<p class="note">{html.escape(n)}</p>' for n in notes)
+        f"<h1>LangGap report</h1><ul>{selections}</ul>"
+        + "".join(f'<p class="note">{html.escape(n)}</p>' for n in notes(summary, published))
         + "<h2>Success by dimension (95 % Wilson intervals)</h2>"
         + dimension_chart(summary)
         + tables

@@ -63,10 +63,24 @@ class Rate:
     successes: int
     gaps: int
     tasks: int
+    # The scripted oracle on the same tasks and init states (from the catalog's recorded verdicts);
+    # oracle_episodes 0: no verdict covers these tasks.
+    oracle_successes: int = 0
+    oracle_episodes: int = 0
 
     @property
     def rate(self) -> float:
         return self.successes / self.episodes if self.episodes else 0.0
+
+    @property
+    def oracle_rate(self) -> float | None:
+        """The oracle's success rate on the same tasks and init states (None: not known)."""
+        return self.oracle_successes / self.oracle_episodes if self.oracle_episodes else None
+
+    @property
+    def relative(self) -> float | None:
+        """The rate as a share of the oracle's (None when the oracle's is unknown or 0)."""
+        return self.rate / self.oracle_rate if self.oracle_rate else None
 
     @property
     def ci(self) -> tuple[float, float]:
@@ -79,7 +93,8 @@ class Rate:
 
     def as_dict(self) -> dict:
         low, high = self.ci
-        return {**asdict(self), "rate": self.rate, "ci_low": low, "ci_high": high, "mde": self.mde}
+        extra = {"oracle_rate": self.oracle_rate, "relative_to_oracle": self.relative}
+        return {**asdict(self), "rate": self.rate, "ci_low": low, "ci_high": high, "mde": self.mde, **extra}
 
 
 @dataclass(frozen=True)

@@ -9,12 +9,14 @@ from __future__ import annotations
 
 import statistics
 from collections import Counter, defaultdict
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 from langgap.catalog.labels import EXTENDED_DIMENSIONS, SPLIT_ORDER, SUITE_ORDER
+from langgap.catalog.task import CEILING_TARGET, GateResult
 from langgap.engine.plan import repeat_of
+from langgap.errors import LangGapError
 from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Outcome, achieved
 from langgap.report.card import PROTOCOL_ITEMS, protocol_card
 from langgap.report.load import Run
@@ -24,27 +26,57 @@ SOURCES = ("original", "extended", "total")
 KINDS = ("original", "extended")
 
 
-def rate(group: str, records: Iterable[EpisodeRecord]) -> Rate:
-    """The success rate of `records` over their judged episodes."""
+def oracle_ceiling(records: Iterable[EpisodeRecord], gates: Mapping[str, GateResult]) -> tuple[int, int]:
+    """(successes, episodes) of the scripted oracle on the tasks and init states of the judged `records`,
+    from the recorded verdicts `gates` (tasks without one are left out; (0, 0) when none has one)."""
+    inits: dict[str, set[int]] = defaultdict(set)
+    for r in records:
+        if r.judged and r.task_id in gates:
+            inits[r.task_id].add(r.init_index)
+    counts = [gates[task].oracle_on(sorted(indices)) for task, indices in inits.items()]
+    return sum(s for s, _ in counts), sum(n for _, n in counts)
+
+
+def rate(group: str, records: Iterable[EpisodeRecord], gates: Mapping[str, GateResult] | None = None) -> Rate:
+    """The success rate of `records` over their judged episodes, beside the oracle's on the same ones."""
     records = list(records)
     judged = [r for r in records if r.judged]
+    oracle_successes, oracle_episodes = oracle_ceiling(judged, gates or {})
     return Rate(
         group=group,
         episodes=len(judged),
         successes=sum(r.success for r in judged),
         gaps=len(records) - len(judged),
         tasks=len({r.task_id for r in records}),
+        oracle_successes=oracle_successes,
+        oracle_episodes=oracle_episodes,
     )
 
 
-def rates_by(records: Iterable[EpisodeRecord], key: Callable[[EpisodeRecord], str | None], order=()) -> list[Rate]:
+def rates_by(
+    records: Iterable[EpisodeRecord],
+    key: Callable[[EpisodeRecord], str | None],
+    order=(),
+    gates: Mapping[str, GateResult] | None = None,
+) -> list[Rate]:
     """One `Rate` per value of `key` (records whose key is None are left out), `order` first, then sorted."""
     groups: dict[str, list[EpisodeRecord]] = defaultdict(list)
     for record in records:
         if (name := key(record)) is not None:
             groups[name].append(record)
     names = [n for n in order if n in groups] + sorted(n for n in groups if n not in order)
-    return [rate(n, groups[n]) for n in names]
+    return [rate(n, groups[n], gates) for n in names]
+
+
+def recorded_gates(spec: dict) -> dict[str, GateResult]:
+    """The feasibility verdicts recorded for the run's catalog (empty when it has none or cannot be read)."""
+    from langgap.catalog.catalog import load_catalog
+
+    try:
+        catalog = load_catalog(spec["catalog"])
+    except (KeyError, LangGapError):
+        return {}
+    return {task.id: task.gate for task in catalog if task.gate is not None}
 
 
 @dataclass(frozen=True)
@@ -191,6 +223,18 @@ def confusion(records: list[EpisodeRecord]) -> dict[str, dict[str, dict[str, int
     return {scene: {task: dict(row) for task, row in rows.items()} for scene, rows in matrices.items()}
 
 
+def capped_because(task_rate: Rate, gate: GateResult | None) -> str | None:
+    """Why a task caps what a policy can show on it (None: it does not): certified infeasible, or an
+    oracle below `CEILING_TARGET` on the run's init states."""
+    if gate is None:
+        return None
+    if gate.certificate:
+        return "certified infeasible"
+    if task_rate.oracle_rate is not None and task_rate.oracle_rate < CEILING_TARGET:
+        return f"oracle {task_rate.oracle_successes}/{task_rate.oracle_episodes}"
+    return None
+
+
 @dataclass
 class RunResults:
     """Everything reports show about one run."""
@@ -212,6 +256,7 @@ class RunResults:
     card: dict[str, str]  # the protocol card (`CARD_ITEMS`)
     spread: list[SpreadRow]  # between-seed spread (runs with --repeats)
     clips: list[Clip]  # filmed episodes (`--video`)
+    capped: dict[str, str]  # task -> why its results are capped by the task (oracle below target, certificate)
 
     @property
     def label(self) -> str:
@@ -233,9 +278,10 @@ def results(run: Run) -> RunResults:
     for r in given:
         if r.judged:
             per_outcome[r.task_id][str(r.outcome)] += 1
+    gates = recorded_gates(run.spec)
     tasks = [
         TaskRow(t, (i := info[t.group]).dimension, i.instruction, i.suite, i.split, dict(per_outcome[t.group]))
-        for t in rates_by(given, lambda r: r.task_id)
+        for t in rates_by(given, lambda r: r.task_id, gates=gates)
     ]
     tasks.sort(key=lambda row: (order.get(row.dimension, len(order)), row.rate.group))
     outcome_groups = [(d, [r for r in extended if r.dimension == d]) for d in EXTENDED_DIMENSIONS]
@@ -247,10 +293,12 @@ def results(run: Run) -> RunResults:
         privileged=run.privileged,
         episodes=len(run.records),
         gaps=sum(not r.judged for r in run.records),
-        by_source=[rate("original", originals), rate("extended", extended), rate("total", given)],
-        by_dimension=rates_by(extended, lambda r: r.dimension, EXTENDED_DIMENSIONS),
-        by_suite=rates_by(given, lambda r: f"{r.suite}/{r.kind}", [f"{s}/{k}" for s in SUITE_ORDER for k in KINDS]),
-        by_split=rates_by(given, lambda r: r.split, SPLIT_ORDER),
+        by_source=[rate("original", originals, gates), rate("extended", extended, gates), rate("total", given, gates)],
+        by_dimension=rates_by(extended, lambda r: r.dimension, EXTENDED_DIMENSIONS, gates),
+        by_suite=rates_by(
+            given, lambda r: f"{r.suite}/{r.kind}", [f"{s}/{k}" for s in SUITE_ORDER for k in KINDS], gates
+        ),
+        by_split=rates_by(given, lambda r: r.split, SPLIT_ORDER, gates),
         tasks=tasks,
         outcomes=[outcome_row(g, rs) for g, rs in outcome_groups if rs],
         confusion=confusion(given),
@@ -258,6 +306,7 @@ def results(run: Run) -> RunResults:
         card=protocol_card(run),
         spread=spread(given, int(run.spec.get("seed", 0))),
         clips=clips(run),
+        capped={t.rate.group: why for t in tasks if (why := capped_because(t.rate, gates.get(t.rate.group)))},
     )
 
 
@@ -302,6 +351,7 @@ class Summary:
                     "privileged": run.privileged,
                     "spec": run.spec,
                     "card": run.card,
+                    "capped_tasks": run.capped,
                 }
             )
             for section, rows in sections.items():

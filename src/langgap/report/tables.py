@@ -25,6 +25,37 @@ PRIVILEGED_NOTE = (
     "† privileged policy (given the goal or simulator state): a scripted reference, not a policy under test"
 )
 PUBLISHED_NOTE = "Rows marked published are the LangGap paper's figures as printed (20 episodes per task), not re-run."
+CEILING_NOTE = (
+    "Oracle % is the scripted oracle's success on the same tasks and init states (the catalog's recorded "
+    "feasibility verdicts); Relative % is the rate as a share of it."
+)
+SELECTION_NOTE = (
+    "Tasks: `--tasks feasible` (the default) runs the tasks the feasibility gate accepted; `--tasks all` adds "
+    "those it rejected. Either way, ⚠ marks a task that caps what any policy can show on it (oracle below "
+    "95 % on these init states, or certified infeasible: `langgap tasks show ID`)."
+)
+
+
+def selection_text(run: RunResults) -> str:
+    """The run's task selection, as its report's header states it."""
+    selection = run.spec.get("selection")
+    if selection in (None, "feasible"):
+        chosen = "feasible (the default)"
+    else:
+        chosen = f"a list of {len(selection.split(','))}" if "," in selection else f"`{selection}`"
+    capped = "; ".join(f"{task} ({why})" for task, why in sorted(run.capped.items()))
+    return f"tasks: {chosen}" + (f"; ⚠ {capped}" if capped else "")
+
+
+def notes(summary: Summary, published: Published | None, *, ceiling: bool = True) -> list[str]:
+    """The notes printed with the tables (`ceiling`: with those that explain the oracle columns and ⚠)."""
+    shown = [
+        (SELECTION_NOTE, ceiling),
+        (CEILING_NOTE, ceiling),
+        (PRIVILEGED_NOTE, summary.privileged),
+        (PUBLISHED_NOTE, published is not None),
+    ]
+    return [note for note, show in shown if show]
 
 
 @dataclass
@@ -58,21 +89,48 @@ def rate_cell(r: Rate | None) -> str:
     return f"{pct(r.rate)} {ci(r)}" + (f" ({r.gaps} gaps)" if r.gaps else "")
 
 
-_RATE_HEADERS = ["Category", "Tasks", "Episodes", "Success", "Rate %", "95% CI", "Gaps"]
+_RATE_HEADERS = ["Category", "Tasks", "Episodes", "Success", "Rate %", "95% CI", "Gaps", "Oracle %", "Relative %"]
+
+
+def ceiling_cells(r: Rate) -> list[str]:
+    """The oracle's rate on the same tasks and init states, and the rate relative to it."""
+    oracle, relative = r.oracle_rate, r.relative
+    return ["–" if oracle is None else pct(oracle), "–" if relative is None else pct(relative)]
 
 
 def _rate_rows(rates: list[Rate], names: dict[str, str]) -> list[list[str]]:
     return [
-        [label(names, r.group), str(r.tasks), str(r.episodes), str(r.successes), pct(r.rate), ci(r), str(r.gaps)]
+        [
+            label(names, r.group),
+            str(r.tasks),
+            str(r.episodes),
+            str(r.successes),
+            pct(r.rate),
+            ci(r),
+            str(r.gaps),
+            *ceiling_cells(r),
+        ]
         for r in rates
     ]
 
 
+def _heading(text: str) -> list[str]:
+    return [f"*{text}*", *[""] * (len(_RATE_HEADERS) - 1)]
+
+
+SUITE_KIND_LABEL = {
+    f"{suite}/{kind}": f"{SUITE_LABEL[suite]}, {'original' if kind == 'original' else 'extended'}"
+    for suite in SUITE_ORDER
+    for kind in ("original", "extended")
+}
+
+
 def source_table(run: RunResults) -> Table:
-    """Table II: by data source and by perturbation dimension."""
-    rows = [["*By data source*", *[""] * 6], *_rate_rows(run.by_source, SOURCE_LABEL)]
-    rows += [["*By perturbation dimension*", *[""] * 6], *_rate_rows(run.by_dimension, DIMENSION_LABEL)]
-    return Table(f"Table II — {run.label}: by data source and dimension", _RATE_HEADERS, rows)
+    """Table II: by data source, by suite and by perturbation dimension, each beside the oracle's ceiling."""
+    rows = [_heading("By data source"), *_rate_rows(run.by_source, SOURCE_LABEL)]
+    rows += [_heading("By suite"), *_rate_rows(run.by_suite, SUITE_KIND_LABEL)]
+    rows += [_heading("By perturbation dimension"), *_rate_rows(run.by_dimension, DIMENSION_LABEL)]
+    return Table(f"Table II — {run.label}: by data source, suite and dimension", _RATE_HEADERS, rows)
 
 
 def _published_cells(values: dict[str, float], keys: list[str]) -> list[str]:
@@ -185,6 +243,14 @@ def outcome_table(run: RunResults) -> Table:
     return Table(f"What the policy did instead — {run.label} (did source task = default-task rate)", headers, rows)
 
 
+CAPPED_MARK = "⚠"
+
+
+def task_label(run: RunResults, task_id: str) -> str:
+    """A task's id, marked when the task itself caps what a policy can show on it."""
+    return f"{task_id} {CAPPED_MARK}" if task_id in run.capped else task_id
+
+
 def _instead_cells(t: TaskRow) -> list[str]:
     if (instead := t.instead) is None:
         return ["–", ""]
@@ -199,18 +265,19 @@ def task_table(run: RunResults) -> Table:
             label(SUITE_LABEL, t.suite),
             label(DIMENSION_LABEL, t.dimension),
             label(SPLIT_LABEL, t.split),
-            t.rate.group,
+            task_label(run, t.rate.group),
             t.instruction,
             f"{t.rate.successes}/{t.rate.episodes}",
             pct(t.rate.rate),
             ci(t.rate),
             str(t.rate.gaps),
+            *ceiling_cells(t.rate),
             *_instead_cells(t),
         ]
         for t in run.tasks
     ]
     headers = ["Suite", "Dimension", "Split", "Task", "Instruction", "Success", "Rate %", "95% CI", "Gaps"]
-    headers += ["Mostly did instead", "Episodes"]
+    headers += ["Oracle %", "Relative %", "Mostly did instead", "Episodes"]
     filters = ("Suite", "Dimension", "Split", "Mostly did instead")
     return Table(f"Per task — {run.label}", headers, rows, filters)
 
@@ -220,7 +287,15 @@ def video_table(run: RunResults) -> Table | None:
     if not run.clips:
         return None
     rows = [
-        [OUTCOME_NAME[c.outcome], c.task_id, c.condition, str(c.init_index), str(c.seed), c.instruction, str(c.path)]
+        [
+            OUTCOME_NAME[c.outcome],
+            task_label(run, c.task_id),
+            c.condition,
+            str(c.init_index),
+            str(c.seed),
+            c.instruction,
+            str(c.path),
+        ]
         for c in run.clips
     ]
     headers = ["Outcome", "Task", "Condition", "Init", "Seed", "Instruction", "Video"]
@@ -274,12 +349,12 @@ def confusion_tables(run: RunResults) -> list[Table]:
         if len(intended) < 2:
             continue
         columns = intended + sorted({a for row in rows.values() for a in row} - set(intended))
-        body = [[task] + [str(rows[task].get(c, 0) or "") for c in columns] for task in intended]
+        body = [[task_label(run, task)] + [str(rows[task].get(c, 0) or "") for c in columns] for task in intended]
         suite, scene = intended[0].split("/")[:2]
         tables.append(
             Table(
                 f"Confusion (intended × achieved) — {run.label}, scene {suite}/{scene}",
-                ["intended \\ achieved", *columns],
+                ["intended \\ achieved", *(task_label(run, c) for c in columns)],
                 body,
                 kind="heatmap",
             )

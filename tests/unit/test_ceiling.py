@@ -1,0 +1,55 @@
+"""The oracle's ceiling beside every rate, from the catalog's recorded feasibility verdicts."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from langgap.catalog.task import GateResult
+from langgap.catalog.verdicts import read_verdicts, record_verdicts
+from langgap.report import load_runs, summarize
+from langgap.report.formats import FORMATS
+from tests.unit.reports import episode, write_run
+
+DRAWER = "spatial/s2/open-cabinet-bottom-drawer"  # rejected by the gate: the oracle never opened it
+BOWL = "spatial/s2/black-bowl-1-on-plate"
+
+
+def test_the_oracle_on_exactly_the_init_states_a_run_used():
+    gate = GateResult(episodes=20, successes=17, feasible=False, inits=20, failed_inits=[3, 4, 15])
+    assert gate.oracle_on(range(5)) == (3, 5)
+    assert gate.oracle_on([15, 16, 30]) == (1, 2)  # init state 30 was not gated
+    assert gate.oracle_on([30, 31]) == (17, 20)  # none gated: the gate's whole result
+    older = GateResult(episodes=10, successes=9, feasible=True)  # recorded without per-init results
+    assert older.oracle_on(range(3)) == (9, 10)
+    assert gate.capped and not GateResult(20, 20, True).capped
+    assert GateResult(20, 20, True, certificate="no grasp reachable").capped
+
+
+def test_re_gating_keeps_a_certificate(tmp_path):
+    registry = tmp_path / "mine.yaml"
+    record_verdicts(registry, {DRAWER: GateResult(10, 0, False, certificate="unreachable handle")}, {})
+    record_verdicts(registry, {DRAWER: GateResult(50, 0, False, inits=50, failed_inits=range(50))}, {})
+    (verdict,) = read_verdicts(registry).values()
+    assert (verdict.episodes, verdict.certificate, len(verdict.failed_inits)) == (50, "unreachable handle", 50)
+
+
+def _run(tmp_path, name: str, successes: dict[str, int]):
+    records = []
+    for task, wins in successes.items():
+        for init in range(4):
+            record = episode("spatial/s0/ramekin-on-plate", init, success=init < wins)
+            records.append(dataclasses.replace(record, task_id=task, suite="libero_spatial", catalog="langgap99"))
+    return write_run(tmp_path / name, name, records, catalog="langgap99")
+
+
+def test_reports_show_the_ceiling_and_mark_tasks_that_cap_it(tmp_path):
+    (run,) = summarize(load_runs([_run(tmp_path, "vla", {DRAWER: 0, BOWL: 2})])).runs
+    rates = {t.rate.group: t.rate for t in run.tasks}
+    assert (rates[BOWL].oracle_rate, rates[BOWL].relative) == (1.0, 0.5)
+    assert rates[DRAWER].oracle_rate == 0.0 and rates[DRAWER].relative is None
+    assert run.capped == {DRAWER: "oracle 0/10"}
+    extended = run.source("extended")  # both tasks are extended: 10 + 10 oracle episodes, 10 successes
+    assert (extended.oracle_successes, extended.oracle_episodes) == (10, 20)
+    markdown = FORMATS["md"](summarize(load_runs([tmp_path / "vla"])), None)
+    assert f"| {DRAWER} ⚠ |" in markdown and f"⚠ {DRAWER} (oracle 0/10)" in markdown
+    assert f"| {BOWL} |" in markdown
