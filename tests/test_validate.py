@@ -42,7 +42,7 @@ def test_gate_with_the_oracle_passes_doable_tasks_and_rejects_a_goal_true_at_t0(
     path = tmp_path / "probe.yaml"
     path.write_text(yaml.safe_dump({"catalog": "probe", "max_steps": source["max_steps"], "tasks": [*keep, already]}))
     selection = "spatial/s0/ramekin-on-plate,spatial/s0/plate-on-plate-spot"
-    rows = {r.id: r for r in validate(str(path), selection, inits=2, workers=0, progress=False)}
+    rows = {r.id: r for r in validate(str(path), selection, inits=2, workers=0, progress=False).rows}
     doable = rows["spatial/s0/ramekin-on-plate"]
     assert doable.feasible and doable.successes == 2 and doable.rate == 1.0, doable.reason
     # Where the goals exclude each other, the source task's goal must be false after the oracle's success.
@@ -52,7 +52,8 @@ def test_gate_with_the_oracle_passes_doable_tasks_and_rejects_a_goal_true_at_t0(
 
 
 def test_gate_rows_and_checks(probe_registry):
-    rows = {r.id: r for r in validate(str(probe_registry), "all", inits=2, workers=0, policy="noop", progress=False)}
+    found = validate(str(probe_registry), "all", inits=2, workers=0, policy="noop", progress=False, blind=True)
+    rows = {r.id: r for r in found.rows}
     assert set(rows) == {
         "spatial/s0/black-bowl-1-on-plate",
         "spatial/s0/ramekin-on-plate",
@@ -64,6 +65,16 @@ def test_gate_rows_and_checks(probe_registry):
     assert rows["spatial/s0/ramekin-on-plate"].reason == "oracle 0/2"
     at_t0 = rows["spatial/s0/plate-on-plate-spot"]
     assert at_t0.goal_true_at_t0 == 2 and not at_t0.checks["goal false at t0"] and "goal false at t0" in at_t0.reason
+    ramekin = rows["spatial/s0/ramekin-on-plate"]  # the noop policy fails it on both init states
+    assert ramekin.failed_inits == [0, 1] and ramekin.verdict(2).failed_inits == (0, 1) and not at_t0.failed_inits
+    # The claims on the real episodes: one scene, identical t0 states; the plate's goal holds at t0 in
+    # every episode of the scene (it is a scene goal), so that claim fails — a release blocker.
+    same_state, nothing_at_t0, originals, never = found.claims
+    assert same_state.holds and same_state.checked == 2
+    assert not nothing_at_t0.holds and nothing_at_t0.checked == 6 and not found.passed
+    assert originals.holds and originals.checked == 2
+    # blind "does" the plate task at once (its goal already holds): the claim names both episodes.
+    assert never.checked == 4 and never.violations == [f"spatial/s0/plate-on-plate-spot init {k}" for k in (0, 1)]
 
 
 def test_goals_exclude():
@@ -92,8 +103,10 @@ def test_cli_validate_writes_report_and_records_verdicts(probe_registry, tmp_pat
         "--no-progress",
     )
     assert result.returncode == 1, result.stderr  # exit 1: a task is infeasible
-    rows = json.loads(out.read_text())
+    report = json.loads(out.read_text())
+    rows = report["tasks"]
     assert [r["id"] for r in rows] == ["spatial/s0/ramekin-on-plate"]
+    assert [c["holds"] for c in report["claims"]] == [True, False]  # the plate's goal holds at t0
     assert {"episodes", "successes", "rate", "mean_steps", "max_steps", "feasible", "reason"} <= set(rows[0])
     catalog = load_catalog_file(probe_registry)
     assert catalog.get("spatial/s0/ramekin-on-plate").gate is not None

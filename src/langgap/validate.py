@@ -9,6 +9,12 @@ ordinary evaluation harness, then checks per task:
   source goal is false at the end of every successful episode;
 * the environment builds and its scene settles (no infrastructure gap; objects at rest after the
   settle steps, on the first init states of each scene).
+
+Then the benchmark's own claims, over every validated init state (`benchmark_claims`): the tasks of
+a scene start from the identical state (equal t0 hashes per init state), no scene task's goal holds
+at t0, and — with `blind=True`, which also runs the `blind` policy — the scene's original task done
+whatever the instruction says succeeds exactly where the oracle does on originals and never on an
+extended task whose goal differs. A claim that fails is a release blocker.
 """
 
 from __future__ import annotations
@@ -70,6 +76,97 @@ class TaskValidation:
             inits=inits,
             failed_inits=tuple(self.failed_inits),
         )
+
+
+@dataclass
+class Claim:
+    """One of the benchmark's own claims, checked over every validated episode."""
+
+    name: str
+    holds: bool
+    checked: int  # what it was checked on (pairs of scene and init state, episodes)
+    violations: list[str] = field(default_factory=list)  # the first few, for the report
+
+
+@dataclass
+class Validation:
+    """What `validate` found: one row per task, and the benchmark's claims."""
+
+    rows: list[TaskValidation]
+    claims: list[Claim]
+
+    @property
+    def passed(self) -> bool:
+        return all(r.feasible for r in self.rows) and all(c.holds for c in self.claims)
+
+
+SHOWN_VIOLATIONS = 5
+
+
+def _claim(name: str, checked: int, violations: list[str]) -> Claim:
+    return Claim(name, not violations, checked, violations[:SHOWN_VIOLATIONS])
+
+
+def benchmark_claims(
+    catalog: Catalog, records: list[EpisodeRecord], blind: list[EpisodeRecord] | None = None
+) -> list[Claim]:
+    """Check the claims the benchmark rests on, on the gate's episodes (and `blind`'s, when given)."""
+    judged = [r for r in records if r.judged]
+    t0: dict[tuple[str, int], set[str]] = {}
+    for r in judged:
+        t0.setdefault((r.scene, r.init_index), set()).add(r.t0_hash)
+    claims = [
+        _claim(
+            "every task of a scene starts from the identical state (t0 hash per init state)",
+            len(t0),
+            [
+                f"{scene} init {init}: {len(hashes)} different t0 states"
+                for (scene, init), hashes in t0.items()
+                if len(hashes) > 1
+            ],
+        ),  # fmt: skip
+        _claim(
+            "no scene task's goal holds at t0",
+            len(judged),
+            [f"{r.task_id} init {r.init_index}: {', '.join(r.goals_at_start)}" for r in judged if r.goals_at_start],
+        ),
+    ]
+    if blind is None:
+        return claims
+    oracle = {r.key: r.success for r in judged}
+    originals = [r for r in blind if r.judged and r.kind == "original" and r.key in oracle]
+    differing = [
+        r
+        for r in blind
+        if r.judged and r.kind == "extended" and catalog.get(r.task_id).goal != catalog.get(r.source).goal
+    ]
+    claims += [
+        _claim(
+            "blind succeeds on an original task exactly where the oracle does",
+            len(originals),
+            [
+                f"{r.task_id} init {r.init_index}: blind {r.success}, oracle {oracle[r.key]}"
+                for r in originals
+                if r.success != oracle[r.key]
+            ],
+        ),  # fmt: skip
+        _claim(
+            "blind never succeeds on an extended task whose goal differs from its source's",
+            len(differing),
+            [f"{r.task_id} init {r.init_index}" for r in differing if r.success],
+        ),
+    ]
+    return claims
+
+
+def claims_text(claims: list[Claim]) -> str:
+    """One line per claim (and its first violations)."""
+    lines = []
+    for claim in claims:
+        verdict = "holds" if claim.holds else "FAILS (release blocker)"
+        lines.append(f"claim: {claim.name}: {verdict} ({claim.checked} checked)")
+        lines += [f"  {v}" for v in claim.violations]
+    return "\n".join(lines)
 
 
 def goals_exclude(a: tuple[Predicate, ...], b: tuple[Predicate, ...]) -> bool:
@@ -148,16 +245,25 @@ def validate(
     resume: bool = False,
     policy: str = "oracle",
     progress: bool = True,
-) -> list[TaskValidation]:
-    """Run the gate on the selected tasks; returns one row per task (catalog order)."""
+    blind: bool = False,
+) -> Validation:
+    """Run the gate on the selected tasks and check the benchmark's claims on its episodes; with
+    `blind`, the `blind` policy runs the same episodes too (kept in `run`-blind when `run` is given)."""
     catalog = load_catalog(catalog_name)
     tasks = catalog.select(selection)
-    spec = RunSpec.create(policy, catalog=catalog_name, tasks=",".join(t.id for t in tasks), episodes=inits)
+    options = ExecutionOptions(workers=workers, progress=progress)
+
+    def episodes(policy_name: str, directory: Path) -> list[EpisodeRecord]:
+        ids = ",".join(t.id for t in tasks)
+        spec = RunSpec.create(policy_name, catalog=catalog_name, tasks=ids, episodes=inits)
+        evaluate(spec, directory, options, resume=resume, extend=resume)
+        with RunStore.open(directory) as store:
+            return store.records()
+
     with tempfile.TemporaryDirectory(prefix="langgap-validate-") as scratch:
         directory = Path(run) if run is not None else Path(scratch) / "run"
-        evaluate(spec, directory, ExecutionOptions(workers=workers, progress=progress), resume=resume, extend=resume)
-        with RunStore.open(directory) as store:
-            records = store.records()
+        records = episodes(policy, directory)
+        blind_records = episodes("blind", directory.with_name(directory.name + "-blind")) if blind else None
     by_task: dict[str, list[EpisodeRecord]] = {}
     for record in records:
         by_task.setdefault(record.task_id, []).append(record)
@@ -168,7 +274,7 @@ def validate(
         if scene not in drift_by_scene:
             drift_by_scene[scene] = settle_drift(task)
         rows.append(_row(task, catalog, by_task.get(task.id, []), drift_by_scene[scene]))
-    return rows
+    return Validation(rows, benchmark_claims(catalog, records, blind_records))
 
 
 def record(catalog_name: str, rows: list[TaskValidation], *, inits: int, policy: str = "oracle") -> Path:
@@ -183,8 +289,9 @@ def record(catalog_name: str, rows: list[TaskValidation], *, inits: int, policy:
     return record_verdicts(registry_path(catalog_name), {r.id: r.verdict(inits) for r in rows}, about)
 
 
-def report_rows(rows: list[TaskValidation]) -> list[dict]:
-    return [asdict(r) for r in rows]
+def report(found: Validation) -> dict:
+    """The validation as JSON data: a row per task, and the claims."""
+    return {"tasks": [asdict(r) for r in found.rows], "claims": [asdict(c) for c in found.claims]}
 
 
 def table_text(rows: list[TaskValidation]) -> str:

@@ -107,6 +107,23 @@ def run_show(args) -> int:
     print(f"{'siblings':<12} {len(info['siblings'])} other task(s) on the same scene")
     for sibling in info["siblings"]:
         print(f"{'':<12} {sibling}")
+    for line in _gate_lines(task.gate):
+        print(f"{'gate':<12} {line}")
     for note in task.notes:
         print(f"{'note':<12} {note}")
     return 0
+
+
+def _gate_lines(gate) -> list[str]:
+    """The feasibility verdict of a task as `tasks show` prints it (its certificate in full)."""
+    if gate is None:
+        return ["not validated (langgap validate --record)"]
+    where = f" on init states 0–{gate.inits - 1}" if gate.inits else ""
+    lines = [f"oracle {gate.successes}/{gate.episodes}{where}: {'accepted' if gate.feasible else 'rejected'}"]
+    if gate.reason:
+        lines.append(f"why: {gate.reason}")
+    if gate.failed_inits:
+        lines.append(f"oracle failed on init states {', '.join(map(str, gate.failed_inits))}")
+    if gate.certificate:
+        lines.append(f"certified infeasible: {gate.certificate}")
+    return lines

@@ -27,7 +27,12 @@ def add_parser(subparsers) -> None:
     parser.add_argument(
         "--policy", default="oracle", help="the scripted policy that proves tasks (default: %(default)s)"
     )
-    parser.add_argument("--out", metavar="FILE", help="write the report as JSON (one row per task)")
+    parser.add_argument(
+        "--blind",
+        action="store_true",
+        help="also run `blind` on the same episodes and check its claims (originals as the oracle, 0 %% elsewhere)",
+    )
+    parser.add_argument("--out", metavar="FILE", help="write the report as JSON (a row per task, the claims)")
     parser.add_argument(
         "--record",
         action="store_true",
@@ -37,8 +42,8 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(handler=run)
 
 
-def run_gate(args, catalog: str, selection: str, inits: int, policy: str = "oracle"):
-    """Run the feasibility gate with the options of `add_gate_options`; returns its rows."""
+def run_gate(args, catalog: str, selection: str, inits: int, policy: str = "oracle", blind: bool = False):
+    """Run the feasibility gate with the options of `add_gate_options`; returns its `Validation`."""
     from langgap.validate import validate
 
     return validate(
@@ -50,19 +55,19 @@ def run_gate(args, catalog: str, selection: str, inits: int, policy: str = "orac
         resume=args.resume,
         policy=policy,
         progress=not args.no_progress,
+        blind=blind,
     )
 
 
 def run(args) -> int:
-    from langgap.validate import record, table_text
+    from langgap.validate import claims_text, record, report, table_text
 
-    rows = run_gate(args, args.catalog, args.tasks, args.inits, args.policy)
-    print(table_text(rows))
+    found = run_gate(args, args.catalog, args.tasks, args.inits, args.policy, blind=args.blind)
+    print(table_text(found.rows))
+    print(claims_text(found.claims))
     if args.out:
-        from langgap.validate import report_rows
-
-        Path(args.out).write_text(json.dumps(report_rows(rows), indent=1) + "\n", encoding="utf-8")
+        Path(args.out).write_text(json.dumps(report(found), indent=1) + "\n", encoding="utf-8")
         print(f"wrote {args.out}")
     if args.record:
-        print(f"recorded verdicts in {record(args.catalog, rows, inits=args.inits, policy=args.policy)}")
-    return 0 if all(r.feasible for r in rows) else 1
+        print(f"recorded verdicts in {record(args.catalog, found.rows, inits=args.inits, policy=args.policy)}")
+    return 0 if found.passed else 1
