@@ -35,8 +35,9 @@ def read_verdicts(registry: str | Path) -> dict[str, GateResult]:
         raise CatalogError(f"cannot read feasibility verdicts {path}: {exc}") from None
 
 
-def record_verdicts(registry: str | Path, verdicts: dict[str, GateResult], about: dict) -> Path:
-    """Merge `verdicts` into the registry's verdict file (atomically); `about` describes how they were made."""
+def record_verdicts(registry: str | Path, verdicts: dict[str, GateResult], about: dict | None) -> Path:
+    """Merge `verdicts` into the registry's verdict file (atomically); `about` describes how they were made
+    (None keeps the file's: a certificate added to a verdict does not change how the gate ran)."""
     path = verdicts_path(registry)
     old = read_verdicts(registry)
     # A certificate is evidence made once, apart from the gate: re-running the gate keeps it.
@@ -44,6 +45,8 @@ def record_verdicts(registry: str | Path, verdicts: dict[str, GateResult], about
         k: v if v.certificate or k not in old else replace(v, certificate=old[k].certificate)
         for k, v in verdicts.items()
     }
+    if about is None:
+        about = json.loads(path.read_text(encoding="utf-8")).get("about", {}) if path.is_file() else {}
     data = {"about": about, "tasks": {k: asdict(merged[k]) for k in sorted(merged)}}
     path.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp", encoding="utf-8") as tmp:

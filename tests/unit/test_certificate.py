@@ -1,0 +1,41 @@
+"""When a drawer's reachability analysis certifies it infeasible."""
+
+from __future__ import annotations
+
+import math
+
+from langgap.certify import TOLERANCE_M, HandleReach, PoseResult
+
+
+def _pose(hand: float, arm: float = 0.0, reachable: bool = True) -> PoseResult:
+    if not reachable:
+        return PoseResult(0, 0.0, 0.0, 0, False, math.nan, math.nan, "")
+    return PoseResult(30, 0.01, 0.0, 0, True, hand, arm, "table_collision" if hand else "")
+
+
+def _reach(*poses: PoseResult, gap: float = 0.016) -> HandleReach:
+    return HandleReach("goal/s0/open-cabinet-bottom-drawer", 0, (0.04, -0.13, 0.95), list(poses), "a family", gap)
+
+
+def test_one_clear_pose_refutes_the_certificate():
+    found = _reach(_pose(0.02), _pose(0.0), _pose(0.0, reachable=False))
+    assert not found.certified and found.certificate() == "" and len(found.clear) == 1
+
+
+def test_a_hand_in_a_fixture_everywhere_certifies():
+    found = _reach(_pose(0.03), _pose(0.021), _pose(0.0, reachable=False))
+    assert found.certified
+    text = found.certificate()
+    assert "reaches 2 (none found for the other 1" in text and "21 mm into table_collision" in text
+    assert "gap between the bar and the drawer's face is 16 mm" in text
+
+
+def test_a_bar_a_finger_can_hook_is_not_certified():
+    assert not _reach(_pose(0.03), gap=0.025).certified
+
+
+def test_an_arm_collision_alone_does_not_certify():
+    # The hand is clear and only the arm meets a fixture: another arm configuration may not.
+    found = _reach(_pose(0.0, arm=0.05), _pose(0.03))
+    assert not found.clear and not found.certified
+    assert not _reach(_pose(TOLERANCE_M), _pose(0.03)).certified  # within the tolerance is clear
