@@ -111,3 +111,16 @@ def test_cli_validate_writes_report_and_records_verdicts(probe_registry, tmp_pat
     catalog = load_catalog_file(probe_registry)
     assert catalog.get("spatial/s0/ramekin-on-plate").gate is not None
     assert catalog.get("spatial/s0/black-bowl-1-on-plate").gate is None
+
+
+def test_claims_only_resets_every_task_without_a_policy(probe_registry, tmp_path):
+    out = tmp_path / "claims.json"
+    args = ("validate", "--catalog", str(probe_registry), "--inits", "2", "--claims-only", "--out", str(out))
+    result = run_cli(*args)
+    assert result.returncode == 1, result.stderr  # the plate's goal holds at t0
+    same_state, nothing_at_t0 = json.loads(out.read_text())["claims"]
+    assert same_state["holds"] and same_state["checked"] == 2  # one scene, two init states, three tasks each
+    assert not nothing_at_t0["holds"] and nothing_at_t0["checked"] == 6
+    assert nothing_at_t0["violations"][0].endswith("init 0: spatial/s0/plate-on-plate-spot")
+    refused = run_cli(*args, "--record")
+    assert refused.returncode == 2 and refused.stderr.startswith("error: --claims-only runs no policy")

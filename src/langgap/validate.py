@@ -107,30 +107,63 @@ def _claim(name: str, checked: int, violations: list[str]) -> Claim:
     return Claim(name, not violations, checked, violations[:SHOWN_VIOLATIONS])
 
 
+@dataclass(frozen=True)
+class Start:
+    """How one task's episode starts from one init state: the state's hash, and the scene goals that hold."""
+
+    task_id: str
+    scene: str
+    init_index: int
+    t0_hash: str
+    goals_at_start: tuple[str, ...]
+
+
+def start_claims(starts: list[Start]) -> list[Claim]:
+    """The claims about starts: one t0 state per scene and init state, and no scene goal true at t0."""
+    t0: dict[tuple[str, int], set[str]] = {}
+    for s in starts:
+        t0.setdefault((s.scene, s.init_index), set()).add(s.t0_hash)
+    differing = [f"{scene} init {init}: {len(hashes)} different t0 states" for (scene, init), hashes in t0.items()]
+    return [
+        _claim(
+            "every task of a scene starts from the identical state (t0 hash per init state)",
+            len(t0),
+            [text for text, hashes in zip(differing, t0.values(), strict=True) if len(hashes) > 1],
+        ),
+        _claim(
+            "no scene task's goal holds at t0",
+            len(starts),
+            [f"{s.task_id} init {s.init_index}: {', '.join(s.goals_at_start)}" for s in starts if s.goals_at_start],
+        ),
+    ]
+
+
+def scene_starts(catalog: Catalog, tasks: list[Task], inits: int) -> list[Start]:
+    """Every task's start from init states 0..`inits`-1, built from its own BDDL file (no policy runs)."""
+    from langgap.catalog.files import scene_key
+    from langgap.engine.episode import scene_goals
+    from langgap.engine.plan import episode_seed
+    from langgap.sim.env import TaskEnv
+
+    starts = []
+    for task in tasks:
+        goals = scene_goals(task, catalog)
+        with TaskEnv(task) as env:
+            for index in range(min(inits, len(env.init_states))):
+                env.reset(index, seed=episode_seed(0, index))
+                t0 = env.t0_hash or ""
+                env.settle()
+                holding = tuple(name for name, goal in goals.items() if env.goal_holds(goal))
+                starts.append(Start(task.id, scene_key(task), index, t0, holding))
+    return starts
+
+
 def benchmark_claims(
     catalog: Catalog, records: list[EpisodeRecord], blind: list[EpisodeRecord] | None = None
 ) -> list[Claim]:
     """Check the claims the benchmark rests on, on the gate's episodes (and `blind`'s, when given)."""
     judged = [r for r in records if r.judged]
-    t0: dict[tuple[str, int], set[str]] = {}
-    for r in judged:
-        t0.setdefault((r.scene, r.init_index), set()).add(r.t0_hash)
-    claims = [
-        _claim(
-            "every task of a scene starts from the identical state (t0 hash per init state)",
-            len(t0),
-            [
-                f"{scene} init {init}: {len(hashes)} different t0 states"
-                for (scene, init), hashes in t0.items()
-                if len(hashes) > 1
-            ],
-        ),  # fmt: skip
-        _claim(
-            "no scene task's goal holds at t0",
-            len(judged),
-            [f"{r.task_id} init {r.init_index}: {', '.join(r.goals_at_start)}" for r in judged if r.goals_at_start],
-        ),
-    ]
+    claims = start_claims([Start(r.task_id, r.scene, r.init_index, r.t0_hash, tuple(r.goals_at_start)) for r in judged])
     if blind is None:
         return claims
     oracle = {r.key: r.success for r in judged}

@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 from langgap.catalog.catalog import DEFAULT_CATALOG
+from langgap.errors import LangGapError
 from langgap.validate import FEASIBLE_RATE, FULL_INITS
 
 
@@ -31,6 +32,12 @@ def add_parser(subparsers) -> None:
         "--blind",
         action="store_true",
         help="also run `blind` on the same episodes and check its claims (originals as the oracle, 0 %% elsewhere)",
+    )
+    parser.add_argument(
+        "--claims-only",
+        action="store_true",
+        help="only the claims about starts (one t0 state per scene and init state, no scene goal at t0): "
+        "every task's own environment reset to each init state, no policy run",
     )
     parser.add_argument("--out", metavar="FILE", help="write the report as JSON (a row per task, the claims)")
     parser.add_argument(
@@ -62,6 +69,8 @@ def run_gate(args, catalog: str, selection: str, inits: int, policy: str = "orac
 def run(args) -> int:
     from langgap.validate import claims_text, record, report, table_text
 
+    if args.claims_only:
+        return _claims_only(args)
     found = run_gate(args, args.catalog, args.tasks, args.inits, args.policy, blind=args.blind)
     print(table_text(found.rows))
     print(claims_text(found.claims))
@@ -70,4 +79,19 @@ def run(args) -> int:
         print(f"wrote {args.out}")
     if args.record:
         print(f"recorded verdicts in {record(args.catalog, found.rows, inits=args.inits, policy=args.policy)}")
+    return 0 if found.passed else 1
+
+
+def _claims_only(args) -> int:
+    from langgap.catalog.catalog import load_catalog
+    from langgap.validate import Validation, claims_text, report, scene_starts, start_claims
+
+    if args.record or args.blind:
+        raise LangGapError("--claims-only runs no policy: it records no verdicts and runs no blind policy")
+    catalog = load_catalog(args.catalog)
+    found = Validation([], start_claims(scene_starts(catalog, catalog.select(args.tasks), args.inits)))
+    print(claims_text(found.claims))
+    if args.out:
+        Path(args.out).write_text(json.dumps(report(found), indent=1) + "\n", encoding="utf-8")
+        print(f"wrote {args.out}")
     return 0 if found.passed else 1
