@@ -112,21 +112,23 @@ class Start:
     """How one task's episode starts from one init state: the state's hash, and the scene goals that hold."""
 
     task_id: str
-    scene: str
+    scene: str  # the original task whose scene and init states the task uses (its source)
     init_index: int
     t0_hash: str
     goals_at_start: tuple[str, ...]
 
 
 def start_claims(starts: list[Start]) -> list[Claim]:
-    """The claims about starts: one t0 state per scene and init state, and no scene goal true at t0."""
+    """The claims about starts: one t0 state per source task and init state (an original and its extended
+    tasks; LIBERO's suites reuse a scene layout across originals with their own init states), and no
+    scene goal true at t0."""
     t0: dict[tuple[str, int], set[str]] = {}
     for s in starts:
         t0.setdefault((s.scene, s.init_index), set()).add(s.t0_hash)
     differing = [f"{scene} init {init}: {len(hashes)} different t0 states" for (scene, init), hashes in t0.items()]
     return [
         _claim(
-            "every task of a scene starts from the identical state (t0 hash per init state)",
+            "every extended task starts from its source's state (one t0 hash per source task and init state)",
             len(t0),
             [text for text, hashes in zip(differing, t0.values(), strict=True) if len(hashes) > 1],
         ),
@@ -140,7 +142,6 @@ def start_claims(starts: list[Start]) -> list[Claim]:
 
 def scene_starts(catalog: Catalog, tasks: list[Task], inits: int) -> list[Start]:
     """Every task's start from init states 0..`inits`-1, built from its own BDDL file (no policy runs)."""
-    from langgap.catalog.files import scene_key
     from langgap.engine.episode import scene_goals
     from langgap.engine.plan import episode_seed
     from langgap.sim.env import TaskEnv
@@ -154,7 +155,7 @@ def scene_starts(catalog: Catalog, tasks: list[Task], inits: int) -> list[Start]
                 t0 = env.t0_hash or ""
                 env.settle()
                 holding = tuple(name for name, goal in goals.items() if env.goal_holds(goal))
-                starts.append(Start(task.id, scene_key(task), index, t0, holding))
+                starts.append(Start(task.id, task.source, index, t0, holding))
     return starts
 
 
@@ -163,7 +164,9 @@ def benchmark_claims(
 ) -> list[Claim]:
     """Check the claims the benchmark rests on, on the gate's episodes (and `blind`'s, when given)."""
     judged = [r for r in records if r.judged]
-    claims = start_claims([Start(r.task_id, r.scene, r.init_index, r.t0_hash, tuple(r.goals_at_start)) for r in judged])
+    claims = start_claims(
+        [Start(r.task_id, r.source, r.init_index, r.t0_hash, tuple(r.goals_at_start)) for r in judged]
+    )
     if blind is None:
         return claims
     oracle = {r.key: r.success for r in judged}

@@ -47,9 +47,21 @@ def test_reports_show_the_ceiling_and_mark_tasks_that_cap_it(tmp_path):
     rates = {t.rate.group: t.rate for t in run.tasks}
     assert (rates[BOWL].oracle_rate, rates[BOWL].relative) == (1.0, 0.5)
     assert rates[DRAWER].oracle_rate == 0.0 and rates[DRAWER].relative is None
-    assert run.capped == {DRAWER: "oracle 0/10"}
+    assert run.capped == {DRAWER: "certified infeasible"}  # langgap certify recorded its certificate
     extended = run.source("extended")  # both tasks are extended: 10 + 10 oracle episodes, 10 successes
     assert (extended.oracle_successes, extended.oracle_episodes) == (10, 20)
     markdown = FORMATS["md"](summarize(load_runs([tmp_path / "vla"])), None)
-    assert f"| {DRAWER} ⚠ |" in markdown and f"⚠ {DRAWER} (oracle 0/10)" in markdown
+    assert f"| {DRAWER} ⚠ |" in markdown and f"⚠ {DRAWER} (certified infeasible)" in markdown
     assert f"| {BOWL} |" in markdown
+
+
+def test_a_task_is_capped_by_a_low_oracle_or_a_certificate():
+    from langgap.report.stats import Rate
+    from langgap.report.summary import capped_because
+
+    low = Rate("t", 20, 5, 0, 1, oracle_successes=18, oracle_episodes=20)
+    assert capped_because(low, GateResult(20, 18, True)) == "oracle 18/20"
+    fine = Rate("t", 20, 5, 0, 1, oracle_successes=19, oracle_episodes=20)
+    assert capped_because(fine, GateResult(20, 19, True)) is None
+    assert capped_because(fine, GateResult(20, 19, True, certificate="…")) == "certified infeasible"
+    assert capped_because(fine, None) is None

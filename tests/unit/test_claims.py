@@ -44,7 +44,7 @@ def test_each_claim_catches_its_violation(catalog):
     blind = [_record(ORIGINAL, 0, kind="original"), _record(ORIGINAL, 1, success=False, kind="original")]
     blind += [_record(RAMEKIN, 0, success=True), _record(RAMEKIN, 1, success=False)]
     same_state, nothing_at_t0, originals, never = benchmark_claims(catalog, episodes, blind)
-    assert same_state.violations == ["libero_spatial/s0 init 1: 2 different t0 states"]
+    assert same_state.violations == [f"{ORIGINAL} init 1: 2 different t0 states"]
     assert nothing_at_t0.violations == [f"{ORIGINAL} init 0: {RAMEKIN}"]
     assert originals.violations == [f"{ORIGINAL} init 1: blind False, oracle True"]
     assert never.violations == [f"{RAMEKIN} init 0"]
