@@ -50,6 +50,11 @@ class PoseResult:
     arm_penetration_m: float  # deepest of the arm's links, best configuration found (nan: unreachable)
     worst_contact: str  # the fixture geom the hand meets deepest
 
+    @property
+    def clear(self) -> bool:
+        """Reachable, and neither the hand nor the arm meets a fixture beyond the tolerance."""
+        return self.reachable and self.hand_penetration_m <= TOLERANCE_M and self.arm_penetration_m <= TOLERANCE_M
+
 
 @dataclass(frozen=True)
 class HandleReach:
@@ -69,7 +74,7 @@ class HandleReach:
     @property
     def clear(self) -> list[PoseResult]:
         """Reachable poses whose hand and arm meet no fixture beyond the tolerance."""
-        return [p for p in self.reachable if p.hand_penetration_m <= TOLERANCE_M and p.arm_penetration_m <= TOLERANCE_M]
+        return [p for p in self.poses if p.clear]
 
     @property
     def certified(self) -> bool:
@@ -193,7 +198,7 @@ def handle_reach(
 ) -> HandleReach:
     """Try every gripper pose that holds the handle of the drawer `task`'s goal opens (see the module);
     a smaller family (`angles`, `along`, `depths`) answers faster but certifies only itself."""
-    from langgap.policies.oracle.drawers import _front, _opening_direction
+    from langgap.policies.oracle.drawers import drawer_front, opening_direction
     from langgap.policies.oracle.hand import PAD_HALF_HEIGHT
     from langgap.policies.oracle.scene import Scene
     from langgap.sim.env import EnvOptions, TaskEnv
@@ -209,8 +214,8 @@ def handle_reach(
         scene = Scene(privileged_state(env))
         region = task.goal[0].args[0]
         art = scene.articulation(region)
-        direction = _opening_direction(art)
-        _, bar, half_length = _front(art, direction)
+        direction = opening_direction(art)
+        _, bar, half_length = drawer_front(art, direction)
         loose = tuple(e for e in scene.entities if scene.movable(e))
         robot = _Robot(env)
         rng = np.random.default_rng(0)
@@ -249,14 +254,11 @@ def handle_reach(
 def hook_gap(art, direction: np.ndarray) -> float:
     """The room between a drawer's handle bar and its face (the front panel, not the bar's posts),
     along the opening direction."""
+    from langgap.policies.oracle.drawers import handle_parts
+
     boxes = art.boxes
-    axis = np.cross([0.0, 0.0, 1.0], direction)
-
-    def extent(along: np.ndarray) -> np.ndarray:
-        return np.sum(np.abs(np.einsum("nji,j->ni", boxes.rot, along)) * boxes.half, axis=1)
-
-    reach = boxes.centre @ direction + extent(direction)
-    bar = reach >= reach.max() - 0.01  # the parts reaching furthest out: the bar
-    back = float(np.max(boxes.centre[bar] @ direction - extent(direction)[bar]))
-    panels = ~bar & (extent(axis) >= float(np.max(extent(axis)[bar])))  # as wide as the bar: not its posts
+    reach, bar = handle_parts(art, direction)
+    back = float(np.max(boxes.centre[bar] @ direction - boxes.extent(direction)[bar]))
+    width = boxes.extent(np.cross([0.0, 0.0, 1.0], direction))
+    panels = ~bar & (width >= float(np.max(width[bar])))  # as wide as the bar: not its posts
     return back - float(np.max(reach[panels]))

@@ -56,10 +56,19 @@ class GateResult:
         failed = set(self.failed_inits)
         return sum(i not in failed for i in covered), len(covered)
 
+    def capped_because(self, successes: int, episodes: int) -> str | None:
+        """Why the task caps what a policy can show on it, given the oracle's `successes` in `episodes` on
+        the init states in question: certified infeasible, or an oracle below `CEILING_TARGET` (None: it does not)."""
+        if self.certificate:
+            return "certified infeasible"
+        if episodes and successes / episodes < CEILING_TARGET:
+            return f"oracle {successes}/{episodes}"
+        return None
+
     @property
     def capped(self) -> bool:
-        """True when the task caps what a policy can show: certified infeasible or an oracle below the target."""
-        return bool(self.certificate) or self.rate < CEILING_TARGET
+        """True when the task caps what a policy can show on the init states the gate ran."""
+        return self.capped_because(self.successes, self.episodes) is not None
 
 
 @dataclass(frozen=True)

@@ -42,7 +42,7 @@ def run(args) -> int:
     print(f"{'approach':>8}  {'reachable':>9}  {'clear':>5}  {'least hand intersection':<40}")
     for angle in sorted({p.angle_deg for p in found.poses}):
         poses = by_angle.get(angle, [])
-        clear = [p for p in poses if p in found.clear]
+        clear = [p for p in poses if p.clear]
         best = min(poses, key=lambda p: p.hand_penetration_m, default=None)
         least = "–" if best is None else f"{1000 * best.hand_penetration_m:.1f} mm {best.worst_contact}"
         print(f"{angle:>7}°  {len(poses):>9}  {len(clear):>5}  {least}")

@@ -67,16 +67,13 @@ def run_gate(args, catalog: str, selection: str, inits: int, policy: str = "orac
 
 
 def run(args) -> int:
-    from langgap.validate import claims_text, record, report, table_text
+    from langgap.validate import record, table_text
 
     if args.claims_only:
         return _claims_only(args)
     found = run_gate(args, args.catalog, args.tasks, args.inits, args.policy, blind=args.blind)
     print(table_text(found.rows))
-    print(claims_text(found.claims))
-    if args.out:
-        Path(args.out).write_text(json.dumps(report(found), indent=1) + "\n", encoding="utf-8")
-        print(f"wrote {args.out}")
+    _print_claims(found, args.out)
     if args.record:
         print(f"recorded verdicts in {record(args.catalog, found.rows, inits=args.inits, policy=args.policy)}")
     return 0 if found.passed else 1
@@ -84,14 +81,21 @@ def run(args) -> int:
 
 def _claims_only(args) -> int:
     from langgap.catalog.catalog import load_catalog
-    from langgap.validate import Validation, claims_text, report, scene_starts, start_claims
+    from langgap.validate import Validation, scene_starts, start_claims
 
     if args.record or args.blind:
         raise LangGapError("--claims-only runs no policy: it records no verdicts and runs no blind policy")
     catalog = load_catalog(args.catalog)
     found = Validation([], start_claims(scene_starts(catalog, catalog.select(args.tasks), args.inits)))
-    print(claims_text(found.claims))
-    if args.out:
-        Path(args.out).write_text(json.dumps(report(found), indent=1) + "\n", encoding="utf-8")
-        print(f"wrote {args.out}")
+    _print_claims(found, args.out)
     return 0 if found.passed else 1
+
+
+def _print_claims(found, out: str | None) -> None:
+    """Print the claims; with `out`, write the whole validation there as JSON."""
+    from langgap.validate import claims_text, report
+
+    print(claims_text(found.claims))
+    if out:
+        Path(out).write_text(json.dumps(report(found), indent=1) + "\n", encoding="utf-8")
+        print(f"wrote {out}")

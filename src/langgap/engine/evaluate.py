@@ -111,7 +111,7 @@ def evaluate(
         policy=spec.policy,
         policy_args=dict(spec.policy_args),
         style=spec.style,
-        run_dir=str(run) if videos else None,
+        run_dir=str(run),
     )
 
     def run_episodes(todo: list[PlannedEpisode], pool: WorkerPool) -> Iterator[EpisodeRecord]:

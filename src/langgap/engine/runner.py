@@ -32,7 +32,7 @@ class RunnerSetup:
     policy: str
     policy_args: dict[str, str]
     style: str
-    run_dir: str | None = None  # set when the run films episodes: clips go to its `videos` folder
+    run_dir: str | None = None  # where a filmed episode's clip goes (its `videos` folder)
     policy_server: Any = None  # a shared policy actor (Ray); None: each runner builds its own policy
 
 
@@ -69,11 +69,18 @@ class EpisodeRunner:
             else:
                 self._policy = make_policy(self.setup.policy, self.setup.policy_args)
             self._policy_hash = config_hash(policy_config(self._policy))
-        if self._env is not None and self._env.can_switch_to(task):
-            self._env.switch_task(task)
+        # An environment without the video cameras serves every episode but a filmed one (rendering
+        # needs a GL context, which costs an environment build seconds and memory: only filming pays it).
+        env = self._env
+        if (
+            env is not None
+            and env.can_switch_to(task)
+            and (not planned.film or set(CAMERAS) <= set(env.options.cameras))
+        ):
+            env.switch_task(task)
         else:
             self._close_env()
-            self._env = TaskEnv(task, self._env_options())
+            self._env = TaskEnv(task, self._env_options(planned.film))
         frames: list = []
         hook = None
         if planned.film:
@@ -99,11 +106,11 @@ class EpisodeRunner:
             record.video = clip.as_posix()
         return record
 
-    def _env_options(self):
-        if self.setup.run_dir is not None:
-            # Videos show both cameras; enabling them costs nothing until a frame is rendered. A policy
-            # that reads no images sees none of them, so its clips skip the reflection pass (~40 % of a
-            # render); a policy's own images keep the renderer settings it was declared with.
+    def _env_options(self, film: bool):
+        if film:
+            # Videos show both cameras. A policy that reads no images sees none of them, so its clips skip
+            # the reflection pass (~40 % of a render); a policy's own images keep the renderer settings it
+            # was declared with.
             if self._policy.spec.cameras:
                 return env_options_for(self._policy, cameras=CAMERAS)
             return env_options_for(self._policy, cameras=CAMERAS, image_size=256, reflection=False)

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 from langgap.catalog.labels import EXTENDED_DIMENSIONS, SPLIT_ORDER, SUITE_ORDER
-from langgap.catalog.task import CEILING_TARGET, GateResult
+from langgap.catalog.task import GateResult
 from langgap.engine.plan import repeat_of
 from langgap.errors import LangGapError
 from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Outcome, achieved
@@ -226,13 +226,7 @@ def confusion(records: list[EpisodeRecord]) -> dict[str, dict[str, dict[str, int
 def capped_because(task_rate: Rate, gate: GateResult | None) -> str | None:
     """Why a task caps what a policy can show on it (None: it does not): certified infeasible, or an
     oracle below `CEILING_TARGET` on the run's init states."""
-    if gate is None:
-        return None
-    if gate.certificate:
-        return "certified infeasible"
-    if task_rate.oracle_rate is not None and task_rate.oracle_rate < CEILING_TARGET:
-        return f"oracle {task_rate.oracle_successes}/{task_rate.oracle_episodes}"
-    return None
+    return None if gate is None else gate.capped_because(task_rate.oracle_successes, task_rate.oracle_episodes)
 
 
 @dataclass

@@ -299,7 +299,7 @@ def video_table(run: RunResults) -> Table | None:
         for c in run.clips
     ]
     headers = ["Outcome", "Task", "Condition", "Init", "Seed", "Instruction", "Video"]
-    return Table(f"Filmed episodes — {run.label}", headers, rows, ("Outcome",), kind="gallery")
+    return Table(f"Filmed episodes — {run.label}", headers, rows, kind="gallery")  # grouped by outcome on a page
 
 
 def _paired_cells(t: PairedTest) -> list[str]:

@@ -33,7 +33,7 @@ PUSH_BESIDE = 0.03  # a drawer is pushed this far beside its handle
 PUSH_LEAN = 0.6  # radians the fingers lean toward a push
 
 
-def _opening_direction(art: Articulation) -> np.ndarray:
+def opening_direction(art: Articulation) -> np.ndarray:
     """Horizontal unit vector a slide joint's part travels along when it opens."""
     sign = np.sign(art.intervals["open"].mean() - art.intervals["close"].mean())
     direction = sign * art.axis * np.sign(art.limits[1] - art.limits[0])
@@ -61,7 +61,7 @@ def _handle_grasp(agent: Agent, art: Articulation, direction: np.ndarray) -> tup
     the wrist nearer the robot when the cabinet faces sideways). The clear option that least
     stretches the arm wins.
     """
-    _, axis, half_length = _front(art, direction)
+    _, axis, half_length = drawer_front(art, direction)
     options = [(-direction, art.handle + hand.PAD_CENTRE * direction)]
     for side in (1.0, -1.0):
         along = side * axis  # the fingers slide onto the bar from its end
@@ -90,7 +90,7 @@ def _handle_grasp(agent: Agent, art: Articulation, direction: np.ndarray) -> tup
 def pull_open(agent: Agent, region: str) -> Program:
     """Open a drawer: take its handle bar with the fingers closing vertically, pull it out."""
     art = agent.scene.articulation(region)
-    direction = _opening_direction(art)
+    direction = opening_direction(art)
     rot, grasp, approach = _handle_grasp(agent, art, direction)
     ready = grasp - HANDLE_APPROACH * approach
     yield from reorient(agent, rot)
@@ -116,17 +116,23 @@ def pull_open(agent: Agent, region: str) -> Program:
     return agent.scene.articulation(region).holds("open")
 
 
-def _front(art: Articulation, direction: np.ndarray) -> tuple[float, np.ndarray, float]:
+HANDLE_BAND = 0.01  # parts reaching within this of a drawer's outermost point form its handle bar
+
+
+def handle_parts(art: Articulation, direction: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """How far each part of a drawer reaches along `direction`, and which parts form its handle bar."""
+    reach = art.boxes.centre @ direction + art.boxes.extent(direction)
+    return reach, reach >= reach.max() - HANDLE_BAND
+
+
+def drawer_front(art: Articulation, direction: np.ndarray) -> tuple[float, np.ndarray, float]:
     """A drawer's front: the face's reach along `direction`, the handle bar's axis and its half-length."""
     boxes = art.boxes
-    local = np.abs(np.einsum("nji,j->ni", boxes.rot, direction))
-    reach = boxes.centre @ direction + np.sum(local * boxes.half, axis=1)
-    handle = reach >= reach.max() - 0.01
+    reach, handle = handle_parts(art, direction)
     face = float(reach[~handle].max()) if (~handle).any() else float(reach.max())
     axis = np.cross([0.0, 0.0, 1.0], direction)
-    along = np.abs(np.einsum("nji,j->ni", boxes.rot, axis))
     extent = boxes.centre[handle] @ axis
-    half = np.sum(along[handle] * boxes.half[handle], axis=1)
+    half = boxes.extent(axis)[handle]
     centre = art.handle @ axis
     half_length = float(max(np.max(extent + half) - centre, centre - np.min(extent - half)))
     return face, axis, half_length
@@ -135,8 +141,8 @@ def _front(art: Articulation, direction: np.ndarray) -> tuple[float, np.ndarray,
 def push_closed(agent: Agent, region: str) -> Program:
     """Close a drawer by pushing its front, beside the handle, with the closed fingers."""
     art = agent.scene.articulation(region)
-    direction = _opening_direction(art)
-    face, axis, half_length = _front(art, direction)
+    direction = opening_direction(art)
+    face, axis, half_length = drawer_front(art, direction)
     yaw = wrap_half_turn(math.atan2(axis[1], axis[0]), closing_yaw(agent.scene.eef_mat))
     rot = top_down(yaw)
     # On the handle (finger tips below the bar so they cannot slip over it) or beside it, wherever

@@ -122,6 +122,10 @@ class Boxes:
     def shifted(self, offset: np.ndarray) -> Boxes:
         return Boxes(self.centre + offset, self.half, self.rot)
 
+    def extent(self, along: np.ndarray) -> np.ndarray:
+        """Each box's half-extent along the unit vector `along` (n,)."""
+        return np.sum(np.abs(np.einsum("nji,j->ni", self.rot, along)) * self.half, axis=1)
+
     def aabb(self) -> np.ndarray:
         """World axis-aligned bounds (n, 6)."""
         return self._bounds
