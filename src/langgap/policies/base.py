@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, replace
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -54,9 +54,12 @@ class PrivilegedContext:
 class TaskContext:
     """What a policy is told at reset.
 
-    `instruction` is the exact string the policy receives (and the one recorded). `privileged` is
-    None for every policy whose spec does not declare `privileged`: the engine removes it before
-    `reset` (`for_policy`), so a policy under test cannot read the goal, however it is written.
+    `instruction` is the exact string the policy receives (and the one recorded). The other public
+    fields name no task: the suite, the init state and seed (which select a placement shared by every
+    task of the scene) and the step limit. `privileged` is None for every policy whose spec does not
+    declare `privileged`: the engine removes it before `reset` (`for_policy`), so a policy under test
+    cannot read the goal, however it is written. There is deliberately no free-form field: every
+    field a policy is told is one of these, so none can carry the answer past `for_policy`.
     """
 
     instruction: str
@@ -65,7 +68,6 @@ class TaskContext:
     seed: int
     max_steps: int
     privileged: PrivilegedContext | None = None
-    extra: dict = field(default_factory=dict, hash=False, compare=False)
 
     def for_policy(self, spec: PolicySpec) -> TaskContext:
         """The context a policy with `spec` may see."""

@@ -19,8 +19,10 @@ server never sees it):
   the client then renders exactly the served spec's cameras at its image size (no resizing) and
   executes `spec.replan` actions of each chunk, so the served policy sees what it would see in process.
 * every request adds `langgap/episode` (a string that changes at each new episode; the server
-  resets its policy when it changes) and `langgap/context` (the `TaskContext` fields, privileged
-  ones included); `langgap/privileged` (a flat map of arrays) is added when the spec asks for it.
+  resets its policy when it changes) and `langgap/context` (the `TaskContext` fields; its
+  `privileged` part, with the task id and the goal, is null unless the served spec is privileged);
+  `langgap/privileged` (a flat map of arrays: the simulator state) is added only when the spec is
+  privileged. The server enforces the same rule on what it receives, whatever the client sends.
 """
 
 from __future__ import annotations
