@@ -3,8 +3,8 @@
 Modes:
   openpi-langgap  openpi's own `WebsocketPolicyServer` (PyPI `openpi-server`) hosting a LangGap policy
                   through `ServedPolicy`, i.e. announcing LangGap's extension in its metadata.
-  langgap-record  `openpi-langgap`, also saving what every request carries beyond the observation (the
-                  context and whether privileged state came) to RECORD_DIR/requests.jsonl: the wire.
+  langgap-record  `openpi-langgap`, also saving every request as it arrived, decoded, to
+                  RECORD_DIR/requests.jsonl (arrays as lists: for policies without cameras): the wire.
   openpi-record   openpi's server with plain metadata: a stand-in for an openpi model server that saves
                   every observation it receives to RECORD_DIR/<n>.npz and answers a (10, 7) chunk.
   garbage         a websocket server that answers every request with bytes that are not msgpack.
@@ -39,7 +39,7 @@ class RecordingOpenpiModel:
 
 
 def _recording(served):
-    """`served` with every request's LangGap context and privileged flag written to RECORD_DIR first."""
+    """`served` with every request written to RECORD_DIR first, before `ServedPolicy` removes anything."""
     import json
 
     from langgap.policies import protocol
@@ -48,9 +48,8 @@ def _recording(served):
     path = pathlib.Path(os.environ["RECORD_DIR"]) / "requests.jsonl"
 
     def recorded(request: dict) -> dict:
-        entry = {"context": request.get(protocol.CONTEXT_KEY), "privileged": protocol.PRIVILEGED_KEY in request}
         with path.open("a") as handle:
-            handle.write(json.dumps(entry) + "\n")
+            handle.write(json.dumps(protocol.jsonable(request)) + "\n")
         return infer(request)
 
     served.infer = recorded

@@ -74,14 +74,22 @@ class ChunkPolicy:
 
 
 class ContextRecorder(NoopPolicy):
-    """Holds still; appends the context it is reset with to `path` (one JSON line per episode)."""
+    """Holds still; appends to `path` what it was told at reset (the context's fields) and whether its
+    first observation carried simulator state (`simulator_state`): one JSON line per episode."""
 
     def __init__(self, path: str = ""):
         self.path = Path(path)
+        self._told: dict | None = None
 
     def reset(self, context):
-        with self.path.open("a") as handle:
-            handle.write(json.dumps(dataclasses.asdict(context)) + "\n")
+        self._told = dataclasses.asdict(context)
+
+    def act(self, observation):
+        if self._told is not None:
+            with self.path.open("a") as handle:
+                handle.write(json.dumps({**self._told, "simulator_state": observation.privileged is not None}) + "\n")
+            self._told = None
+        return super().act(observation)
 
 
 class PrivilegedContextRecorder(ContextRecorder):

@@ -3,19 +3,21 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 
 import numpy as np
+import pytest
+from websockets.sync.client import connect
 
 from langgap.engine.context import task_context
 from langgap.policies import protocol
 from langgap.policies.openpi import OpenpiPolicy
-from langgap.serve import ServedPolicy
+from langgap.sim.env import Observation
 from tests.conftest import run_cli, store_rows
-from tests.policies import ContextRecorder
 from tests.servers import free_port, helper_server, langgap_serve, running, subprocess_env
-from tests.test_openpi import PLAN, episodes
+from tests.test_openpi import PLAN, TASK_ID, episodes
 
 TASK = "spatial/s0/black-bowl-2-on-plate"
 
@@ -24,7 +26,7 @@ def _recorded(path) -> list[dict]:
     return [json.loads(line) for line in path.read_text().splitlines()]
 
 
-def test_only_a_privileged_policy_is_told_the_goal_and_its_records_say_so(short_catalog, tmp_path):
+def test_only_a_privileged_policy_is_told_the_goal_or_shown_the_simulator_state(short_catalog, tmp_path):
     for policy, workers in (("ContextRecorder", "2"), ("PrivilegedContextRecorder", "0")):
         log, run = tmp_path / f"{policy}.jsonl", tmp_path / policy
         result = run_cli(
@@ -37,6 +39,7 @@ def test_only_a_privileged_policy_is_told_the_goal_and_its_records_say_so(short_
         assert len(contexts) == 4 and all(c["instruction"] for c in contexts)
         privileged = policy.startswith("Privileged")
         assert {r["privileged"] for r in store_rows(run)} == {int(privileged)}
+        assert {c["simulator_state"] for c in contexts} == {privileged}  # the real env's observations
         if privileged:
             assert {c["privileged"]["task_id"] for c in contexts} == {TASK}
             assert {c["privileged"]["condition"] for c in contexts} == {"given", "shuffled"}
@@ -44,6 +47,17 @@ def test_only_a_privileged_policy_is_told_the_goal_and_its_records_say_so(short_
         else:
             assert all(c["privileged"] is None for c in contexts)
             assert TASK not in json.dumps(contexts) and "plate_1" not in json.dumps(contexts)
+
+
+@pytest.mark.parametrize("policy,privileged", [("oracle", 1), ("random", 0)])
+def test_records_say_whether_a_builtin_policy_was_privileged(short_catalog, tmp_path, policy, privileged):
+    run = tmp_path / "run"
+    result = run_cli(
+        "eval", "--policy", policy, "--catalog", short_catalog, "--tasks", TASK, "--episodes", "1",
+        "--run", str(run), "--workers", "0", "--no-progress", "--quiet",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert [(r["policy"], r["privileged"]) for r in store_rows(run)] == [(policy, privileged)]
 
 
 def test_the_openpi_client_sends_the_goal_only_to_a_privileged_served_policy(catalog, tmp_path):
@@ -54,26 +68,40 @@ def test_the_openpi_client_sends_the_goal_only_to_a_privileged_served_policy(cat
         with running(helper_server("langgap-record", port, name), port, env=subprocess_env(RECORD_DIR=str(record))):
             remote = OpenpiPolicy(port=port)
             episodes(remote, catalog, PLAN[:1])
+            if name == "random":  # the client's own guard: handed everything, as by a careless caller
+                remote.reset(task_context(catalog.get(TASK_ID), catalog, init_index=0, seed=0))
+                remote.act(Observation(state=np.zeros(8, dtype=np.float32), privileged={"body/plate_1": np.zeros(7)}))
             remote.close()
         sent[name] = _recorded(record / "requests.jsonl")
-    assert sent["random"] and all(r["context"]["privileged"] is None and not r["privileged"] for r in sent["random"])
-    assert "(On " not in json.dumps(sent["random"])
-    assert all(r["privileged"] for r in sent["oracle"])
-    assert sent["oracle"][0]["context"]["privileged"]["goal"] == ["(On akita_black_bowl_1 plate_1)"]
+    public = {protocol.STATE_KEY, protocol.PROMPT_KEY, protocol.EPISODE_KEY, protocol.CONTEXT_KEY}
+    assert sent["random"] and all(set(r) == public for r in sent["random"])
+    assert all(r[protocol.CONTEXT_KEY]["privileged"] is None for r in sent["random"])
+    wire = json.dumps(sent["random"])  # every request, whole: the answer appears nowhere in it
+    assert TASK_ID not in wire and "(On " not in wire and "goal" not in wire
+    assert all(set(r) == public | {protocol.PRIVILEGED_KEY} for r in sent["oracle"])
+    told = sent["oracle"][0][protocol.CONTEXT_KEY]["privileged"]
+    assert told["task_id"] == TASK_ID and told["goal"] == ["(On akita_black_bowl_1 plate_1)"]
 
 
-def test_a_server_never_gives_the_goal_to_a_policy_that_is_not_privileged(catalog, tmp_path):
-    log = tmp_path / "served.jsonl"
-    served = ServedPolicy(ContextRecorder(str(log)), "recorder")
+@pytest.mark.parametrize("policy", ["ContextRecorder", "PrivilegedContextRecorder"])
+def test_langgap_serve_drops_the_privileged_part_a_client_sends_to_a_policy_that_is_not(catalog, tmp_path, policy):
+    log, port = tmp_path / "served.jsonl", free_port()
     full = task_context(catalog.get(TASK), catalog, init_index=0, seed=0)  # as a careless client might send
     request = {
         protocol.EPISODE_KEY: "e1",
         protocol.CONTEXT_KEY: protocol.context_to_message(full),
         protocol.STATE_KEY: np.zeros(8, dtype=np.float32),
+        protocol.PRIVILEGED_KEY: {"body/plate_1": np.zeros(7)},
     }
-    served.infer(request)
-    (context,) = _recorded(log)
-    assert context["privileged"] is None and context["instruction"] == full.instruction
+    server = running(langgap_serve(port, f"tests.policies:{policy}", f"path={log}"), port)
+    with server, connect(f"ws://127.0.0.1:{port}", proxy=None) as ws:
+        ws.recv(timeout=5)  # the metadata
+        ws.send(protocol.pack(request))
+        assert protocol.ACTIONS_KEY in protocol.unpack(ws.recv(timeout=10))
+    (told,) = _recorded(log)
+    privileged = policy.startswith("Privileged")
+    assert told["instruction"] == full.instruction and told["simulator_state"] == privileged
+    assert told["privileged"] == (json.loads(json.dumps(dataclasses.asdict(full.privileged))) if privileged else None)
 
 
 def test_langgap_serve_listens_on_loopback_unless_told_otherwise():
