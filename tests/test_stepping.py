@@ -61,3 +61,23 @@ def test_an_episode_does_not_depend_on_what_ran_before(catalog):
         trajectory(env, 2)
         after_others = trajectory(env, 1)
     assert fresh.shape == after_others.shape and np.array_equal(fresh, after_others)
+
+
+def test_substeps_between_actions_run_langgap_s_controller(catalog):
+    """LIBERO's control configuration is the one `OscSubsteps` reproduces: every substep but the policy
+    step runs through it (the bit-identity test above then holds for it)."""
+    from langgap.sim.osc import OscSubsteps
+
+    task = catalog.get("spatial/s0/black-bowl-1-on-plate")
+    with TaskEnv(task, env_options_for(make_policy("oracle", {}))) as env:
+        env.reset(0)
+        stepping = env.robosuite_env.step
+        env.step(np.zeros(7))
+        osc = stepping._substep_control()
+        assert isinstance(osc, OscSubsteps) and OscSubsteps.supports(env.robosuite_env)
+        calls = []
+        control = osc.control
+        osc.control = lambda action: (calls.append(1), control(action))
+        env.step(np.zeros(7))
+        inner = env.robosuite_env
+        assert len(calls) == round(inner.control_timestep / inner.model_timestep) - 1

@@ -9,14 +9,19 @@ two from the acceleration stage on (`mj_forwardSkip`), and integrates with the m
 after the same checks `mj_step` performs.
 
 The acceleration stage and its constraint solver still run as often as before, so the solver's warm
-start evolves exactly as in robosuite, and the trajectory is the same to the last bit (a test
-compares full simulator states over real rollouts). Whenever the state is not the one the position
-stage last saw, the full computation runs, so a caller that edits the state in between is safe.
+start evolves exactly as in robosuite (each acceleration stage leaves its solution as the next one's
+warm start, so none can be dropped without changing the last bits), and the trajectory is the same
+to the last bit (a test compares full simulator states over real rollouts). Whenever the state is
+not the one the position stage last saw, the full computation runs, so a caller that edits the state
+in between is safe. The substeps between two actions run the arm's controller through
+`OscSubsteps` (sim/osc.py), robosuite's computation without its per-substep overhead.
 """
 
 from __future__ import annotations
 
 import mujoco
+
+from langgap.sim.osc import OscSubsteps
 
 _INTEGRATE = {
     mujoco.mjtIntegrator.mjINT_EULER: mujoco.mj_Euler,
@@ -43,6 +48,7 @@ class FastStepping:
         self.env = env
         self._robosuite_step = env.step
         self._positions_of: tuple | None = None  # state key for which the position stage is current
+        self._osc: OscSubsteps | None = None
 
     @classmethod
     def install(cls, env) -> None:
@@ -77,8 +83,30 @@ class FastStepping:
             self._positions_of = None
 
         sim.forward, sim.step = forward, step
+        osc = self._substep_control()
+        if osc is not None:
+            robosuite_pre_action = self.env._pre_action
+
+            def pre_action(action, policy_step=False) -> None:
+                if policy_step:  # a new goal and robosuite's bookkeeping: robosuite's own code
+                    return robosuite_pre_action(action, policy_step)
+                forward()  # the controller's update() begins with sim.forward()
+                osc.control(action)
+
+            self.env._pre_action = pre_action
         try:
             return self._robosuite_step(action)
         finally:
             del sim.forward, sim.step  # back to the class methods for everything outside a step
+            if osc is not None:
+                del self.env._pre_action
             self._positions_of = None
+
+    def _substep_control(self) -> OscSubsteps | None:
+        """The fast substep controller for the env's current simulator, robot and controller (every
+        reset builds a new controller, a hard reset a new simulator and robot), or None when the env's
+        control configuration is not the one it reproduces."""
+        env = self.env
+        if self._osc is None or not self._osc.controls(env):
+            self._osc = OscSubsteps(env) if OscSubsteps.supports(env) else None
+        return self._osc
