@@ -21,7 +21,7 @@ from langgap.sim.env import CAMERAS, EnvOptions, TaskEnv
 
 CONFIGS = {
     "no rendering": EnvOptions(),
-    "no rendering, robosuite's own stepping": EnvOptions(fast_stepping=False),
+    "no rendering, robosuite's own stepping": EnvOptions(stepping="robosuite"),
     "2 cameras 128x128": EnvOptions(cameras=CAMERAS, image_size=128),
     "2 cameras 256x256": EnvOptions(cameras=CAMERAS, image_size=256),
     "2 cameras 256x256, reflection off": EnvOptions(cameras=CAMERAS, image_size=256, reflection=False),

@@ -4,7 +4,8 @@ Side by side in one process, on one model, in interleaved rounds (so load on a s
 every row alike), the medians of:
 - raw physics: the 25 `mj_step` calls of one control step (LIBERO: 20 Hz control, 2 ms physics),
   on a copy of the simulator's state taken mid-episode;
-- LangGap's step (fast stepping + the substep controller) and robosuite's own step, same actions;
+- LangGap's `exact` stepping (bit-identical to robosuite's), its `fast` stepping (the last bits
+  differ) and robosuite's own step, same actions;
 then an oracle episode profiled (cProfile) by where its time goes: physics, robosuite's controller
 and step loop, LangGap's goal checks (all the scene's goals, every step), the oracle's planning,
 and the rest of the harness.
@@ -29,9 +30,14 @@ from langgap.engine.context import task_context
 from langgap.engine.episode import scene_goals
 from langgap.engine.rollout import env_options_for, run_episode
 from langgap.policies import make_policy
-from langgap.sim.env import EnvOptions, TaskEnv
+from langgap.sim.env import STEPPINGS, EnvOptions, TaskEnv
 
 TARGET = 2.0  # a control step at most twice the raw physics of its substeps
+STEPPING_LABELS = {
+    "exact": "LangGap `exact` (bit-identical)",
+    "fast": "LangGap `fast` (last bits differ)",
+    "robosuite": "robosuite's own",
+}
 
 
 def _actions(steps: int) -> list[np.ndarray]:
@@ -56,26 +62,26 @@ def _time_raw_steps(model, data, substeps: int, steps: int) -> float:
 
 
 def compare_steps(task, steps: int, rounds: int) -> dict[str, float]:
-    """Median seconds per control step of raw physics, LangGap's and robosuite's stepping."""
+    """Median seconds per control step of raw physics and of each stepping."""
     actions = _actions(steps)
-    fast = TaskEnv(task, EnvOptions())
-    plain = TaskEnv(task, EnvOptions(fast_stepping=False))
+    envs = {stepping: TaskEnv(task, EnvOptions(stepping=stepping)) for stepping in STEPPINGS}
     try:
-        inner = fast.robosuite_env
+        inner = envs["exact"].robosuite_env
         substeps = int(round(inner.control_timestep / inner.model_timestep))
-        fast.reset(0)
+        envs["exact"].reset(0)
         for action in actions[: steps // 2]:  # mid-episode: the arm moving, controls set
-            fast.step(action)
+            envs["exact"].step(action)
         model, mid = inner.sim.model._model, copy.copy(inner.sim.data._data)
-        times: dict[str, list[float]] = {"raw": [], "langgap": [], "robosuite": []}
+        for env in envs.values():  # warm up (the fast stepping's compiled controller loads here)
+            _time_env_steps(env, actions[:2], 0)
+        times: dict[str, list[float]] = {"raw": [], **{stepping: [] for stepping in envs}}
         for r in range(rounds):
-            raw = copy.copy(mid)
-            times["raw"].append(_time_raw_steps(model, raw, substeps, steps))
-            times["langgap"].append(_time_env_steps(fast, actions, r))
-            times["robosuite"].append(_time_env_steps(plain, actions, r))
+            times["raw"].append(_time_raw_steps(model, copy.copy(mid), substeps, steps))
+            for stepping, env in envs.items():
+                times[stepping].append(_time_env_steps(env, actions, r))
     finally:
-        fast.close()
-        plain.close()
+        for env in envs.values():
+            env.close()
     return {name: statistics.median(values) for name, values in times.items()}
 
 
@@ -88,11 +94,11 @@ _ENTRY_POINTS = (
 )
 
 
-def profile_episode(task, catalog) -> tuple[int, float, dict[str, float]]:
+def profile_episode(task, catalog, stepping: str) -> tuple[int, float, dict[str, float]]:
     """Steps, seconds per step and each entry point's share of one oracle episode (cProfile)."""
     policy = make_policy("oracle", {})
     watch = scene_goals(task, catalog)
-    with TaskEnv(task, env_options_for(policy)) as env:
+    with TaskEnv(task, env_options_for(policy, stepping=stepping)) as env:
         run_episode(env, policy, task_context(task, catalog, init_index=1, seed=0), watch=watch)  # warm up
         profiler = cProfile.Profile()
         profiler.enable()
@@ -129,17 +135,21 @@ def main() -> None:
     print("| stepping | ms per control step | vs raw physics | target |")
     print("|---|---|---|---|")
     print(f"| raw physics (25 mj_step) | {t['raw'] * 1e3:.2f} | 1.00x | |")
-    print(f"| LangGap | {t['langgap'] * 1e3:.2f} | {t['langgap'] / t['raw']:.2f}x | ≤ {TARGET:.1f}x |")
-    print(f"| robosuite | {t['robosuite'] * 1e3:.2f} | {t['robosuite'] / t['raw']:.2f}x | |")
-    print(f"LangGap vs robosuite: {t['robosuite'] / t['langgap']:.2f}x faster")
+    for stepping in STEPPINGS:
+        target = f"≤ {TARGET:.1f}x" if stepping == "fast" else ""
+        print(f"| {STEPPING_LABELS[stepping]} | {t[stepping] * 1e3:.2f} | {t[stepping] / t['raw']:.2f}x | {target} |")
+    for stepping in ("exact", "fast"):
+        print(f"{stepping} vs robosuite's own: {t['robosuite'] / t[stepping]:.2f}x faster")
     if args.no_profile:
         return
-    steps, per_step, shares = profile_episode(task, catalog)
-    print(f"\noracle episode (init 0): {steps} steps, {per_step * 1e3:.1f} ms per step under cProfile (all in)")
-    print("| where | share of the step |")
-    print("|---|---|")
-    for name, share in shares.items():
-        print(f"| {name} | {share:.0%} |")
+    profiles = {stepping: profile_episode(task, catalog, stepping) for stepping in ("exact", "fast")}
+    print("\noracle episode (init 0) under cProfile, all in: where a step's time goes")
+    print("| where | " + " | ".join(f"`{s}` stepping" for s in profiles) + " |")
+    print("|---|" + "---|" * len(profiles))
+    steps = " | ".join(f"{p[0]} steps, {p[1] * 1e3:.1f} ms/step" for p in profiles.values())
+    print(f"| episode | {steps} |")
+    for name in profiles["exact"][2]:
+        print(f"| {name} | " + " | ".join(f"{p[2][name]:.0%}" for p in profiles.values()) + " |")
 
 
 if __name__ == "__main__":

@@ -255,6 +255,7 @@ def test_existing_foreign_or_corrupt_stores_are_never_overwritten(short_catalog,
         (["--policy", "noop"], "already exists"),
         (["--policy", "random", "--resume"], "another spec: policy: stored 'noop', given 'random'"),
         (["--policy", "noop", "--seed", "5", "--resume"], "another spec: seed: stored 0, given 5"),
+        (["--policy", "noop", "--stepping", "fast", "--resume"], "another spec: physics: stored"),
     ):
         result = run_cli(*base, *extra)
         assert result.returncode == 2 and message in result.stderr and result.stderr.count("\n") == 1

@@ -78,6 +78,13 @@ def version_of(package: str) -> str | None:
         return None
 
 
-def physics_stack() -> dict[str, str | None]:
-    """Installed versions of everything that changes simulation results."""
-    return {name: version_of(name) for name in RECORDED}
+# How physics substeps are computed (langgap/sim/stepping.py): `exact` and `robosuite` give the same
+# bits, `fast` differs from them in the last bits (and then drifts), so a result's physics names it.
+STEPPINGS = ("exact", "fast", "robosuite")
+DEFAULT_STEPPING = "exact"
+
+
+def physics_stack(stepping: str = DEFAULT_STEPPING) -> dict[str, str | None]:
+    """Installed versions of everything that changes simulation results, and the `fast` stepping if used."""
+    versions = {name: version_of(name) for name in RECORDED}
+    return versions | ({"stepping": stepping} if stepping == "fast" else {})

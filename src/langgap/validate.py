@@ -33,7 +33,7 @@ from langgap.catalog.verdicts import record_verdicts
 from langgap.engine.evaluate import evaluate
 from langgap.engine.spec import ExecutionOptions, RunSpec
 from langgap.records import EpisodeRecord
-from langgap.stack import physics_stack
+from langgap.stack import DEFAULT_STEPPING, physics_stack
 from langgap.store import RunStore
 from langgap.version import code_version
 
@@ -287,6 +287,7 @@ def validate(
     policy: str = "oracle",
     progress: bool = True,
     blind: bool = False,
+    stepping: str = DEFAULT_STEPPING,
 ) -> Validation:
     """Run the gate on the selected tasks and check the benchmark's claims on its episodes; with
     `blind`, the `blind` policy runs the same episodes too (kept in `run`-blind when `run` is given)."""
@@ -296,7 +297,7 @@ def validate(
 
     def episodes(policy_name: str, directory: Path) -> list[EpisodeRecord]:
         ids = ",".join(t.id for t in tasks)
-        spec = RunSpec.create(policy_name, catalog=catalog_name, tasks=ids, episodes=inits)
+        spec = RunSpec.create(policy_name, catalog=catalog_name, tasks=ids, episodes=inits, stepping=stepping)
         evaluate(spec, directory, options, resume=resume, extend=resume)
         with RunStore.open(directory) as store:
             return store.records()
@@ -318,13 +319,20 @@ def validate(
     return Validation(rows, benchmark_claims(catalog, records, blind_records))
 
 
-def record(catalog_name: str, rows: list[TaskValidation], *, inits: int, policy: str = "oracle") -> Path:
+def record(
+    catalog_name: str,
+    rows: list[TaskValidation],
+    *,
+    inits: int,
+    policy: str = "oracle",
+    stepping: str = DEFAULT_STEPPING,
+) -> Path:
     """Record the rows' verdicts beside the catalog's registry file."""
     about = {
         "policy": policy,
         "inits": inits,
         "feasible_rate": FEASIBLE_RATE,
-        "physics": physics_stack(),
+        "physics": physics_stack(stepping),
         "code_version": code_version(),
     }
     return record_verdicts(registry_path(catalog_name), {r.id: r.verdict(inits) for r in rows}, about)

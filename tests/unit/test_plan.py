@@ -168,12 +168,23 @@ def test_a_spec_resolves_its_selection_and_records_what_determines_results():
         ({"policy": "levitate"}, LangGapError, "unknown policy 'levitate'"),
         ({"policy_args": {"speed": "2"}}, LangGapError, "policy 'random' has no argument 'speed'"),
         ({"policy_args": {"scale": "fast"}}, LangGapError, "policy 'random' argument scale"),
+        ({"stepping": "robosuite"}, SpecError, "unknown stepping 'robosuite' \\(known: exact, fast\\)"),
     ],
 )
 def test_a_spec_is_validated(arguments, error, message):
     arguments = {"policy": "random", "tasks": BOWL_1, "episodes": 2} | arguments
     with pytest.raises(error, match=message):
         RunSpec.create(arguments.pop("policy"), **arguments)
+
+
+def test_the_fast_stepping_is_part_of_what_a_run_is():
+    """`fast` changes results (in their last bits): its spec's physics says so and differs from `exact`'s,
+    while `exact` keeps the physics of runs stored before steppings were named (they resume)."""
+    exact = RunSpec.create("noop", tasks=BOWL_1, episodes=1)
+    fast = RunSpec.create("noop", tasks=BOWL_1, episodes=1, stepping="fast")
+    assert exact.stepping == "exact" and exact.physics == stack.physics_stack() and "stepping" not in exact.physics
+    assert fast.stepping == "fast" and fast.physics == stack.physics_stack() | {"stepping": "fast"}
+    assert fast.differences(exact.to_dict()) == ["physics"]
 
 
 def test_a_spec_names_every_field_that_differs():

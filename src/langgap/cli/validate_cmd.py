@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 from langgap.catalog.catalog import DEFAULT_CATALOG
+from langgap.cli.eval_cmd import add_stepping_option
 from langgap.errors import LangGapError
 from langgap.validate import FEASIBLE_RATE, FULL_INITS
 
@@ -16,6 +17,7 @@ def add_gate_options(parser) -> None:
     parser.add_argument("--run", metavar="DIR", help="keep the oracle's episodes in this run directory (resumable)")
     parser.add_argument("--resume", action="store_true", help="continue an interrupted validation in --run")
     parser.add_argument("--no-progress", action="store_true")
+    add_stepping_option(parser)
 
 
 def add_parser(subparsers) -> None:
@@ -63,6 +65,7 @@ def run_gate(args, catalog: str, selection: str, inits: int, policy: str = "orac
         policy=policy,
         progress=not args.no_progress,
         blind=blind,
+        stepping=args.stepping,
     )
 
 
@@ -75,7 +78,8 @@ def run(args) -> int:
     print(table_text(found.rows))
     _print_claims(found, args.out)
     if args.record:
-        print(f"recorded verdicts in {record(args.catalog, found.rows, inits=args.inits, policy=args.policy)}")
+        path = record(args.catalog, found.rows, inits=args.inits, policy=args.policy, stepping=args.stepping)
+        print(f"recorded verdicts in {path}")
     return 0 if found.passed else 1
 
 

@@ -51,7 +51,6 @@ def _record(planned: PlannedEpisode, task: Task, **values) -> EpisodeRecord:
         scene=scene_key(task),
         max_steps=task.max_steps,
         settle_steps=SETTLE_STEPS,
-        physics=stack.physics_stack(),
         code_version=code_version(),
         finished_at=datetime.now(UTC).isoformat(timespec="seconds"),
         **values,
@@ -93,6 +92,7 @@ def execute_episode(
         image_size=policy.spec.image_size if policy.spec.cameras else 0,
         worker=worker,
         attempts=attempts,
+        physics=stack.physics_stack(env.options.stepping),
     )
     try:
         result = run_episode(env, policy, context, watch=scene_goals(task, catalog), on_step=on_step)
@@ -130,11 +130,14 @@ def execute_episode(
     )
 
 
-def gap_record(planned: PlannedEpisode, task: Task, *, policy_name: str, error: str, attempts: int) -> EpisodeRecord:
+def gap_record(
+    planned: PlannedEpisode, task: Task, *, policy_name: str, error: str, attempts: int, physics: dict
+) -> EpisodeRecord:
     """The record of an episode that infrastructure failed to run (no verdict on the policy)."""
     return _record(
         planned,
         task,
+        physics=physics,
         status=Status.GAP,
         success=False,
         outcome=Outcome.GAP,

@@ -112,12 +112,15 @@ def evaluate(
         policy_args=dict(spec.policy_args),
         style=spec.style,
         run_dir=str(run),
+        stepping=spec.stepping,
     )
 
     def run_episodes(todo: list[PlannedEpisode], pool: WorkerPool) -> Iterator[EpisodeRecord]:
         def make_gap(planned: PlannedEpisode, error: str, attempts: int) -> EpisodeRecord:
             task = catalog.get(planned.key.task_id)
-            return gap_record(planned, task, policy_name=spec.policy, error=error, attempts=attempts)
+            return gap_record(
+                planned, task, policy_name=spec.policy, error=error, attempts=attempts, physics=spec.physics
+            )
 
         return schedule(
             todo,

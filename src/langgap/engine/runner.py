@@ -21,6 +21,7 @@ from langgap.policies import make_policy
 from langgap.policies.base import config_hash, policy_config
 from langgap.records import EpisodeRecord
 from langgap.sim.env import CAMERAS, TaskEnv
+from langgap.stack import DEFAULT_STEPPING
 from langgap.video import FRAME_EVERY, VIDEO_SUFFIX
 
 
@@ -33,6 +34,7 @@ class RunnerSetup:
     policy_args: dict[str, str]
     style: str
     run_dir: str | None = None  # where a filmed episode's clip goes (its `videos` folder)
+    stepping: str = DEFAULT_STEPPING  # how physics substeps are computed (`RunSpec.stepping`)
     policy_server: Any = None  # a shared policy actor (Ray); None: each runner builds its own policy
 
 
@@ -112,9 +114,11 @@ class EpisodeRunner:
             # the reflection pass (~40 % of a render); a policy's own images keep the renderer settings it
             # was declared with.
             if self._policy.spec.cameras:
-                return env_options_for(self._policy, cameras=CAMERAS)
-            return env_options_for(self._policy, cameras=CAMERAS, image_size=256, reflection=False)
-        return env_options_for(self._policy)
+                return env_options_for(self._policy, cameras=CAMERAS, stepping=self.setup.stepping)
+            return env_options_for(
+                self._policy, cameras=CAMERAS, image_size=256, reflection=False, stepping=self.setup.stepping
+            )
+        return env_options_for(self._policy, stepping=self.setup.stepping)
 
     def _close_env(self) -> None:
         if self._env is not None:

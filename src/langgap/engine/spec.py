@@ -2,10 +2,11 @@
 
 A `RunSpec` holds everything that changes a run's results: the policy and its arguments, the
 catalog (name and content hash), the tasks, init indices, seed, language conditions, instruction
-style and the physics stack. It is stored whole with the run and compared whole on `--resume`, so
-a resumed run can never mix episodes made under two protocols. `ExecutionOptions` says how the
-episodes are run (backend, workers, timeouts, retries, videos, Ray's options): every backend gives
-the same episodes, so none of it is part of the run's identity.
+style and the physics (the stack's versions, and the `fast` stepping when chosen). It is stored
+whole with the run and compared whole on `--resume`, so a resumed run can never mix episodes made
+under two protocols. `ExecutionOptions` says how the episodes are run (backend, workers, timeouts,
+retries, videos, Ray's options): every backend gives the same episodes, so none of it is part of
+the run's identity.
 """
 
 from __future__ import annotations
@@ -26,6 +27,8 @@ DEFAULT_MAX_ATTEMPTS = 3
 DEFAULT_FAILURE_STREAK = 3
 # The fields that only say which episodes a run holds: `--extend` lets a resumed run grow them.
 PLAN_FIELDS = ("selection", "tasks", "inits", "conditions", "repeats")
+# The steppings a run can choose: `robosuite` gives `exact`'s bits, slower (for benchmarks and tests).
+RESULT_STEPPINGS = ("exact", "fast")
 
 
 class SpecError(LangGapError):
@@ -62,6 +65,7 @@ class RunSpec:
         repeats: int = 1,
         conditions: tuple[str, ...] = ("given",),
         style: str = DEFAULT_STYLE,
+        stepping: str = stack.DEFAULT_STEPPING,
     ) -> RunSpec:
         """A validated spec: the policy accepts its arguments, the selection resolves, the options exist.
 
@@ -75,6 +79,8 @@ class RunSpec:
             raise SpecError(f"--repeats must be between 1 and {REPEAT_STRIDE}, got {repeats}")
         if style not in INSTRUCTION_STYLES:
             raise SpecError(f"unknown instruction style {style!r} (known: {', '.join(INSTRUCTION_STYLES)})")
+        if stepping not in RESULT_STEPPINGS:
+            raise SpecError(f"unknown stepping {stepping!r} (known: {', '.join(RESULT_STEPPINGS)})")
         conditions = tuple(dict.fromkeys(conditions))
         unknown = [c for c in conditions if c not in CONDITIONS]
         if unknown or not conditions:
@@ -92,8 +98,13 @@ class RunSpec:
             repeats=repeats,
             conditions=conditions,
             style=style,
-            physics=stack.physics_stack(),
+            physics=stack.physics_stack(stepping),
         )
+
+    @property
+    def stepping(self) -> str:
+        """How the physics substeps are computed (`exact` unless the spec's physics names `fast`)."""
+        return self.physics.get("stepping") or stack.DEFAULT_STEPPING
 
     def to_dict(self) -> dict:
         """The spec as JSON data (the form stored with a run)."""

@@ -27,6 +27,7 @@ from langgap.bddl import Predicate
 from langgap.catalog import files
 from langgap.catalog.task import Task
 from langgap.errors import InitStateError, SimulationError
+from langgap.stack import DEFAULT_STEPPING, STEPPINGS
 
 CAMERAS = ("agentview", "robot0_eye_in_hand")
 SETTLE_STEPS = 10
@@ -52,7 +53,9 @@ class EnvOptions:
     reflection: bool = True
     hard_reset: bool = False
     privileged: bool = False
-    fast_stepping: bool = True  # bit-identical to robosuite's stepping (sim/stepping.py); off for benchmarks
+    # exact: bit-identical to robosuite's stepping, faster; fast: the last bits differ, faster still;
+    # robosuite: robosuite's own code (sim/stepping.py)
+    stepping: str = DEFAULT_STEPPING
 
     def __post_init__(self) -> None:
         unknown = [c for c in self.cameras if c not in CAMERAS]
@@ -60,6 +63,8 @@ class EnvOptions:
             raise SimulationError(f"unknown camera(s) {unknown}; LIBERO has {', '.join(CAMERAS)}")
         if len(set(self.cameras)) != len(self.cameras):
             raise SimulationError(f"camera listed twice: {list(self.cameras)}")
+        if self.stepping not in STEPPINGS:
+            raise SimulationError(f"unknown stepping {self.stepping!r} (known: {', '.join(STEPPINGS)})")
         if not 16 <= self.image_size <= 1024:
             raise SimulationError(f"image size must be in 16..1024, got {self.image_size}")
 
@@ -129,8 +134,8 @@ class TaskEnv:
             raise SimulationError(f"cannot build env for {task.id}: {type(exc).__name__}: {exc}") from exc
         self._inner = self._env.env
         ContactIndex.install(self._inner)
-        if self.options.fast_stepping:
-            FastStepping.install(self._inner)
+        if self.options.stepping != "robosuite":
+            FastStepping.install(self._inner, fast=self.options.stepping == "fast")
 
     # -- lifecycle ---------------------------------------------------------------------------
 
