@@ -24,6 +24,7 @@ from langgap.catalog.naming import SUITE_SHORT, task_id
 from langgap.catalog.registry_writer import registry_text
 from langgap.catalog.task import DIMENSIONS, INSTRUCTION_STYLES, Task
 from langgap.errors import CatalogError
+from langgap.goals import conjunction
 from langgap.stack import SUITES
 
 FULL_CATALOG = "full"
@@ -63,8 +64,8 @@ def _scene_tasks(source: Task, published: dict[tuple, Task]) -> list[Task]:
     """The source itself, then its scene's extended candidates by dimension and id."""
     scene = files.scene_problem(source)
     extended = []
-    for goal in candidate_goals(scene, source.goal):
-        if (goal,) == source.goal:
+    for goal in candidate_goals(scene, source.bddl_goal):
+        if (goal,) == source.bddl_goal:
             continue
         task = _extended_task(source, (goal,), scene)
         paper_task = published.get((task.suite, task.scene_task, task.goal))
@@ -79,12 +80,12 @@ def _extended_task(source: Task, goal: tuple[Predicate, ...], scene: BddlProblem
         catalog=FULL_CATALOG,
         suite=source.suite,
         kind="extended",
-        dimension=dimension(goal[0], source.goal, scene),
+        dimension=dimension(goal[0], source.bddl_goal, scene),
         split="heldout",
         source=source.id,
         scene_task=source.scene_task,
         scene_index=source.scene_index,
-        goal=goal,
+        goal=conjunction(goal),
         obj_of_interest=obj_of_interest(goal, scene),
         instructions={style: phrasing.instruction(style, source.suite, goal, scene) for style in INSTRUCTION_STYLES},
         max_steps=source.max_steps,

@@ -14,6 +14,7 @@ from langgap.report.summary import RunResults, Summary, TaskRow
 SOURCE_LABEL = {"original": "Original (LIBERO)", "extended": "Extended (LangGap)", "total": "Total"}
 OUTCOME_LABEL = {
     Outcome.SUCCESS: "Success %",
+    Outcome.WRONG_ORDER: "Wrong order %",
     Outcome.DID_SOURCE_TASK: "Did source task %",
     Outcome.DID_OTHER_TASK: "Did other task %",
     Outcome.NO_GOAL_REACHED: "No goal %",
@@ -229,13 +230,16 @@ def spread_table(run: RunResults) -> Table | None:
 
 
 def outcome_table(run: RunResults) -> Table:
-    """What the policy did instead, per dimension (`did source task` is the default-task rate)."""
-    headers = ["Dimension", "Episodes", *(OUTCOME_LABEL[o] for o in JUDGED_OUTCOMES), "Gaps"]
+    """What the policy did instead, per dimension (`did source task` is the default-task rate). `wrong order`
+    is shown for runs with ordered tasks (or any episode in that outcome)."""
+    ordered = any(o.group == "ordering" or o.shares[Outcome.WRONG_ORDER] for o in run.outcomes)
+    shown = [o for o in JUDGED_OUTCOMES if o is not Outcome.WRONG_ORDER or ordered]
+    headers = ["Dimension", "Episodes", *(OUTCOME_LABEL[o] for o in shown), "Gaps"]
     rows = [
         [
             label(OUTCOME_GROUP_LABEL, o.group),
             str(o.episodes),
-            *(pct(o.shares[outcome]) for outcome in JUDGED_OUTCOMES),
+            *(pct(o.shares[outcome]) for outcome in shown),
             str(o.gaps),
         ]
         for o in run.outcomes
