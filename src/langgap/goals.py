@@ -130,12 +130,13 @@ def _parse(tokens: list[str], i: int, text: str) -> tuple[Goal, int]:
     return Atom(Predicate.of(name, args)), i + 1
 
 
-def goal_from_strings(expressions: Iterable[str]) -> And:
-    """A registry's `goal` list: the conjunction of its expressions."""
+def goal_from_strings(expressions: Iterable[str]) -> Goal:
+    """A registry's `goal` list: the conjunction of its expressions (a list of atoms is LIBERO's goal, an
+    `And` even of one atom; one compound expression is that expression)."""
     parts = tuple(parse_goal(e) for e in expressions)
     if not parts:
         raise BddlError("goal is empty")
-    return And(parts)
+    return parts[0] if len(parts) == 1 and not isinstance(parts[0], Atom) else And(parts)
 
 
 def goal_strings(goal: Goal) -> list[str]:

@@ -82,6 +82,9 @@ def test_a_registry_list_of_atoms_is_the_libero_conjunction_and_writes_back_iden
     assert goal_strings(Then((Atom(OPEN_DRAWER), Atom(BOWL_ON_PLATE)))) == [
         "(Then (Open cabinet_1_top_region) (On bowl_1 plate_1))"
     ]
+    negation = And((Or((Atom(BOWL_ON_RAMEKIN), Atom(BOWL_IN_DRAWER))), Not(Atom(BOWL_ON_PLATE))))
+    for goal in (Then((Atom(OPEN_DRAWER), Atom(BOWL_ON_PLATE))), negation, conjunction([BOWL_ON_PLATE])):
+        assert goal_from_strings(goal_strings(goal)) == goal  # what a generator writes is what loads
     with pytest.raises(BddlError, match="empty"):
         goal_from_strings([])
 

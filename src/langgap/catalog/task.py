@@ -9,7 +9,10 @@ from langgap.errors import CatalogError
 from langgap.goals import Goal, goal_strings, witness
 
 KINDS = ("original", "extended")
-DIMENSIONS = ("original", "change_object", "change_target", "spatial_description", "drawer_action")
+# The paper's four dimensions, then the four of the `langgap-beyond` catalog (`catalog/beyond.py`).
+PAPER_DIMENSIONS = ("change_object", "change_target", "spatial_description", "drawer_action")
+BEYOND_DIMENSIONS = ("ordering", "negation", "paraphrase", "attribute_reference")
+DIMENSIONS = ("original", *PAPER_DIMENSIONS, *BEYOND_DIMENSIONS)
 SPLITS = ("original", "train", "heldout")
 INSTRUCTION_STYLES = ("libero", "paper")
 DEFAULT_STYLE = "libero"
