@@ -104,3 +104,42 @@ def test_paraphrase_and_attribute_keep_the_source_goal(beyond):
     )
     # two black bowls in every libero_spatial scene: "the black one" would not be unique
     assert not [t for t in beyond.select("attribute_reference") if t.suite == "libero_spatial"]
+
+
+ORDER_SOURCE = "goal/s8/black-bowl-on-plate"
+IN_ORDER = "goal/s8/first-turn-on-stove-then-black-bowl-on-plate"  # the oracle turns knobs first
+OUT_OF_ORDER = "goal/s8/first-black-bowl-on-plate-then-turn-on-stove"
+NEGATED = "goal/s8/black-bowl-on-plate~not-where"
+
+
+def _run(policy: str, tasks: str, path) -> dict:
+    from langgap.engine.evaluate import evaluate
+    from langgap.engine.spec import ExecutionOptions, RunSpec
+    from langgap.report.load import load_runs
+
+    spec = RunSpec.create(policy, catalog=BEYOND_CATALOG, tasks=tasks, episodes=1)
+    evaluate(spec, path, ExecutionOptions(workers=0, progress=False))
+    (run,) = load_runs([path])
+    return {r.task_id: r for r in run.records}
+
+
+@pytest.mark.slow
+def test_an_ordered_goal_reached_in_the_wrong_order_fails_as_wrong_order(tmp_path):
+    # The oracle sees the goal's atoms only and does articulations first (what it must learn: README),
+    # so it meets one order and breaks the other: the outcome tells them apart.
+    records = _run("oracle", f"{IN_ORDER},{OUT_OF_ORDER}", tmp_path / "oracle")
+    assert records[IN_ORDER].success and records[IN_ORDER].outcome == "success"
+    wrong = records[OUT_OF_ORDER]
+    assert not wrong.success and wrong.outcome == "wrong_order"
+    assert wrong.steps == wrong.max_steps  # both parts held, in the wrong order: the episode ran to its limit
+    # what it did instead: the stove first, then the bowl, which is the other order's task
+    reached = wrong.reached
+    assert reached["goal/s7/turn-on-stove"] < reached[ORDER_SOURCE] == reached[IN_ORDER]
+
+
+@pytest.mark.slow
+def test_a_negated_goal_met_by_the_negated_target_is_recorded_as_the_source_task(tmp_path):
+    records = _run("blind", NEGATED, tmp_path / "blind")
+    episode = records[NEGATED]
+    assert not episode.success and episode.outcome == "did_source_task"
+    assert ORDER_SOURCE in episode.reached and ORDER_SOURCE in episode.goals_at_end
