@@ -16,7 +16,7 @@ def test_every_extended_bddl_differs_from_its_source_only_in_task_sections(catal
         generated = files.task_bddl_path(task).read_text()
         assert strip_task_sections(generated) == strip_task_sections(source_text), task.id
         problem = parse_bddl(generated)
-        assert problem.goal == task.goal
+        assert problem.goal == task.bddl_goal
         assert problem.language == task.instruction("paper")
         assert problem.obj_of_interest == task.obj_of_interest
         assert generated != source_text

@@ -74,12 +74,16 @@ def test_libero_style_rederives_every_original(catalog):
     """The phrasing tables reproduce LIBERO's own sentence for all 30 single-goal originals."""
     for task in catalog.select("original"):
         if task.suite != "libero_10":
-            assert instruction("libero", task.suite, task.goal, files.scene_problem(task)) == task.instruction("libero")
+            assert instruction("libero", task.suite, task.bddl_goal, files.scene_problem(task)) == task.instruction(
+                "libero"
+            )
 
 
 def test_extended_libero_sentences_follow_the_originals(catalog):
     for task in catalog.select("extended"):
-        assert instruction("libero", task.suite, task.goal, files.scene_problem(task)) == task.instruction("libero")
+        assert instruction("libero", task.suite, task.bddl_goal, files.scene_problem(task)) == task.instruction(
+            "libero"
+        )
 
 
 def test_change_target_sentences_differ_from_source_only_in_the_target(catalog):

@@ -54,14 +54,16 @@ def _init_facts(task):
 
 def test_ids_of_the_paper_tasks_are_what_naming_spells(paper):
     for task in paper:
-        assert task_id(task.suite, task.scene_index, task.goal, files.scene_problem(task)) == task.id
+        assert task_id(task.suite, task.scene_index, task.bddl_goal, files.scene_problem(task)) == task.id
 
 
 def test_phrasing_reproduces_every_single_goal_original_sentence(paper):
     originals = [t for t in paper if t.kind == "original" and t.suite != "libero_10"]
     assert len(originals) == 30
     for task in originals:
-        assert phrasing.instruction("libero", task.suite, task.goal, files.scene_problem(task)) == task.instruction()
+        assert (
+            phrasing.instruction("libero", task.suite, task.bddl_goal, files.scene_problem(task)) == task.instruction()
+        )
 
 
 def test_paper_template_reproduces_the_authors_strings_except_their_hand_written_bowl_descriptions(paper):
@@ -69,7 +71,7 @@ def test_paper_template_reproduces_the_authors_strings_except_their_hand_written
         t.paper_id
         for t in paper
         if t.kind == "extended"
-        and phrasing.instruction("paper", t.suite, t.goal, files.scene_problem(t)) != t.instruction("paper")
+        and phrasing.instruction("paper", t.suite, t.bddl_goal, files.scene_problem(t)) != t.instruction("paper")
     ]
     assert differ == [40, 41, 42, 84]
 
@@ -99,8 +101,8 @@ def test_every_paper_task_is_found_unchanged(paper, by_id):
 
 def test_single_goal_originals_are_among_their_scene_candidates(paper):
     for task in paper:
-        if task.kind == "original" and len(task.goal) == 1:
-            assert task.goal[0] in candidate_goals(files.scene_problem(task), task.goal), task.id
+        if task.kind == "original" and len(task.bddl_goal) == 1:
+            assert task.bddl_goal[0] in candidate_goals(files.scene_problem(task), task.bddl_goal), task.id
 
 
 def test_the_paper_label_is_kept_where_the_dimension_rule_differs(by_id):
@@ -142,7 +144,7 @@ def test_counts_per_suite_and_dimension(generated):
 
 def test_no_goal_is_true_at_t0_by_construction(generated):
     for task in (t for t in generated if t.kind == "extended"):
-        (goal,) = task.goal
+        (goal,) = task.bddl_goal
         facts = _init_facts(task)
         if goal.name in ("On", "In"):
             obj, target = goal.args
@@ -156,7 +158,9 @@ def test_no_goal_is_true_at_t0_by_construction(generated):
 
 
 def test_receive_rules_leave_out_meaningless_pairs(generated):
-    placements = [(t, *t.goal[0].args) for t in generated if t.kind == "extended" and t.goal[0].name in ("On", "In")]
+    placements = [
+        (t, *t.bddl_goal[0].args) for t in generated if t.kind == "extended" and t.bddl_goal[0].name in ("On", "In")
+    ]
     for task, obj, target in placements:
         scene = files.scene_problem(task)
         obj_category = scene.objects[obj]
@@ -177,14 +181,14 @@ def test_receive_rules_leave_out_meaningless_pairs(generated):
 def test_conjuncts_of_a_libero_10_source_are_not_candidates(generated, paper):
     sources = {t.id: t for t in paper if t.suite == "libero_10" and t.kind == "original"}
     for task in (t for t in generated if t.suite == "libero_10" and t.kind == "extended"):
-        assert task.goal[0] not in sources[task.source].goal, task.id
+        assert task.bddl_goal[0] not in sources[task.source].bddl_goal, task.id
 
 
 def test_every_generated_bddl_parses_with_its_goal_and_the_source_scene(generated):
     for task in generated:
         text = files.task_bddl_text(task)
         parsed = parse_bddl(text, source=task.id)
-        assert parsed.goal == task.goal
+        assert parsed.goal == task.bddl_goal
         if task.kind == "extended":
             assert parsed.language == task.instruction("paper")
             scene_text = files.task_bddl_text(load_catalog("full").get(task.source))
@@ -219,7 +223,7 @@ def test_recorded_verdicts_flag_rejected_tasks_and_survive_regeneration(tmp_path
     regenerating the registry keeps them."""
     path = write_registry(generate_tasks(["object"]), tmp_path / "gated.yaml")
     catalog = load_catalog_file(path)
-    milk = {t.id for t in catalog if t.goal[0].args[0] == "milk_1"}
+    milk = {t.id for t in catalog if t.bddl_goal[0].args[0] == "milk_1"}
     verdicts = {
         t.id: GateResult(
             episodes=4,
@@ -275,7 +279,7 @@ def test_generated_task_builds_in_the_simulator_with_its_goal_false_at_t0(task_i
     with TaskEnv(task) as env:
         env.reset(0)
         env.settle()
-        assert env.robosuite_env.parsed_problem["goal_state"] == [list(p.as_libero()) for p in task.goal]
+        assert env.robosuite_env.parsed_problem["goal_state"] == [list(p.as_libero()) for p in task.bddl_goal]
         assert not env.success()
 
 
@@ -291,5 +295,5 @@ def test_no_candidate_goal_holds_at_t0_in_simulation():
         with TaskEnv(source) as env:
             env.reset(0)
             env.settle()
-            holding += [t.id for t in extended if all(env.predicate_holds(p) for p in t.goal)]
+            holding += [t.id for t in extended if all(env.predicate_holds(p) for p in t.bddl_goal)]
     assert holding == []

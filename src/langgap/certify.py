@@ -23,6 +23,7 @@ import numpy as np
 
 from langgap.catalog.task import Task
 from langgap.errors import LangGapError
+from langgap.goals import plain_atoms
 from langgap.policies.oracle.hand import FINGER_THICKNESS
 
 TOLERANCE_M = 0.002  # contact deeper than this is a collision (MuJoCo's soft contacts overlap slightly)
@@ -204,7 +205,8 @@ def handle_reach(
     from langgap.sim.env import EnvOptions, TaskEnv
     from langgap.sim.privileged import privileged_state
 
-    if len(task.goal) != 1 or task.goal[0].name != "Open":
+    atoms = plain_atoms(task.goal) or ()
+    if len(atoms) != 1 or atoms[0].name != "Open":
         raise LangGapError(
             f"certify analyses tasks that open a drawer; {task.id}'s goal is {' '.join(task.goal_strings)}"
         )
@@ -212,7 +214,7 @@ def handle_reach(
         env.reset(init_index)
         env.settle()
         scene = Scene(privileged_state(env))
-        region = task.goal[0].args[0]
+        region = atoms[0].args[0]
         art = scene.articulation(region)
         direction = opening_direction(art)
         _, bar, half_length = drawer_front(art, direction)

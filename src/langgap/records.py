@@ -24,6 +24,7 @@ class Outcome(StrEnum):
     """What an episode achieved (see `classify`)."""
 
     SUCCESS = "success"
+    WRONG_ORDER = "wrong_order"  # an ordered task's sub-goals all held, but not in the order asked
     DID_SOURCE_TASK = "did_source_task"  # an extended task's policy did the scene's original task instead
     DID_OTHER_TASK = "did_other_task"
     NO_GOAL_REACHED = "no_goal_reached"
@@ -108,10 +109,18 @@ class EpisodeRecord:
         return self.status == Status.DONE
 
 
-def classify(task_id: str, kind: str, source: str, success: bool, reached: Mapping[str, int]) -> Outcome:
-    """What an episode of task `task_id` achieved, from the scene goals that became true during it."""
+def classify(
+    task_id: str, kind: str, source: str, success: bool, reached: Mapping[str, int], *, wrong_order: bool = False
+) -> Outcome:
+    """What an episode of task `task_id` achieved, from the scene goals that became true during it.
+
+    `wrong_order`: the task's goal is ordered and its parts all held at some step, out of order. That
+    is named before the source task, which an ordered task built on the source's goal also reaches.
+    """
     if success:
         return Outcome.SUCCESS
+    if wrong_order:
+        return Outcome.WRONG_ORDER
     if kind == "extended" and source in reached:
         return Outcome.DID_SOURCE_TASK
     if any(name != task_id for name in reached):

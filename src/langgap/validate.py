@@ -26,12 +26,12 @@ from pathlib import Path
 
 import numpy as np
 
-from langgap.bddl import Predicate
 from langgap.catalog.catalog import Catalog, load_catalog, registry_path
 from langgap.catalog.task import GateResult, Task
 from langgap.catalog.verdicts import record_verdicts
 from langgap.engine.evaluate import evaluate
 from langgap.engine.spec import ExecutionOptions, RunSpec
+from langgap.goals import Goal, plain_atoms
 from langgap.records import EpisodeRecord
 from langgap.stack import DEFAULT_STEPPING, physics_stack
 from langgap.store import RunStore
@@ -210,11 +210,12 @@ def claims_text(claims: list[Claim]) -> str:
     return "\n".join(lines)
 
 
-def goals_exclude(a: tuple[Predicate, ...], b: tuple[Predicate, ...]) -> bool:
+def goals_exclude(a: Goal, b: Goal) -> bool:
     """True when both goals place the same object at different targets (so they cannot hold together)."""
-    if len(a) != 1 or len(b) != 1:
+    a_atoms, b_atoms = plain_atoms(a) or (), plain_atoms(b) or ()
+    if len(a_atoms) != 1 or len(b_atoms) != 1:
         return False
-    (p,), (q,) = a, b
+    (p,), (q,) = a_atoms, b_atoms
     placements = ("On", "In")
     return p.name in placements and q.name in placements and p.args[0] == q.args[0] and p.args[1] != q.args[1]
 

@@ -49,6 +49,24 @@ def test_classify(task, kind, success, reached, outcome):
     assert classify(task, kind, SOURCE, success, reached) is outcome
 
 
+ORDERED = "goal/s0/first-open-cabinet-top-drawer-then-black-bowl-on-plate"
+
+
+@pytest.mark.parametrize(
+    ("success", "reached", "wrong_order", "outcome"),
+    [
+        (True, {ORDERED: 90, SOURCE: 40}, False, Outcome.SUCCESS),
+        # both sub-goals done, the source's first: right goals, wrong order (named before the source task)
+        (False, {SOURCE: 40}, True, Outcome.WRONG_ORDER),
+        # only the source's sub-goal done: the source task
+        (False, {SOURCE: 40}, False, Outcome.DID_SOURCE_TASK),
+        (False, {}, False, Outcome.NO_GOAL_REACHED),
+    ],
+)
+def test_classify_an_ordered_task(success, reached, wrong_order, outcome):
+    assert classify(ORDERED, "extended", SOURCE, success, reached, wrong_order=wrong_order) is outcome
+
+
 def _record(**changes) -> EpisodeRecord:
     base = dict(
         task_id=TASK,
@@ -81,7 +99,7 @@ def test_achieved_is_the_own_task_else_the_earliest_goal_then_name():
 
 def test_the_outcome_names_are_the_stored_strings():
     assert [o.value for o in Outcome] == [
-        "success", "did_source_task", "did_other_task", "no_goal_reached", "policy_error", "gap"
+        "success", "wrong_order", "did_source_task", "did_other_task", "no_goal_reached", "policy_error", "gap"
     ]  # fmt: skip
     assert Outcome.GAP not in JUDGED_OUTCOMES and len(JUDGED_OUTCOMES) == len(Outcome) - 1
     assert [s.value for s in Status] == ["done", "gap"]

@@ -42,7 +42,14 @@ def test_what_the_policy_did_instead(summary):
     assert [o.group for o in blind.outcomes] == ["change_object", "change_target", "extended", "original"]
     vla_shares = {o.group: o.shares for o in vla.outcomes}
     assert vla_shares["change_target"] == pytest.approx(
-        {"success": 0.75, "did_source_task": 0, "did_other_task": 0, "no_goal_reached": 0.25, "policy_error": 0}
+        {
+            "success": 0.75,
+            "wrong_order": 0,
+            "did_source_task": 0,
+            "did_other_task": 0,
+            "no_goal_reached": 0.25,
+            "policy_error": 0,
+        }  # fmt: skip
     )
 
 

@@ -17,11 +17,11 @@ from pathlib import Path
 
 import yaml
 
-from langgap.bddl import Predicate
 from langgap.catalog.naming import SUITE_SHORT
 from langgap.catalog.task import DIMENSIONS, KINDS, SPLITS, GateResult, Task
 from langgap.catalog.verdicts import read_verdicts
 from langgap.errors import BddlError, CatalogError, UnknownTaskError
+from langgap.goals import goal_from_strings
 
 DEFAULT_CATALOG = "langgap99"
 _KEYWORDS_HELP = (
@@ -156,7 +156,7 @@ def _task_from_entry(
             source=source_id,
             scene_task=scene["libero_task"],
             scene_index=int(scene["libero_index"]),
-            goal=tuple(Predicate.parse(g) for g in entry["goal"]),
+            goal=goal_from_strings(entry["goal"]),
             obj_of_interest=tuple(entry["obj_of_interest"]),
             instructions=dict(entry["instructions"]),
             max_steps=int(entry.get("max_steps", defaults["max_steps"][suite])),

@@ -19,6 +19,7 @@ from langgap import stack
 from langgap.bddl import BddlProblem, parse_bddl, rewrite_task_sections, strip_task_sections
 from langgap.catalog.task import Task
 from langgap.errors import BddlError
+from langgap.goals import atoms, conjunction
 
 
 def cache_dir() -> Path:
@@ -66,12 +67,14 @@ def task_bddl_text(task: Task) -> str:
     source_text = _read_text(scene_bddl_path(task))
     if task.kind == "original":
         shipped = parse_bddl(source_text, source=str(scene_bddl_path(task)))
-        if shipped.goal != task.goal:
+        if conjunction(shipped.goal) != task.goal:
             raise BddlError(f"task {task.id}: registry goal {task.goal_strings} differs from LIBERO's BDDL")
         return source_text
     try:
+        # Atoms only the goal language reads (an `Or`'s other parts, a `Not`) must name the scene's things too.
+        parse_bddl(source_text).check_goal(atoms(task.goal))
         return rewrite_task_sections(
-            source_text, language=task.instruction("paper"), obj_of_interest=task.obj_of_interest, goal=task.goal
+            source_text, language=task.instruction("paper"), obj_of_interest=task.obj_of_interest, goal=task.bddl_goal
         )
     except BddlError as exc:
         raise BddlError(f"task {task.id}: {exc}") from None

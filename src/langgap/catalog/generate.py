@@ -1,4 +1,5 @@
-"""The `full` catalog: every candidate same-scene task of LIBERO's suites, generated from their BDDL.
+"""The generated catalogs. `full`: every candidate same-scene task of LIBERO's suites, from their BDDL
+(`langgap-beyond`, the dimensions beyond the paper's, is generated in `beyond`).
 
 For each original task (the sources: LangGap-99's 40 originals), every one-predicate goal its scene
 affords (`candidates`) becomes a task on the source's scene and init states, with an id from
@@ -24,15 +25,25 @@ from langgap.catalog.naming import SUITE_SHORT, task_id
 from langgap.catalog.registry_writer import registry_text
 from langgap.catalog.task import DIMENSIONS, INSTRUCTION_STYLES, Task
 from langgap.errors import CatalogError
+from langgap.goals import conjunction
 from langgap.stack import SUITES
 
 FULL_CATALOG = "full"
 FULL_DESCRIPTION = "Every candidate same-scene task of LIBERO's scenes, generated from their BDDL (langgap generate)."
 
 
-def default_registry_path() -> Path:
-    """Where the shipped `full` registry lives inside the package."""
-    return Path(str(resources.files("langgap.catalog") / "registry" / f"{FULL_CATALOG}.yaml"))
+BEYOND_CATALOG = "langgap-beyond"
+BEYOND_DESCRIPTION = (
+    "LIBERO's 40 originals, each with tasks beyond the paper's dimensions on its scene and init states: "
+    "ordering, negation, paraphrase and attribute reference (langgap generate --catalog langgap-beyond)."
+)
+# The catalogs `langgap generate` writes, with their descriptions.
+GENERATED = {FULL_CATALOG: FULL_DESCRIPTION, BEYOND_CATALOG: BEYOND_DESCRIPTION}
+
+
+def default_registry_path(catalog: str = FULL_CATALOG) -> Path:
+    """Where the shipped registry of generated catalog `catalog` lives inside the package."""
+    return Path(str(resources.files("langgap.catalog") / "registry" / f"{catalog}.yaml"))
 
 
 def resolve_suites(names: Iterable[str]) -> list[str]:
@@ -47,24 +58,28 @@ def resolve_suites(names: Iterable[str]) -> list[str]:
     return [s for s in SUITES if s in wanted]
 
 
-def generate_tasks(suites: Iterable[str] = SUITES) -> list[Task]:
-    """Every candidate task of `suites`, originals first within each scene; deterministic."""
+def source_tasks(suites: Iterable[str] = SUITES) -> list[Task]:
+    """The originals of LangGap-99 in `suites` (the sources of generated tasks), in suite and scene order."""
     suites = resolve_suites(suites)
     paper = load_catalog(DEFAULT_CATALOG)
-    published = {(t.suite, t.scene_task, t.goal): t for t in paper if t.kind == "extended"}
-    sources = sorted(
+    return sorted(
         (t for t in paper if t.kind == "original" and t.suite in suites),
         key=lambda t: (suites.index(t.suite), t.scene_index),
     )
-    return [task for source in sources for task in _scene_tasks(source, published)]
+
+
+def generate_tasks(suites: Iterable[str] = SUITES) -> list[Task]:
+    """Every candidate task of `suites`, originals first within each scene; deterministic."""
+    published = {(t.suite, t.scene_task, t.goal): t for t in load_catalog(DEFAULT_CATALOG) if t.kind == "extended"}
+    return [task for source in source_tasks(suites) for task in _scene_tasks(source, published)]
 
 
 def _scene_tasks(source: Task, published: dict[tuple, Task]) -> list[Task]:
     """The source itself, then its scene's extended candidates by dimension and id."""
     scene = files.scene_problem(source)
     extended = []
-    for goal in candidate_goals(scene, source.goal):
-        if (goal,) == source.goal:
+    for goal in candidate_goals(scene, source.bddl_goal):
+        if (goal,) == source.bddl_goal:
             continue
         task = _extended_task(source, (goal,), scene)
         paper_task = published.get((task.suite, task.scene_task, task.goal))
@@ -79,12 +94,12 @@ def _extended_task(source: Task, goal: tuple[Predicate, ...], scene: BddlProblem
         catalog=FULL_CATALOG,
         suite=source.suite,
         kind="extended",
-        dimension=dimension(goal[0], source.goal, scene),
+        dimension=dimension(goal[0], source.bddl_goal, scene),
         split="heldout",
         source=source.id,
         scene_task=source.scene_task,
         scene_index=source.scene_index,
-        goal=goal,
+        goal=conjunction(goal),
         obj_of_interest=obj_of_interest(goal, scene),
         instructions={style: phrasing.instruction(style, source.suite, goal, scene) for style in INSTRUCTION_STYLES},
         max_steps=source.max_steps,
@@ -107,12 +122,12 @@ def _as_published(task: Task, paper_task: Task) -> Task:
     )
 
 
-def write_registry(tasks: list[Task], path: str | Path) -> Path:
-    """Write `tasks` as the `full` registry YAML at `path` (parent folders are created)."""
+def write_registry(tasks: list[Task], path: str | Path, catalog: str = FULL_CATALOG) -> Path:
+    """Write `tasks` as the registry YAML of generated catalog `catalog` at `path` (parent folders are created)."""
     path = Path(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(registry_text(FULL_CATALOG, FULL_DESCRIPTION, tasks), encoding="utf-8")
+        path.write_text(registry_text(catalog, GENERATED[catalog], tasks), encoding="utf-8")
     except OSError as exc:
         raise CatalogError(f"cannot write registry {path}: {exc.strerror}") from None
     return path

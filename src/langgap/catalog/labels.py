@@ -2,19 +2,25 @@
 
 from __future__ import annotations
 
-from langgap.catalog.task import DIMENSIONS, SPLITS
+from langgap.catalog.task import BEYOND_DIMENSIONS, PAPER_DIMENSIONS, SPLITS
 
 # The paper's Table VI order (not LIBERO's suite order).
 SUITE_ORDER = ("libero_spatial", "libero_goal", "libero_object", "libero_10")
 SUITE_LABEL = {"libero_spatial": "Spatial", "libero_goal": "Goal", "libero_object": "Object", "libero_10": "Libero-10"}
 
-EXTENDED_DIMENSIONS = tuple(d for d in DIMENSIONS if d != "original")
+# The paper's dimensions (Table VII, always shown); the `langgap-beyond` ones appear where a run has them.
+EXTENDED_DIMENSIONS = PAPER_DIMENSIONS
+ALL_EXTENDED_DIMENSIONS = (*PAPER_DIMENSIONS, *BEYOND_DIMENSIONS)
 DIMENSION_LABEL = {
     "original": "Original",
     "change_object": "Change Object",
     "change_target": "Change Target",
     "spatial_description": "Spatial Description",
     "drawer_action": "Drawer Action",
+    "ordering": "Ordering",
+    "negation": "Negation",
+    "paraphrase": "Paraphrase",
+    "attribute_reference": "Attribute Reference",
 }
 
 SPLIT_ORDER = SPLITS

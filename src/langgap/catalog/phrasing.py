@@ -165,13 +165,28 @@ def _target(suite: str, style: str, target: str, scene: BddlProblem) -> str:
     return phrase.format(noun=noun, level=level)
 
 
+def articulated_noun(entity: str, scene: BddlProblem) -> str:
+    """What an articulated part is called: `stove`, `microwave`, `top drawer of the cabinet`."""
+    if entity in scene.fixtures:
+        return _FIXTURE_NOUNS.get(scene.fixtures[entity], scene.fixtures[entity].replace("_", " "))
+    return f"{_drawer_level(entity, scene)} drawer of the cabinet"
+
+
 def _articulation(predicate: Predicate, scene: BddlProblem) -> str:
     (entity,) = predicate.args
-    if entity in scene.fixtures:
-        noun = _FIXTURE_NOUNS.get(scene.fixtures[entity], scene.fixtures[entity].replace("_", " "))
+    return _ARTICULATION[predicate.name].format(noun=articulated_noun(entity, scene))
+
+
+def placement_parts(style: str, suite: str, predicate: Predicate, scene: BddlProblem) -> tuple[str, str]:
+    """(what, where) of a pick-and-place goal as `style` says them in `suite`: the placed object's noun
+    phrase and its destination (`the black bowl next to the plate`, `on the plate`)."""
+    obj, target = predicate.args
+    kind = affordances.receiver_kind(target, scene) or ""
+    if suite == "libero_goal" and kind in _DRAWER_TARGETS:  # libero_goal says "open the drawer and put X inside"
+        where = _DRAWER_TARGETS[kind].format(level=_drawer_level(target, scene))
     else:
-        noun = f"{_drawer_level(entity, scene)} drawer of the cabinet"
-    return _ARTICULATION[predicate.name].format(noun=noun)
+        where = _target(suite, style, target, scene)
+    return _subject(suite, obj, scene, style), where
 
 
 def _placement(suite: str, style: str, predicate: Predicate, scene: BddlProblem) -> str:

@@ -6,9 +6,13 @@ from dataclasses import asdict, dataclass, field
 
 from langgap.bddl import Predicate
 from langgap.errors import CatalogError
+from langgap.goals import Goal, goal_strings, witness
 
 KINDS = ("original", "extended")
-DIMENSIONS = ("original", "change_object", "change_target", "spatial_description", "drawer_action")
+# The paper's four dimensions, then the four of the `langgap-beyond` catalog (`catalog/beyond.py`).
+PAPER_DIMENSIONS = ("change_object", "change_target", "spatial_description", "drawer_action")
+BEYOND_DIMENSIONS = ("ordering", "negation", "paraphrase", "attribute_reference")
+DIMENSIONS = ("original", *PAPER_DIMENSIONS, *BEYOND_DIMENSIONS)
 SPLITS = ("original", "train", "heldout")
 INSTRUCTION_STYLES = ("libero", "paper")
 DEFAULT_STYLE = "libero"
@@ -77,7 +81,8 @@ class Task:
 
     `scene_task` is the LIBERO task (suite + name + index) whose BDDL scene and 50 fixed init
     states the task uses; for an original task that is the task itself, for an extended task its
-    `source`.
+    `source`. `goal` is an expression of `langgap.goals` (for LIBERO's and the paper's tasks, a
+    conjunction of atoms); `bddl_goal` is the conjunction its BDDL file states.
     """
 
     id: str
@@ -89,7 +94,7 @@ class Task:
     source: str
     scene_task: str
     scene_index: int
-    goal: tuple[Predicate, ...]
+    goal: Goal
     obj_of_interest: tuple[str, ...]
     instructions: dict[str, str] = field(hash=False, compare=False)
     max_steps: int = 0
@@ -126,7 +131,14 @@ class Task:
 
     @property
     def goal_strings(self) -> list[str]:
-        return [str(p) for p in self.goal]
+        """The goal as the registry writes it (a list of expressions, read as their conjunction)."""
+        return goal_strings(self.goal)
+
+    @property
+    def bddl_goal(self) -> tuple[Predicate, ...]:
+        """The conjunction of atoms the task's BDDL file states: the goal itself for a LIBERO-style goal,
+        else a final state that satisfies it (LIBERO parses no `Or`, `Not` or order; LangGap judges the goal)."""
+        return witness(self.goal)
 
     def to_dict(self, style: str = DEFAULT_STYLE) -> dict:
         """The JSON form printed by `langgap tasks list --json`."""

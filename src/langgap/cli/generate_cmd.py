@@ -1,16 +1,22 @@
-"""`langgap generate`: enumerate every same-scene task into the `full` registry and print its counts."""
+"""`langgap generate`: enumerate same-scene tasks into a generated registry (`full`, or `langgap-beyond` with
+`--catalog`) and print its counts."""
 
 from __future__ import annotations
 
 from collections import Counter
 
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
-from langgap.catalog.generate import default_registry_path, generate_tasks, write_registry
+from langgap.catalog.generate import (
+    BEYOND_CATALOG,
+    FULL_CATALOG,
+    GENERATED,
+    default_registry_path,
+    generate_tasks,
+    write_registry,
+)
 from langgap.catalog.task import DIMENSIONS, Task
 from langgap.cli.validate_cmd import add_gate_options, run_gate
 from langgap.stack import SUITES
-
-_EXTENDED_DIMENSIONS = [d for d in DIMENSIONS if d != "original"]
 
 
 def add_parser(subparsers) -> None:
@@ -18,7 +24,13 @@ def add_parser(subparsers) -> None:
         "generate", help="enumerate every candidate same-scene task of LIBERO's scenes into a registry"
     )
     parser.add_argument(
-        "--out", metavar="FILE", help="registry file to write (default: the package's catalog/registry/full.yaml)"
+        "--catalog",
+        choices=list(GENERATED),
+        default=FULL_CATALOG,
+        help="which catalog to generate: the full task space (default), or the dimensions beyond the paper's",
+    )
+    parser.add_argument(
+        "--out", metavar="FILE", help="registry file to write (default: the package's catalog/registry/CATALOG.yaml)"
     )
     parser.add_argument(
         "--suites",
@@ -44,16 +56,23 @@ def summary_lines(tasks: list[Task]) -> list[str]:
     for task in tasks:
         scenes.setdefault(task.source, Counter())[task.dimension] += 1
     width = max(len(s) for s in scenes)
-    columns = ["original", *_EXTENDED_DIMENSIONS]
+    present = {t.dimension for t in tasks}
+    columns = [d for d in DIMENSIONS if d in present]
     lines = [f"{'scene (source task)':<{width}}  " + "  ".join(columns)]
     for scene, counts in scenes.items():
         lines.append(f"{scene:<{width}}  " + "  ".join(f"{counts[c]:>{len(c)}}" for c in columns))
+    suites: dict[str, Counter] = {}
+    for task in tasks:
+        suites.setdefault(task.suite, Counter())[task.dimension] += 1
+    for suite, counts in suites.items():
+        lines.append(f"{suite:<{width}}  " + "  ".join(f"{counts[c]:>{len(c)}}" for c in columns))
     total = Counter(t.dimension for t in tasks)
     lines.append(f"{'total':<{width}}  " + "  ".join(f"{total[c]:>{len(c)}}" for c in columns))
     extended = len(tasks) - total["original"]
     lines.append(f"{len(tasks)} tasks: {total['original']} original, {extended} extended")
 
-    suites = {t.suite for t in tasks}
+    if not any(t.in_langgap99 and t.kind == "extended" for t in tasks):
+        return lines  # a catalog built on the originals only (langgap-beyond)
     paper = [t for t in load_catalog(DEFAULT_CATALOG) if t.suite in suites]
     found = {t.id for t in tasks if t.in_langgap99}
     missing = [t.id for t in paper if t.id not in found]
@@ -66,8 +85,13 @@ def summary_lines(tasks: list[Task]) -> list[str]:
 
 
 def run(args) -> int:
-    tasks = generate_tasks(args.suites)
-    path = write_registry(tasks, args.out or default_registry_path())
+    if args.catalog == BEYOND_CATALOG:
+        from langgap.catalog.beyond import generate_beyond
+
+        tasks = generate_beyond(args.suites)
+    else:
+        tasks = generate_tasks(args.suites)
+    path = write_registry(tasks, args.out or default_registry_path(args.catalog), args.catalog)
     print("\n".join(summary_lines(tasks)))
     print(f"wrote {path}")
     if args.gate_inits:

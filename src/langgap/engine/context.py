@@ -28,7 +28,8 @@ def task_context(
         privileged=PrivilegedContext(
             task_id=task.id,
             condition=condition,
-            goal=tuple(task.goal_strings),
-            source_goal=tuple(catalog.get(task.source).goal_strings),
+            goal=tuple(str(p) for p in task.bddl_goal),
+            source_goal=tuple(str(p) for p in catalog.get(task.source).bddl_goal),
+            goal_expression=str(task.goal),
         ),
     )

@@ -22,15 +22,16 @@ from langgap.catalog.task import Task
 from langgap.engine.context import task_context
 from langgap.engine.plan import PlannedEpisode
 from langgap.engine.rollout import StepHook, run_episode
+from langgap.goals import Goal
 from langgap.policies.base import Policy, PolicyOutputError
 from langgap.records import EpisodeRecord, FailureKind, Outcome, Status, classify
 from langgap.sim.env import SETTLE_STEPS, TaskEnv
 from langgap.version import code_version
 
 
-def scene_goals(task: Task, catalog: Catalog) -> dict[str, tuple[tuple[str, ...], ...]]:
-    """The goals (LIBERO form) of every task in `task`'s scene, keyed by task id."""
-    return {mate.id: tuple(p.as_libero() for p in mate.goal) for mate in catalog.scene_mates(task)}
+def scene_goals(task: Task, catalog: Catalog) -> dict[str, Goal]:
+    """The goals of every task in `task`'s scene, keyed by task id."""
+    return {mate.id: mate.goal for mate in catalog.scene_mates(task)}
 
 
 def _record(planned: PlannedEpisode, task: Task, **values) -> EpisodeRecord:
@@ -116,7 +117,9 @@ def execute_episode(
         task,
         status=Status.DONE,
         success=result.success,
-        outcome=classify(task.id, task.kind, task.source, result.success, result.reached),
+        outcome=classify(
+            task.id, task.kind, task.source, result.success, result.reached, wrong_order=result.wrong_order
+        ),
         failure_kind=None if result.success else FailureKind.POLICY,
         error=None,
         steps=result.steps,

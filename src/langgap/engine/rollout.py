@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from langgap.goals import Goal, GoalProgress, is_ordered, unordered
 from langgap.policies.base import Policy, TaskContext, as_action_chunk
 from langgap.sim.env import SETTLE_STEPS, EnvOptions, TaskEnv
 
@@ -23,6 +25,7 @@ class RolloutResult:
     reached: dict[str, int] = field(default_factory=dict)  # watched goal -> first step it became true
     at_start: list[str] = field(default_factory=list)  # watched goals already true after settling
     at_end: list[str] = field(default_factory=list)  # watched goals true when the episode ended
+    wrong_order: bool = False  # an ordered goal's parts all held at some step, but not in the order asked
 
 
 def env_options_for(policy: Policy, **overrides) -> EnvOptions:
@@ -38,7 +41,7 @@ def run_episode(
     policy: Policy,
     context: TaskContext,
     *,
-    watch: Mapping[str, tuple[tuple[str, ...], ...]] | None = None,
+    watch: Mapping[str, Goal] | None = None,
     on_step: StepHook | None = None,
     on_start: Callable[[TaskEnv], None] | None = None,
     settle_steps: int = SETTLE_STEPS,
@@ -46,10 +49,12 @@ def run_episode(
 ) -> RolloutResult:
     """Run one episode of `policy` on `env` and return its outcome.
 
-    `watch` maps names to goals (LIBERO-form predicate tuples) evaluated after every step; the
-    first step at which each becomes true is returned in `reached` (a goal already true after
-    settling is reported in `at_start` instead, never as reached). The episode stops at the first step
-    the task's own goal holds (LIBERO's success criterion) or at the task's step limit.
+    `watch` maps names to goals (`langgap.goals` expressions) evaluated after every step, each with its
+    own history (ordered goals); the first step at which each becomes true is returned in `reached` (a
+    goal already true after settling, order ignored, is reported in `at_start` instead, never as
+    reached). The episode stops at the first step the task's own goal holds (LIBERO's success
+    criterion) or at the task's step limit. For an ordered task goal, `wrong_order` says whether its
+    parts all held at some step without the goal being met (right goals, wrong order).
     `on_start` sees the environment after settling, before the first action. `sampled_start` starts
     from the placement LIBERO samples with the context's seed instead of init state `init_index`
     (demonstrations; see `TaskEnv.reset`).
@@ -63,7 +68,11 @@ def run_episode(
         on_start(env)
     watch = dict(watch or {})
     at_start = [name for name, goal in watch.items() if env.goal_holds(goal)]
-    pending = {name: goal for name, goal in watch.items() if name not in at_start}
+    # Each watched goal keeps its own history from step 0; the task's goal unordered tells a wrong order.
+    pending = {name: GoalProgress(goal) for name, goal in watch.items() if name not in at_start}
+    ordered = GoalProgress(unordered(env.task.goal)) if is_ordered(env.task.goal) else None
+    for progress in [*pending.values(), *([ordered] if ordered else [])]:
+        progress.observe(0, env.predicate_holds)
     reached: dict[str, int] = {}
     queue: list[np.ndarray] = []
     calls = 0
@@ -75,9 +84,12 @@ def run_episode(
             queue = list(chunk[: spec.replan])
         action = queue.pop(0)
         success = env.step(action)
-        for name, goal in pending.items():
-            if name not in reached and env.goal_holds(goal):
+        truth = functools.cache(env.predicate_holds)  # scene goals share atoms: each is read once a step
+        for name, progress in pending.items():
+            if progress.observe(env.steps, truth) and name not in reached:
                 reached[name] = env.steps
+        if ordered is not None:
+            ordered.observe(env.steps, truth)
         if on_step is not None:
             on_step(env, env.steps, action)
         if success:
@@ -91,4 +103,5 @@ def run_episode(
         reached=reached,
         at_start=at_start,
         at_end=at_end,
+        wrong_order=not success and ordered is not None and ordered.first_held is not None,
     )

@@ -13,9 +13,9 @@ import shutil
 import urllib.parse
 from pathlib import Path
 
-from langgap.catalog.labels import DIMENSION_LABEL, EXTENDED_DIMENSIONS
+from langgap.catalog.labels import DIMENSION_LABEL
 from langgap.report.published import Published
-from langgap.report.summary import Summary
+from langgap.report.summary import Summary, shown_dimensions
 from langgap.report.tables import Table, full_report, notes, selection_text
 
 MEDIA_DIR = "media"
@@ -151,7 +151,7 @@ _COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b")
 
 def dimension_chart(summary: Summary) -> str:
     """Success per dimension (and on the originals) with 95 % intervals, runs side by side, as inline SVG."""
-    groups = ["original", *EXTENDED_DIMENSIONS]
+    groups = ["original", *shown_dimensions(summary.runs)]
     width, height, left, bottom = 760, 260, 40, 40
     slot = (width - left) / len(groups)
     bar = slot * 0.8 / max(1, len(summary.runs))

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from langgap.catalog.labels import DIMENSION_LABEL, EXTENDED_DIMENSIONS
-from langgap.report.summary import RunResults, Summary
+from langgap.catalog.labels import DIMENSION_LABEL
+from langgap.report.summary import RunResults, Summary, shown_dimensions
 
 
 def _pyplot():
@@ -20,7 +20,7 @@ def _pyplot():
 def dimension_plot(summary: Summary, out: Path) -> Path:
     """Success per dimension (and on the originals) with 95 % intervals, runs side by side."""
     plt = _pyplot()
-    groups = ["original", *EXTENDED_DIMENSIONS]
+    groups = ["original", *shown_dimensions(summary.runs)]
     fig, ax = plt.subplots(figsize=(8, 4))
     runs = summary.runs
     width = 0.8 / max(1, len(runs))

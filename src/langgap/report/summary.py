@@ -13,8 +13,8 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
-from langgap.catalog.labels import EXTENDED_DIMENSIONS, SPLIT_ORDER, SUITE_ORDER
-from langgap.catalog.task import GateResult
+from langgap.catalog.labels import ALL_EXTENDED_DIMENSIONS, EXTENDED_DIMENSIONS, SPLIT_ORDER, SUITE_ORDER
+from langgap.catalog.task import BEYOND_DIMENSIONS, GateResult
 from langgap.engine.plan import repeat_of
 from langgap.errors import LangGapError
 from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Outcome, achieved
@@ -101,8 +101,8 @@ class TaskRow:
 
 
 # The order in which clips are shown: the failures that explain most first, successes last.
-CLIP_ORDER = (Outcome.DID_SOURCE_TASK, Outcome.DID_OTHER_TASK, Outcome.NO_GOAL_REACHED, Outcome.POLICY_ERROR,
-              Outcome.SUCCESS)  # fmt: skip
+CLIP_ORDER = (Outcome.DID_SOURCE_TASK, Outcome.WRONG_ORDER, Outcome.DID_OTHER_TASK, Outcome.NO_GOAL_REACHED,
+              Outcome.POLICY_ERROR, Outcome.SUCCESS)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -158,7 +158,7 @@ def spread(records: list[EpisodeRecord], run_seed: int) -> list[SpreadRow]:
     if len(repeats) < 2:
         return []
     groups = [("original", lambda r: r.kind == "original"), ("extended", lambda r: r.kind == "extended")]
-    groups += [(d, lambda r, d=d: r.kind == "extended" and r.dimension == d) for d in EXTENDED_DIMENSIONS]
+    groups += [(d, lambda r, d=d: r.kind == "extended" and r.dimension == d) for d in ALL_EXTENDED_DIMENSIONS]
     rows = []
     for name, member in groups:
         chosen = [r for r in records if member(r)]
@@ -214,6 +214,23 @@ def condition_tests(records: list[EpisodeRecord]) -> list[PairedTest]:
     return [t for t in tests if t is not None]
 
 
+# Dimensions whose tasks keep their source's goal and change only its words: paired against the source.
+REWORDED_DIMENSIONS = ("paraphrase", "attribute_reference")
+
+
+def wording_tests(records: list[EpisodeRecord]) -> list[PairedTest]:
+    """Each rewording (a paraphrase template, attribute reference) against its sources' original sentences,
+    episode by episode (same init state, seed and condition): the difference the words alone make."""
+    originals = {(r.task_id, r.init_index, r.seed, r.condition): r for r in records if r.kind == "original"}
+    variants: dict[str, dict[tuple, EpisodeRecord]] = defaultdict(dict)
+    for r in records:
+        if r.kind == "extended" and r.dimension in REWORDED_DIMENSIONS:
+            name = f"{r.dimension} ~{r.task_id.rsplit('~', 1)[-1]}"
+            variants[name][(r.source, r.init_index, r.seed, r.condition)] = r
+    tests = (paired(f"original vs {name}", originals, variants[name]) for name in sorted(variants))
+    return [t for t in tests if t is not None]
+
+
 def confusion(records: list[EpisodeRecord]) -> dict[str, dict[str, dict[str, int]]]:
     """Per scene: intended task -> achieved task -> judged episode count."""
     matrices: dict[str, dict[str, Counter]] = defaultdict(lambda: defaultdict(Counter))
@@ -247,6 +264,7 @@ class RunResults:
     outcomes: list[OutcomeRow]  # per dimension, all extended, original
     confusion: dict[str, dict[str, dict[str, int]]]
     conditions: list[PairedTest]
+    wording: list[PairedTest]  # rewordings against their sources' original sentences (`wording_tests`)
     card: dict[str, str]  # the protocol card (`CARD_ITEMS`)
     spread: list[SpreadRow]  # between-seed spread (runs with --repeats)
     clips: list[Clip]  # filmed episodes (`--video`)
@@ -266,7 +284,7 @@ def results(run: Run) -> RunResults:
     given = [r for r in run.records if r.condition == "given"]
     extended = [r for r in given if r.kind == "extended"]
     originals = [r for r in given if r.kind == "original"]
-    order = {d: i for i, d in enumerate(("original", *EXTENDED_DIMENSIONS))}
+    order = {d: i for i, d in enumerate(("original", *ALL_EXTENDED_DIMENSIONS))}
     info = {r.task_id: r for r in given}
     per_outcome: dict[str, Counter] = defaultdict(Counter)
     for r in given:
@@ -278,7 +296,7 @@ def results(run: Run) -> RunResults:
         for t in rates_by(given, lambda r: r.task_id, gates=gates)
     ]
     tasks.sort(key=lambda row: (order.get(row.dimension, len(order)), row.rate.group))
-    outcome_groups = [(d, [r for r in extended if r.dimension == d]) for d in EXTENDED_DIMENSIONS]
+    outcome_groups = [(d, [r for r in extended if r.dimension == d]) for d in ALL_EXTENDED_DIMENSIONS]
     outcome_groups += [("extended", extended), ("original", originals)]
     return RunResults(
         name=run.name,
@@ -288,7 +306,7 @@ def results(run: Run) -> RunResults:
         episodes=len(run.records),
         gaps=sum(not r.judged for r in run.records),
         by_source=[rate("original", originals, gates), rate("extended", extended, gates), rate("total", given, gates)],
-        by_dimension=rates_by(extended, lambda r: r.dimension, EXTENDED_DIMENSIONS, gates),
+        by_dimension=rates_by(extended, lambda r: r.dimension, ALL_EXTENDED_DIMENSIONS, gates),
         by_suite=rates_by(
             given, lambda r: f"{r.suite}/{r.kind}", [f"{s}/{k}" for s in SUITE_ORDER for k in KINDS], gates
         ),
@@ -297,11 +315,18 @@ def results(run: Run) -> RunResults:
         outcomes=[outcome_row(g, rs) for g, rs in outcome_groups if rs],
         confusion=confusion(given),
         conditions=condition_tests(run.records),
+        wording=wording_tests(given),
         card=protocol_card(run),
         spread=spread(given, int(run.spec.get("seed", 0))),
         clips=clips(run),
         capped={t.rate.group: why for t in tasks if (why := capped_because(t.rate, gates.get(t.rate.group)))},
     )
+
+
+def shown_dimensions(runs: list[RunResults]) -> list[str]:
+    """The paper's dimensions (always shown), then those beyond them that some run has episodes of."""
+    present = {r.group for run in runs for r in run.by_dimension if r.episodes}
+    return [*EXTENDED_DIMENSIONS, *(d for d in BEYOND_DIMENSIONS if d in present)]
 
 
 @dataclass
@@ -333,7 +358,7 @@ class Summary:
             "per_split": lambda run: run.by_split,
             "per_task": lambda run: [t.rate for t in run.tasks],
         }
-        for section in (*sections, "outcomes", "conditions", "spread", "videos"):
+        for section in (*sections, "outcomes", "conditions", "wording", "spread", "videos"):
             out[section] = []
         for run in self.runs:
             out["runs"].append(
@@ -354,6 +379,7 @@ class Summary:
                     out[section].append({"run": run.name, "id": data.pop("group"), **data})
             out["outcomes"] += [{"run": run.name, **o.as_dict()} for o in run.outcomes]
             out["conditions"] += [{"run": run.name, **t.as_dict()} for t in run.conditions]
+            out["wording"] += [{"run": run.name, **t.as_dict()} for t in run.wording]
             out["spread"] += [{"run": run.name, **row.as_dict()} for row in run.spread]
             out["videos"] += [{"run": run.name, **clip.as_dict()} for clip in run.clips]
             out["confusion"][run.name] = run.confusion

@@ -9,11 +9,12 @@ from langgap.records import JUDGED_OUTCOMES, Outcome
 from langgap.report.card import CARD_ITEMS
 from langgap.report.published import Published
 from langgap.report.stats import PairedTest, Rate
-from langgap.report.summary import RunResults, Summary, TaskRow
+from langgap.report.summary import RunResults, Summary, TaskRow, shown_dimensions
 
 SOURCE_LABEL = {"original": "Original (LIBERO)", "extended": "Extended (LangGap)", "total": "Total"}
 OUTCOME_LABEL = {
     Outcome.SUCCESS: "Success %",
+    Outcome.WRONG_ORDER: "Wrong order %",
     Outcome.DID_SOURCE_TASK: "Did source task %",
     Outcome.DID_OTHER_TASK: "Did other task %",
     Outcome.NO_GOAL_REACHED: "No goal %",
@@ -169,6 +170,20 @@ def dimension_table(summary: Summary, published: Published | None = None) -> Tab
     return Table("Table VII — extended tasks by dimension (success %, 95% CI, (tasks))", headers, rows)
 
 
+def beyond_table(summary: Summary) -> Table | None:
+    """Table VII's form for the dimensions beyond the paper's (ordering, negation, paraphrase, attribute
+    reference) that the runs have; None when they have none."""
+    beyond = shown_dimensions(summary.runs)[len(EXTENDED_DIMENSIONS) :]
+    if not beyond:
+        return None
+    rows = []
+    for run in summary.runs:
+        by_dim = {r.group: r for r in run.by_dimension}
+        rows.append([run.label, *(rate_cell(r) + f" ({r.tasks})" if (r := by_dim.get(d)) else "–" for d in beyond)])
+    headers = ["Method", *(DIMENSION_LABEL[d] for d in beyond)]
+    return Table("Beyond Table VII — new dimensions (success %, 95% CI, (tasks))", headers, rows)
+
+
 def _count_cell(successes: int, episodes: int) -> str:
     return f"{successes}/{episodes} ({pct(successes / episodes)}%)" if episodes else "–"
 
@@ -229,13 +244,16 @@ def spread_table(run: RunResults) -> Table | None:
 
 
 def outcome_table(run: RunResults) -> Table:
-    """What the policy did instead, per dimension (`did source task` is the default-task rate)."""
-    headers = ["Dimension", "Episodes", *(OUTCOME_LABEL[o] for o in JUDGED_OUTCOMES), "Gaps"]
+    """What the policy did instead, per dimension (`did source task` is the default-task rate). `wrong order`
+    is shown for runs with ordered tasks (or any episode in that outcome)."""
+    ordered = any(o.group == "ordering" or o.shares[Outcome.WRONG_ORDER] for o in run.outcomes)
+    shown = [o for o in JUDGED_OUTCOMES if o is not Outcome.WRONG_ORDER or ordered]
+    headers = ["Dimension", "Episodes", *(OUTCOME_LABEL[o] for o in shown), "Gaps"]
     rows = [
         [
             label(OUTCOME_GROUP_LABEL, o.group),
             str(o.episodes),
-            *(pct(o.shares[outcome]) for outcome in JUDGED_OUTCOMES),
+            *(pct(o.shares[outcome]) for outcome in shown),
             str(o.gaps),
         ]
         for o in run.outcomes
@@ -307,6 +325,19 @@ def _paired_cells(t: PairedTest) -> list[str]:
     return [t.name, str(t.pairs), pct(d["rate_a"]), pct(d["rate_b"]), str(t.only_a), str(t.only_b), f"{t.p_value:.3g}"]
 
 
+def wording_table(run: RunResults) -> Table | None:
+    """Paraphrases and attribute references against their sources' original sentences, episode by episode."""
+    if not run.wording:
+        return None
+    rows = [[*_paired_cells(t), f"{100 * (t.successes_b - t.successes_a) / t.pairs:+.1f}"] for t in run.wording]
+    headers = ["Comparison", "Pairs", "Original %", "Reworded %", "Only original", "Only reworded", "p"]
+    return Table(
+        f"Same goal, other words, paired episode by episode (McNemar) — {run.label}",
+        [*headers, "Difference (points)"],
+        rows,
+    )
+
+
 def condition_table(run: RunResults) -> Table | None:
     """Language conditions against `given`, episode by episode."""
     if not run.conditions:
@@ -374,9 +405,13 @@ def full_report(summary: Summary, published: Published | None = None) -> list[Ta
             tables.append(seeds)
         if (conditions := condition_table(run)) is not None:
             tables.append(conditions)
+        if (wording := wording_table(run)) is not None:
+            tables.append(wording)
     if published:
         tables.append(published_diagnostic_table(published))
     tables += [suite_table(summary, published), dimension_table(summary, published)]
+    if (beyond := beyond_table(summary)) is not None:
+        tables.append(beyond)
     if (comparison := comparison_table(summary)) is not None:
         tables.append(comparison)
     if published:
@@ -389,10 +424,14 @@ def full_report(summary: Summary, published: Published | None = None) -> list[Ta
 def diagnosis(summary: Summary, published: Published | None = None) -> list[Table]:
     """The short diagnosis: success by dimension (runs side by side) and what each policy did instead."""
     tables = [protocol_table(summary), dimension_table(summary, published)]
+    if (beyond := beyond_table(summary)) is not None:
+        tables.append(beyond)
     if (comparison := comparison_table(summary)) is not None and summary.refused:
         tables.append(comparison)
     for run in summary.runs:
         tables.append(outcome_table(run))
         if (conditions := condition_table(run)) is not None:
             tables.append(conditions)
+        if (wording := wording_table(run)) is not None:
+            tables.append(wording)
     return tables

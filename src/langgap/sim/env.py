@@ -27,6 +27,7 @@ from langgap.bddl import Predicate
 from langgap.catalog import files
 from langgap.catalog.task import Task
 from langgap.errors import InitStateError, SimulationError
+from langgap.goals import Goal, GoalProgress, holds_now
 from langgap.stack import DEFAULT_STEPPING, STEPPINGS
 
 CAMERAS = ("agentview", "robot0_eye_in_hand")
@@ -108,7 +109,8 @@ class TaskEnv:
         self.t0_hash: str | None = None
         self.steps = 0
         self._raw_obs: dict | None = None
-        self._goal = tuple(p.as_libero() for p in task.goal)
+        self._progress = GoalProgress(task.goal)
+        self._holds = False  # the task's goal, as of the last observed step
         bddl = files.task_bddl_path(task)
         configure_rendering()
         # Imported here: robosuite and MuJoCo load only when an environment is built (after the GL choice).
@@ -151,7 +153,8 @@ class TaskEnv:
         if not self.can_switch_to(task):
             raise SimulationError(f"cannot switch {self.task.id} to {task.id}: not the same scene and init states")
         self.task = task
-        self._goal = tuple(p.as_libero() for p in task.goal)
+        self._progress = GoalProgress(task.goal)
+        self._holds = False
 
     def __enter__(self) -> TaskEnv:
         return self
@@ -218,6 +221,7 @@ class TaskEnv:
         self._forget_solver_history()
         self.t0_hash = self.state_hash()
         self.steps = 0
+        self._restart_goal()
         self._reapply_render_flags()
         return self.observe()
 
@@ -246,6 +250,13 @@ class TaskEnv:
         for _ in range(steps):
             self._raw_obs, _, _, _ = self._env.step(SETTLE_ACTION)
         self._forget_solver_history()
+        self._restart_goal()
+
+    def _restart_goal(self) -> None:
+        # The goal's history (when each part of an ordered goal first held) starts at the state the
+        # policy first sees: step 0, after settling (or a restored state).
+        self._progress = GoalProgress(self.task.goal)
+        self._holds = self._progress.observe(0, self.predicate_holds)
 
     def _forget_solver_history(self) -> None:
         # MuJoCo warm-starts its constraint solver from the previous step's accelerations, which are not
@@ -262,7 +273,8 @@ class TaskEnv:
             raise SimulationError(f"action must be 7 finite numbers, got shape {action.shape}")
         self._raw_obs, _, _, _ = self._env.step(action)
         self.steps += 1
-        return self.success()
+        self._holds = self._progress.observe(self.steps, self.predicate_holds)
+        return self._holds
 
     @property
     def truncated(self) -> bool:
@@ -270,14 +282,16 @@ class TaskEnv:
         return self.steps >= self.task.max_steps
 
     def success(self) -> bool:
-        """Whether this task's goal holds in the current state."""
-        return self.goal_holds(self._goal)
+        """Whether this task's goal holds now, as judged over the episode so far (an ordered goal needs its
+        parts to have held in order since step 0)."""
+        return self._holds
 
-    def goal_holds(self, goal: tuple[tuple[str, ...], ...]) -> bool:
-        """Evaluate a conjunction of LIBERO-form predicates (`('on', a, b)`) on the current state."""
-        return all(self._inner._eval_predicate(p) for p in goal)
+    def goal_holds(self, goal: Goal) -> bool:
+        """Whether `goal` holds in the current state, order ignored (`langgap.goals.holds_now`)."""
+        return holds_now(goal, self.predicate_holds)
 
     def predicate_holds(self, predicate: Predicate) -> bool:
+        """Whether one atom holds in the current state (LIBERO's predicate)."""
         return bool(self._inner._eval_predicate(predicate.as_libero()))
 
     # -- observations ------------------------------------------------------------------------
@@ -332,6 +346,7 @@ class TaskEnv:
         """Restore a flattened state recorded from this scene (e.g. to replay a demonstration)."""
         self._raw_obs = self._env.set_init_state(np.asarray(state, dtype=np.float64))
         self._forget_solver_history()
+        self._restart_goal()
 
     def state_hash(self) -> str:
         """SHA-256 over the flattened state and the fixture placements (model body poses)."""

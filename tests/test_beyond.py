@@ -1,0 +1,145 @@
+"""The `langgap-beyond` catalog: ordering, negation, paraphrase and attribute reference on LIBERO's scenes.
+
+The catalog tests read LIBERO's BDDL files only; the simulation tests (slow) run one scene's tasks
+with the scripted references and check what is recorded.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+
+import pytest
+
+from langgap.bddl import parse_bddl, strip_task_sections
+from langgap.catalog import files
+from langgap.catalog.beyond import generate_beyond
+from langgap.catalog.catalog import load_catalog
+from langgap.catalog.generate import BEYOND_CATALOG, GENERATED, default_registry_path
+from langgap.catalog.registry_writer import registry_text
+from langgap.catalog.task import BEYOND_DIMENSIONS
+from langgap.goals import Then, holds_now, plain_atoms, witness
+
+# The counts the README gives, per suite and dimension.
+COUNTS = {
+    "libero_spatial": {"original": 10, "ordering": 76, "negation": 20, "paraphrase": 40},
+    "libero_object": {"original": 10, "negation": 10, "paraphrase": 40, "attribute_reference": 10},
+    "libero_goal": {"original": 10, "ordering": 90, "negation": 13, "paraphrase": 38, "attribute_reference": 7},
+    "libero_10": {"original": 10, "ordering": 10, "negation": 1, "paraphrase": 13, "attribute_reference": 1},
+}
+
+
+@pytest.fixture(scope="module")
+def beyond():
+    return load_catalog(BEYOND_CATALOG)
+
+
+def test_the_shipped_registry_is_current_and_generation_deterministic(beyond):
+    tasks = generate_beyond()
+    text = registry_text(BEYOND_CATALOG, GENERATED[BEYOND_CATALOG], tasks)
+    assert text == registry_text(BEYOND_CATALOG, GENERATED[BEYOND_CATALOG], generate_beyond())
+    assert default_registry_path(BEYOND_CATALOG).read_text() == text, "run `langgap generate --catalog langgap-beyond`"
+    assert [t.id for t in beyond] == [t.id for t in tasks]
+
+
+def test_counts_per_suite_and_dimension(beyond):
+    counts: dict[str, Counter] = {}
+    for task in beyond:
+        counts.setdefault(task.suite, Counter())[task.dimension] += 1
+    assert {suite: dict(c) for suite, c in counts.items()} == COUNTS
+
+
+def test_every_task_is_on_its_sources_scene_with_both_styles(beyond, catalog):
+    for task in beyond.select("extended"):
+        source = beyond.get(task.source)
+        paper = catalog.get(source.id)
+        assert source.kind == "original" and (source.goal, source.instructions) == (paper.goal, paper.instructions)
+        assert task.dimension in BEYOND_DIMENSIONS and task.split == "heldout"
+        assert task.instruction("libero") and task.instruction("paper")
+        assert task.id.startswith(source.id.rsplit("/", 1)[0] + "/")
+
+
+def test_every_bddl_file_keeps_the_scene_and_states_a_witness_libero_parses(beyond):
+    for task in beyond.select("extended"):
+        text = files.task_bddl_text(task)
+        assert strip_task_sections(text) == strip_task_sections(files.scene_bddl_path(task).read_text())
+        assert parse_bddl(text).goal == task.bddl_goal == witness(task.goal), task.id
+        if task.goal != beyond.get(task.source).goal:  # new goals are not true at t0 by construction
+            init = {(f[0].lower(), *f[1:]) for f in files.scene_problem(task).init}
+            assert not any(p.as_libero() in init for p in task.bddl_goal), task.id
+
+
+def test_negation_fails_on_the_source_goal_and_holds_on_its_witness(beyond):
+    negations = beyond.select("negation")
+    assert {t.id.rsplit("~", 1)[1] for t in negations} == {"not-where", "not-what"}
+    for task in negations:
+        (source_atom,) = plain_atoms(beyond.get(task.source).goal)
+        assert not holds_now(task.goal, lambda p, s=source_atom: p == s), task.id  # doing the source task fails
+        assert holds_now(task.goal, lambda p, w=task.bddl_goal: p in w)
+        assert source_atom not in task.bddl_goal
+    task = beyond.get("spatial/s0/black-bowl-1-on-plate~not-where")
+    assert task.instruction() == (
+        "pick up the black bowl between the plate and the ramekin and place it anywhere but on the plate"
+    )
+
+
+def test_ordering_comes_in_both_orders_ending_in_the_same_state(beyond):
+    ordered = {t.id: t for t in beyond.select("ordering")}
+    for task in ordered.values():
+        assert isinstance(task.goal, Then) and len(task.goal.parts) == 2
+        reverse = Then(task.goal.parts[::-1])
+        (twin,) = [t for t in ordered.values() if t.goal == reverse and t.source == task.source]
+        assert set(twin.bddl_goal) == set(task.bddl_goal) and twin.goal != task.goal
+    task = ordered["goal/s8/first-open-cabinet-top-drawer-then-black-bowl-on-plate"]
+    assert task.instruction() == "first open the top drawer of the cabinet, then put the bowl on the plate"
+    # a bowl that starts in a drawer is not paired with closing that drawer (only one order is possible)
+    assert not [t for t in ordered if t.startswith("spatial/s4/") and "close-cabinet-top-drawer" in t]
+
+
+def test_paraphrase_and_attribute_keep_the_source_goal(beyond):
+    for task in [*beyond.select("paraphrase"), *beyond.select("attribute_reference")]:
+        assert task.goal == beyond.get(task.source).goal, task.id
+    assert beyond.get("goal/s8/black-bowl-on-plate~by-attribute").instruction() == "put the black one on the plate"
+    assert beyond.get("object/s4/ketchup-in-basket~by-attribute").instruction() == (
+        "pick up the container of ketchup and place it in the basket"
+    )
+    # two black bowls in every libero_spatial scene: "the black one" would not be unique
+    assert not [t for t in beyond.select("attribute_reference") if t.suite == "libero_spatial"]
+
+
+ORDER_SOURCE = "goal/s8/black-bowl-on-plate"
+IN_ORDER = "goal/s8/first-turn-on-stove-then-black-bowl-on-plate"  # the oracle turns knobs first
+OUT_OF_ORDER = "goal/s8/first-black-bowl-on-plate-then-turn-on-stove"
+NEGATED = "goal/s8/black-bowl-on-plate~not-where"
+
+
+def _run(policy: str, tasks: str, path) -> dict:
+    from langgap.engine.evaluate import evaluate
+    from langgap.engine.spec import ExecutionOptions, RunSpec
+    from langgap.report.load import load_runs
+
+    spec = RunSpec.create(policy, catalog=BEYOND_CATALOG, tasks=tasks, episodes=1)
+    evaluate(spec, path, ExecutionOptions(workers=0, progress=False))
+    (run,) = load_runs([path])
+    return {r.task_id: r for r in run.records}
+
+
+@pytest.mark.slow
+def test_an_ordered_goal_reached_in_the_wrong_order_fails_as_wrong_order(tmp_path):
+    # The oracle sees the goal's atoms only and does articulations first (what it must learn: README),
+    # so it meets one order and breaks the other: the outcome tells them apart.
+    records = _run("oracle", f"{IN_ORDER},{OUT_OF_ORDER}", tmp_path / "oracle")
+    assert records[IN_ORDER].success and records[IN_ORDER].outcome == "success"
+    wrong = records[OUT_OF_ORDER]
+    assert not wrong.success and wrong.outcome == "wrong_order"
+    assert wrong.steps == wrong.max_steps  # both parts held, in the wrong order: the episode ran to its limit
+    # what it did instead: the stove first, then the bowl, which is the other order's task
+    reached = wrong.reached
+    assert reached["goal/s7/turn-on-stove"] < reached[ORDER_SOURCE] == reached[IN_ORDER]
+
+
+@pytest.mark.slow
+def test_a_negated_goal_met_by_the_negated_target_is_recorded_as_the_source_task(tmp_path):
+    records = _run("blind", NEGATED, tmp_path / "blind")
+    episode = records[NEGATED]
+    assert not episode.success and episode.outcome == "did_source_task"
+    assert ORDER_SOURCE in episode.reached and ORDER_SOURCE in episode.goals_at_end

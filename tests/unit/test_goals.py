@@ -1,0 +1,145 @@
+"""The goal language, evaluated against a fake truth function (no simulator)."""
+
+from __future__ import annotations
+
+import pytest
+
+from langgap.bddl import Predicate
+from langgap.errors import BddlError
+from langgap.goals import (
+    And,
+    Atom,
+    GoalProgress,
+    Not,
+    Or,
+    Then,
+    atoms,
+    conjunction,
+    goal_from_strings,
+    goal_strings,
+    holds_now,
+    is_ordered,
+    parse_goal,
+    plain_atoms,
+    stages,
+    unordered,
+    witness,
+)
+
+BOWL_ON_PLATE = Predicate.parse("(On bowl_1 plate_1)")
+BOWL_ON_RAMEKIN = Predicate.parse("(On bowl_1 ramekin_1)")
+BOWL_IN_DRAWER = Predicate.parse("(In bowl_1 cabinet_1_top_region)")
+OPEN_DRAWER = Predicate.parse("(Open cabinet_1_top_region)")
+
+
+def run(goal, history: list[set[Predicate]]) -> list[bool]:
+    """The goal's value at each step of a history of true-atom sets (step 0 first)."""
+    progress = GoalProgress(goal)
+    return [progress.observe(step, lambda p, true=true: p in true) for step, true in enumerate(history)]
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "(On bowl_1 plate_1)",
+        "(And (On bowl_1 plate_1) (Open cabinet_1_top_region))",
+        "(Or (On bowl_1 ramekin_1) (In bowl_1 cabinet_1_top_region))",
+        "(Not (On bowl_1 plate_1))",
+        "(Then (Open cabinet_1_top_region) (On bowl_1 plate_1))",
+        "(And (Or (On bowl_1 ramekin_1) (On bowl_1 cookies_1)) (Not (On bowl_1 plate_1)))",
+    ],
+)
+def test_parse_and_str_round_trip(text):
+    assert str(parse_goal(text)) == text
+    assert parse_goal(text.lower().replace("bowl_1", "bowl_1")) == parse_goal(text)  # names are case-insensitive
+
+
+@pytest.mark.parametrize(
+    ("text", "says"),
+    [
+        ("(On bowl_1)", "takes 2"),
+        ("(Maybe bowl_1)", "unknown predicate"),
+        ("(Not (On a b) (On a c))", "Not takes one"),
+        ("(Or)", "is empty"),
+        ("(And (On a b) x)", "expressions only"),
+        ("(On a b) (On a c)", "after the expression"),
+        ("(On a (b))", "names"),
+        ("", "expected"),
+    ],
+)
+def test_malformed_goals_are_one_clear_error(text, says):
+    with pytest.raises(BddlError, match=says):
+        parse_goal(text)
+
+
+def test_a_registry_list_of_atoms_is_the_libero_conjunction_and_writes_back_identically():
+    strings = ["(On bowl_1 plate_1)", "(Open cabinet_1_top_region)"]
+    goal = goal_from_strings(strings)
+    assert goal == conjunction([BOWL_ON_PLATE, OPEN_DRAWER])
+    assert goal_strings(goal) == strings
+    assert plain_atoms(goal) == (BOWL_ON_PLATE, OPEN_DRAWER)
+    assert witness(goal) == (BOWL_ON_PLATE, OPEN_DRAWER)
+    assert goal_strings(Then((Atom(OPEN_DRAWER), Atom(BOWL_ON_PLATE)))) == [
+        "(Then (Open cabinet_1_top_region) (On bowl_1 plate_1))"
+    ]
+    negation = And((Or((Atom(BOWL_ON_RAMEKIN), Atom(BOWL_IN_DRAWER))), Not(Atom(BOWL_ON_PLATE))))
+    for goal in (Then((Atom(OPEN_DRAWER), Atom(BOWL_ON_PLATE))), negation, conjunction([BOWL_ON_PLATE])):
+        assert goal_from_strings(goal_strings(goal)) == goal  # what a generator writes is what loads
+    with pytest.raises(BddlError, match="empty"):
+        goal_from_strings([])
+
+
+def test_negation_holds_on_any_other_receiver_and_never_on_the_negated_one():
+    goal = And((Or((Atom(BOWL_ON_RAMEKIN), Atom(BOWL_IN_DRAWER))), Not(Atom(BOWL_ON_PLATE))))
+    assert plain_atoms(goal) is None
+    assert holds_now(goal, lambda p: p == BOWL_ON_RAMEKIN)
+    assert holds_now(goal, lambda p: p == BOWL_IN_DRAWER)
+    assert not holds_now(goal, lambda p: p == BOWL_ON_PLATE)  # the source task: a failure
+    assert not holds_now(goal, lambda p: p in (BOWL_ON_PLATE, BOWL_ON_RAMEKIN))
+    assert not holds_now(goal, lambda p: False)
+    assert witness(goal) == (BOWL_ON_RAMEKIN,)
+    assert atoms(goal) == (BOWL_ON_RAMEKIN, BOWL_IN_DRAWER, BOWL_ON_PLATE)
+
+
+def test_then_succeeds_only_in_order():
+    goal = Then((Atom(OPEN_DRAWER), Atom(BOWL_ON_PLATE)))
+    in_order = [set(), {OPEN_DRAWER}, {OPEN_DRAWER}, {OPEN_DRAWER, BOWL_ON_PLATE}]
+    assert run(goal, in_order) == [False, False, False, True]
+    wrong_order = [set(), {BOWL_ON_PLATE}, {BOWL_ON_PLATE, OPEN_DRAWER}, {BOWL_ON_PLATE, OPEN_DRAWER}]
+    assert run(goal, wrong_order) == [False, False, False, False]
+    assert run(unordered(goal), wrong_order) == [False, False, True, True]  # right goals, wrong order
+    same_step = [set(), {BOWL_ON_PLATE, OPEN_DRAWER}]
+    assert run(goal, same_step) == [False, False]  # "before" is strict
+    # the first time counts: doing B, undoing it, then A and B again is still the wrong order
+    redo = [set(), {BOWL_ON_PLATE}, set(), {OPEN_DRAWER}, {OPEN_DRAWER, BOWL_ON_PLATE}]
+    assert run(goal, redo) == [False] * 5
+    # in order, but A undone by the end: not done
+    undone = [set(), {OPEN_DRAWER}, {BOWL_ON_PLATE}]
+    assert run(goal, undone) == [False, False, False]
+    assert not holds_now(goal, lambda p: False) and holds_now(goal, lambda p: True)  # one state: order ignored
+
+
+def test_then_of_compound_parts_uses_when_each_part_first_held():
+    first = Or((Atom(BOWL_ON_RAMEKIN), Atom(BOWL_ON_PLATE)))
+    goal = Then((first, Atom(OPEN_DRAWER)))
+    assert run(goal, [set(), {BOWL_ON_PLATE}, {BOWL_ON_RAMEKIN, OPEN_DRAWER}]) == [False, False, True]
+    progress = GoalProgress(goal)
+    for step, true in enumerate([set(), {BOWL_ON_PLATE}, {BOWL_ON_RAMEKIN, OPEN_DRAWER}]):
+        progress.observe(step, lambda p, true=true: p in true)
+    assert progress.first_held == 2 and progress.first[first] == 1
+
+
+def test_stages_give_the_order_a_policy_must_follow():
+    goal = Then((Atom(OPEN_DRAWER), Atom(BOWL_ON_PLATE)))
+    assert is_ordered(goal) and not is_ordered(unordered(goal))
+    assert stages(goal) == ((OPEN_DRAWER,), (BOWL_ON_PLATE,))
+    assert stages(And((goal, Not(Atom(BOWL_ON_RAMEKIN))))) == ((OPEN_DRAWER,), (BOWL_ON_PLATE,))
+    assert stages(conjunction([BOWL_ON_PLATE, OPEN_DRAWER])) == ((BOWL_ON_PLATE, OPEN_DRAWER),)
+    assert witness(goal) == (OPEN_DRAWER, BOWL_ON_PLATE)
+
+
+def test_a_goal_whose_first_alternative_contradicts_it_has_no_witness():
+    with pytest.raises(BddlError, match="no witness"):
+        witness(And((Atom(BOWL_ON_PLATE), Not(Atom(BOWL_ON_PLATE)))))
+    with pytest.raises(BddlError, match="no witness"):
+        witness(Not(Atom(BOWL_ON_PLATE)))
