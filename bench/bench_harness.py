@@ -4,6 +4,9 @@
     .venv/bin/python bench/bench_harness.py authors    # oracle episodes/hour vs the authors' evaluator setup (>= 15x)
     .venv/bin/python bench/bench_harness.py workers    # 2 workers vs 1, no rendering (>= 1.8x)
     .venv/bin/python bench/bench_harness.py protocol   # the full protocol: 99 tasks x 20 episodes, oracle, 2 workers
+    .venv/bin/python bench/bench_harness.py validate   # langgap validate over all 99 tasks x 50 init states (<= 60 min)
+
+Every mode takes `--stepping exact|fast` (default exact, bit-identical to robosuite's stepping).
 
 The authors' configuration (their evaluator, re-created with LangGap's own pieces): a hard reset every
 episode, two 256x256 cameras rendered at every step, one process.
@@ -21,8 +24,9 @@ import numpy as np
 
 from langgap.catalog.catalog import load_catalog
 from langgap.engine.evaluate import RunSummary, evaluate
-from langgap.engine.spec import ExecutionOptions, RunSpec
+from langgap.engine.spec import RESULT_STEPPINGS, ExecutionOptions, RunSpec
 from langgap.sim.env import CAMERAS, SETTLE_ACTION, SETTLE_STEPS, EnvOptions, TaskEnv
+from langgap.stack import DEFAULT_STEPPING
 
 SAMPLE_TASKS = (
     "spatial/s0/black-bowl-1-on-plate,spatial/s0/ramekin-on-plate,goal/s7/turn-on-stove,"
@@ -31,10 +35,15 @@ SAMPLE_TASKS = (
 
 
 def timed_eval(
-    policy: str, tasks: str, episodes: int, policy_args: dict[str, str] | None = None, **execution
+    policy: str,
+    tasks: str,
+    episodes: int,
+    policy_args: dict[str, str] | None = None,
+    stepping: str = DEFAULT_STEPPING,
+    **execution,
 ) -> tuple[float, RunSummary]:
     """Wall time of one fresh evaluation (spec from the arguments, `execution`: ExecutionOptions fields)."""
-    spec = RunSpec.create(policy, policy_args=policy_args, tasks=tasks, episodes=episodes)
+    spec = RunSpec.create(policy, policy_args=policy_args, tasks=tasks, episodes=episodes, stepping=stepping)
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()
         summary = evaluate(spec, Path(tmp) / "run", ExecutionOptions(progress=False, **execution))
@@ -147,45 +156,67 @@ def authors(episodes: int, workers: int, policy: str) -> None:
     )
 
 
-def workers(episodes: int, policy: str) -> None:
-    one, summary = timed_eval(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, workers=1)
-    two, _ = timed_eval(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, workers=2)
+def workers(episodes: int, policy: str, stepping: str) -> None:
+    one, summary = timed_eval(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, stepping=stepping, workers=1)
+    two, _ = timed_eval(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, stepping=stepping, workers=2)
     print(
         f"| {policy}, {summary.ran} episodes | 1 worker {one:.0f} s | 2 workers {two:.0f} s | {one / two:.2f}x "
         "(target >= 1.8x) |"
     )
 
 
-def protocol(policy: str, run: str | None) -> None:
+def protocol(policy: str, run: str | None, stepping: str) -> None:
     directory = Path(run) if run else Path(tempfile.mkdtemp()) / "run"
     start = time.perf_counter()
     summary = evaluate(
-        RunSpec.create(policy, tasks="all", episodes=20), directory, ExecutionOptions(workers=2), resume=run is not None
+        RunSpec.create(policy, tasks="all", episodes=20, stepping=stepping),
+        directory,
+        ExecutionOptions(workers=2),
+        resume=run is not None,
     )
     wall = time.perf_counter() - start
     print(
-        f"| full protocol, {policy}, 99 tasks x 20 episodes, 2 workers | {summary.ran} episodes run in "
-        f"{wall / 60:.1f} min ({summary.successes} successes, {summary.gaps} gaps) | target <= 25 min |"
+        f"| full protocol, {policy}, 99 tasks x 20 episodes, 2 workers, {stepping} stepping | {summary.ran} "
+        f"episodes run in {wall / 60:.1f} min = {summary.ran / wall * 3600:.0f} episodes/h ({summary.successes} "
+        f"successes, {summary.gaps} gaps) | target <= 25 min |"
+    )
+
+
+def validation(workers: int, run: str | None, stepping: str) -> None:
+    from langgap.validate import FULL_INITS, validate
+
+    start = time.perf_counter()
+    found = validate(
+        "langgap99", "all", inits=FULL_INITS, workers=workers, run=run, resume=run is not None, stepping=stepping
+    )
+    wall = time.perf_counter() - start
+    episodes = sum(row.episodes for row in found.rows)
+    print(
+        f"| langgap validate, 99 tasks x {FULL_INITS} init states, {workers} workers, {stepping} stepping | "
+        f"{episodes} episodes in {wall / 60:.1f} min = {episodes / wall * 3600:.0f} episodes/h | target <= 60 min |"
     )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", choices=("overhead", "authors", "workers", "protocol"))
+    parser.add_argument("what", choices=("overhead", "authors", "workers", "protocol", "validate"))
     parser.add_argument("--episodes", type=int, default=4)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--policy", default="oracle")
     parser.add_argument("--rounds", type=int, default=3, help="overhead: alternating rounds (best of each)")
-    parser.add_argument("--run", help="protocol: keep (and resume) the run here")
+    parser.add_argument("--run", help="protocol, validate: keep (and resume) the run here")
+    parser.add_argument("--stepping", choices=RESULT_STEPPINGS, default=DEFAULT_STEPPING)
     args = parser.parse_args()
     if args.what == "overhead":
         overhead(args.episodes, args.rounds)
     elif args.what == "authors":
         authors(args.episodes, args.workers, args.policy)
     elif args.what == "workers":
-        workers(args.episodes, args.policy)
+        workers(args.episodes, args.policy, args.stepping)
+    elif args.what == "protocol":
+        protocol(args.policy, args.run, args.stepping)
     else:
-        protocol(args.policy, args.run)
+        validation(args.workers, args.run, args.stepping)
 
 
 if __name__ == "__main__":
