@@ -15,11 +15,14 @@ episode, two 256x256 cameras rendered at every step, one process.
 from __future__ import annotations
 
 import argparse
+import multiprocessing as mp
 import os
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
+import mujoco
 import numpy as np
 
 from langgap.catalog.catalog import load_catalog
@@ -27,6 +30,7 @@ from langgap.engine.evaluate import RunSummary, evaluate
 from langgap.engine.spec import RESULT_STEPPINGS, ExecutionOptions, RunSpec
 from langgap.sim.env import CAMERAS, SETTLE_ACTION, SETTLE_STEPS, EnvOptions, TaskEnv
 from langgap.stack import DEFAULT_STEPPING
+from langgap.store import RunStore
 
 SAMPLE_TASKS = (
     "spatial/s0/black-bowl-1-on-plate,spatial/s0/ramekin-on-plate,goal/s7/turn-on-stove,"
@@ -34,20 +38,41 @@ SAMPLE_TASKS = (
 )
 
 
-def timed_eval(
+@dataclass
+class TimedRun:
+    """One timed evaluation: its wall time, the driver process's CPU time, and each worker's time in episodes."""
+
+    wall_s: float
+    driver_cpu_s: float
+    summary: RunSummary
+    busy_s: dict[int, float]  # worker -> the sum of its episodes' wall times
+
+
+def timed_run(
     policy: str,
     tasks: str,
     episodes: int,
     policy_args: dict[str, str] | None = None,
     stepping: str = DEFAULT_STEPPING,
     **execution,
-) -> tuple[float, RunSummary]:
-    """Wall time of one fresh evaluation (spec from the arguments, `execution`: ExecutionOptions fields)."""
+) -> TimedRun:
+    """One fresh evaluation, timed (spec from the arguments, `execution`: ExecutionOptions fields)."""
     spec = RunSpec.create(policy, policy_args=policy_args, tasks=tasks, episodes=episodes, stepping=stepping)
     with tempfile.TemporaryDirectory() as tmp:
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         summary = evaluate(spec, Path(tmp) / "run", ExecutionOptions(progress=False, **execution))
-        return time.perf_counter() - start, summary
+        wall, cpu = time.perf_counter() - start, time.process_time() - cpu
+        busy: dict[int, float] = {}
+        with RunStore.open(Path(tmp) / "run") as store:
+            for record in store.records():
+                busy[record.worker] = busy.get(record.worker, 0.0) + record.wall_time_s
+        return TimedRun(wall, cpu, summary, busy)
+
+
+def timed_eval(policy: str, tasks: str, episodes: int, **arguments) -> tuple[float, RunSummary]:
+    """Wall time and summary of one fresh evaluation (arguments as `timed_run`'s)."""
+    run = timed_run(policy, tasks, episodes, **arguments)
+    return run.wall_s, run.summary
 
 
 class ReplayPolicy:
@@ -156,13 +181,53 @@ def authors(episodes: int, workers: int, policy: str) -> None:
     )
 
 
+def _physics_rate(seconds: float) -> float:
+    """mj_step calls per second on one LIBERO model, in this process (no harness, no Python control)."""
+    env = TaskEnv(load_catalog().get(SAMPLE_TASKS.split(",")[0]), EnvOptions())
+    try:
+        env.reset(0)
+        model, data = env.robosuite_env.sim.model._model, env.robosuite_env.sim.data._data
+        steps, start = 0, time.perf_counter()
+        while time.perf_counter() - start < seconds:
+            for _ in range(100):
+                mujoco.mj_step(model, data)
+            steps += 100
+        return steps / (time.perf_counter() - start)
+    finally:
+        env.close()
+
+
+def machine_ceiling(seconds: float = 20.0) -> float:
+    """How much two processes of raw physics get done against one, on this machine (its own scaling)."""
+    context = mp.get_context("spawn")
+    with context.Pool(1) as pool:
+        one = pool.apply(_physics_rate, (seconds,))
+    with context.Pool(2) as pool:
+        two = sum(pool.map(_physics_rate, [seconds, seconds]))
+    return two / one
+
+
 def workers(episodes: int, policy: str, stepping: str) -> None:
-    one, summary = timed_eval(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, stepping=stepping, workers=1)
-    two, _ = timed_eval(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, stepping=stepping, workers=2)
+    ceiling = machine_ceiling()
+    runs = {
+        n: timed_run(policy=policy, tasks=SAMPLE_TASKS, episodes=episodes, stepping=stepping, workers=n) for n in (1, 2)
+    }
+    one, two = runs[1], runs[2]
     print(
-        f"| {policy}, {summary.ran} episodes | 1 worker {one:.0f} s | 2 workers {two:.0f} s | {one / two:.2f}x "
-        "(target >= 1.8x) |"
+        f"| {policy}, {one.summary.ran} episodes, {stepping} stepping | 1 worker {one.wall_s:.0f} s | 2 workers "
+        f"{two.wall_s:.0f} s | {one.wall_s / two.wall_s:.2f}x (target >= 1.8x) | this machine's own ceiling "
+        f"(raw physics, 2 processes vs 1): {ceiling:.2f}x |"
     )
+    print("where the time goes | 1 worker | 2 workers")
+    for n, run in runs.items():
+        busy = sum(run.busy_s.values())
+        print(
+            f"  {n} worker(s): wall {run.wall_s:.1f} s; in episodes {busy:.1f} s of {n * run.wall_s:.1f} worker-s "
+            f"({busy / (n * run.wall_s):.0%}; the rest: start-up, environment builds, hand-overs, idle tail); "
+            f"driver CPU {run.driver_cpu_s:.1f} s; per-episode time {busy / run.summary.ran:.2f} s"
+        )
+    slowdown = (sum(two.busy_s.values()) / two.summary.ran) / (sum(one.busy_s.values()) / one.summary.ran)
+    print(f"  an episode takes {slowdown:.2f}x as long with 2 workers as with 1 (both cores busy: caches, memory)")
 
 
 def protocol(policy: str, run: str | None, stepping: str) -> None:
