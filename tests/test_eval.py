@@ -433,27 +433,6 @@ def test_every_flag_of_a_run_reaches_its_effect(short_catalog, tmp_path):
     assert quiet.returncode == 0 and quiet.stdout.count("\n") == 1 and "%|" not in quiet.stderr
 
 
-def test_the_shared_policy_server_waits_max_wait_ms_for_a_batch():
-    import asyncio
-
-    from langgap.engine.shared_policy import PolicyServer
-
-    async def two_queries_50_ms_apart(max_wait_ms: float) -> int:
-        server = PolicyServer("noop", {}, max_batch=2, max_wait_ms=max_wait_ms)
-        for slot in (0, 1):
-            await server.reset(slot, None)
-
-        async def later(slot: int, delay: float):
-            await asyncio.sleep(delay)
-            return await server.act(slot, None)
-
-        await asyncio.gather(later(0, 0.0), later(1, 0.05))
-        return server.calls
-
-    assert asyncio.run(two_queries_50_ms_apart(500)) == 1
-    assert asyncio.run(two_queries_50_ms_apart(5)) == 2
-
-
 def test_repeats_run_every_episode_with_more_seeds_and_reports_the_spread(short_catalog, tmp_path):
     run = tmp_path / "run"
     result = _cli_eval(short_catalog, run, "random", "--episodes", "2", "--repeats", "2", "--tasks", "spatial/s0/open*")

@@ -132,7 +132,7 @@ def test_execution_defaults():
     )
     # what a valid shared-policy configuration looks like
     shared = ExecutionOptions(backend="ray", workers=4, shared_policy=True, max_batch=8, max_wait_ms=0, policy_gpus=0)
-    assert shared.max_batch == 8
+    assert (shared.batch_limit, shared.batch_wait_ms) == (8, 0)
 
 
 def test_an_unknown_backend_is_refused_by_the_pool_registry():
