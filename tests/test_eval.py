@@ -235,6 +235,13 @@ def test_a_replay_that_ends_otherwise_gets_no_clip(short_catalog, tmp_path):
         (["--policy", "noop", "--tasks", "spatial/s0/levitate"], "unknown task"),
         (["--policy", "noop", "--episodes", "51"], "out of range"),
         (["--policy", "noop", "--policy-arg", "oops"], "key=value"),
+        (["--policy", "noop", "--max-batch", "2"], "--max-batch only apply to a shared policy (--shared-policy)"),
+        (["--policy", "noop", "--shared-policy", "--workers", "0"], "--shared-policy needs worker processes"),
+        (["--policy", "noop", "--shared-policy", "--policy-gpus", "1"], "--policy-gpus needs --backend ray"),
+        (
+            ["--policy", "tests.policies:UnbuildablePolicy", "--shared-policy", "--workers", "2"],
+            "the shared policy process could not start: FileNotFoundError: no checkpoint at /nowhere",
+        ),
     ],
 )
 def test_bad_input_is_one_line_and_creates_nothing(tmp_path, extra, message):

@@ -1,14 +1,23 @@
-"""The shared policy's server (batching, privileges), with the test policies of `tests/policies.py` (no simulator)."""
+"""The shared policy's server (batching, privileges) and the local pool's policy process: a real spawned
+process and real Unix-socket clients, with the test policies of `tests/policies.py` (no simulator)."""
 
 from __future__ import annotations
 
 import asyncio
 import json
+import os
+import signal
+import threading
+import time
+from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from langgap.engine.pools.policy_process import GONE, PolicyProcess, SocketPolicyClient
 from langgap.engine.shared_policy import PolicyServer
+from langgap.errors import LangGapError, PolicyServerError
 from langgap.policies.base import PrivilegedContext, TaskContext
 from langgap.sim.env import Observation
 
@@ -60,3 +69,78 @@ def test_the_server_gives_the_goal_and_the_simulator_state_to_privileged_policie
     privileged = policy.startswith("Privileged")
     assert told["instruction"] == CONTEXT.instruction
     assert (told["privileged"] is not None, told["simulator_state"]) == (privileged, privileged)
+
+
+@pytest.fixture
+def policy_process(tmp_path):
+    """A `BatchRecorder` (random actions, batched calls logged to a file) in its own process, at most
+    two queries per call, each waiting up to 2 s for the other."""
+    process = PolicyProcess(
+        "tests.policies:BatchRecorder", {"path": str(tmp_path / "batches")}, max_batch=2, max_wait_ms=2000
+    )
+    yield process
+    process.close()
+
+
+def _act_together(clients: list[SocketPolicyClient]) -> list[np.ndarray]:
+    actions: list = [None] * len(clients)
+
+    def act(k: int) -> None:
+        actions[k] = clients[k].act(SEEN)
+
+    threads = [threading.Thread(target=act, args=(k,)) for k in range(len(clients))]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(timeout=30)
+    return actions
+
+
+def test_the_policy_process_batches_its_clients_queries_and_reports_its_counters(policy_process, tmp_path):
+    clients = [policy_process.address.connect(worker) for worker in (0, 1)]
+    assert [c.spec.chunk for c in clients] == [1, 1] and clients[0].config()["shared"]["max_batch"] == 2
+    for k, client in enumerate(clients):
+        client.reset(replace(CONTEXT, seed=k))
+    actions = _act_together(clients)
+    assert (tmp_path / "batches").read_text() == "2\n"  # one batched call answered both workers
+    assert not np.array_equal(actions[0], actions[1])  # each connection has its own policy instance (own seed)
+    for client in clients:
+        client.close()
+    socket_dir = Path(policy_process.address.path).parent
+    assert policy_process.close() == {"calls": 1, "queries": 2}
+    assert not socket_dir.exists()
+    with pytest.raises(PolicyServerError, match=GONE):
+        policy_process.address.connect(0)
+
+
+def test_a_policy_error_is_an_error_of_the_query_and_the_process_serves_on(tmp_path):
+    process = PolicyProcess("tests.policies:RaisingPolicy", {}, max_batch=4, max_wait_ms=0)
+    try:
+        client = process.address.connect(0)
+        client.reset(CONTEXT)
+        for _ in range(2):
+            with pytest.raises(PolicyServerError, match="^shared policy failed: RuntimeError: model exploded$"):
+                client.act(SEEN)
+    finally:
+        assert process.close() == {"calls": 2, "queries": 2}
+
+
+def test_a_killed_policy_process_is_one_cause_for_every_client(policy_process):
+    client = policy_process.address.connect(0)
+    client.reset(CONTEXT)
+    os.kill(policy_process.pid, signal.SIGKILL)
+    time.sleep(0.5)
+    with pytest.raises(PolicyServerError, match=f"^{GONE}$"):
+        client.act(SEEN)
+    with pytest.raises(PolicyServerError, match=f"^{GONE}$"):
+        policy_process.address.connect(1)
+    assert policy_process.close() == {}  # no counters from a dead process; its socket is removed all the same
+    assert not Path(policy_process.address.path).parent.exists()
+
+
+def test_a_policy_that_cannot_be_built_is_one_error_line():
+    with pytest.raises(LangGapError) as error:
+        PolicyProcess("tests.policies:UnbuildablePolicy", {}, max_batch=2, max_wait_ms=5)
+    assert str(error.value) == (
+        "the shared policy process could not start: FileNotFoundError: no checkpoint at /nowhere"
+    )

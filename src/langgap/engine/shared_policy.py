@@ -1,11 +1,12 @@
 """One policy for many environment workers, batching their queries: the logic every transport shares.
 
 A GPU policy should not be loaded once per environment worker. With `--shared-policy`, one
-`PolicyServer` serves every worker, in a Ray actor (`langgap.engine.pools.ray`); each worker talks
-to it through a client that follows the ordinary `Policy` protocol. The server keeps one policy
-instance per slot (policies are stateful within an episode) and answers concurrent `act` calls
-together: it waits up to `max_wait_ms` for up to `max_batch` queries, then calls the policy class's
-optional `act_batch(policies, observations)` once — or each policy's `act` if the class has
+`PolicyServer` serves every worker: in a Ray actor (`langgap.engine.pools.ray`) or, on the local
+backend, in one policy process behind a Unix socket (`langgap.engine.pools.policy_process`). Each
+worker talks to it through a client that follows the ordinary `Policy` protocol. The server keeps
+one policy instance per slot (policies are stateful within an episode) and answers concurrent `act`
+calls together: it waits up to `max_wait_ms` for up to `max_batch` queries, then calls the policy
+class's optional `act_batch(policies, observations)` once — or each policy's `act` if the class has
 no batched form.
 
 Privileges are enforced here, whatever a client sends: a policy whose spec is not privileged is
