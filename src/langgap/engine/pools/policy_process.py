@@ -177,6 +177,7 @@ class PolicyProcess:
             try:
                 error = ready.recv()
             except EOFError:
+                self._process.join(timeout=10)
                 error = f"it exited with code {self._process.exitcode}"
         except BaseException:
             self.close()
