@@ -81,6 +81,13 @@ class UnbuildablePolicy(NoopPolicy):
         raise FileNotFoundError("no checkpoint at /nowhere")
 
 
+class DyingOnBuildPolicy(NoopPolicy):
+    """Kills the process that builds it (as a policy whose native library aborts on load)."""
+
+    def __init__(self):
+        os._exit(17)
+
+
 class BatchRecorder(RandomPolicy):
     """`random`, with a batched form that appends each batch's size to `path` (one line per batched call)."""
 

@@ -138,9 +138,14 @@ def test_a_killed_policy_process_is_one_cause_for_every_client(policy_process):
     assert not Path(policy_process.address.path).parent.exists()
 
 
-def test_a_policy_that_cannot_be_built_is_one_error_line():
+@pytest.mark.parametrize(
+    ("policy", "why"),
+    [
+        ("UnbuildablePolicy", "FileNotFoundError: no checkpoint at /nowhere"),
+        ("DyingOnBuildPolicy", "it exited with code 17"),
+    ],
+)
+def test_a_policy_that_cannot_be_built_is_one_error_line(policy, why):
     with pytest.raises(LangGapError) as error:
-        PolicyProcess("tests.policies:UnbuildablePolicy", {}, max_batch=2, max_wait_ms=5)
-    assert str(error.value) == (
-        "the shared policy process could not start: FileNotFoundError: no checkpoint at /nowhere"
-    )
+        PolicyProcess(f"tests.policies:{policy}", {}, max_batch=2, max_wait_ms=5)
+    assert str(error.value) == f"the shared policy process could not start: {why}"
