@@ -25,8 +25,10 @@ import numpy as np
 from langgap.catalog.catalog import load_catalog
 from langgap.engine.evaluate import RunSummary, evaluate
 from langgap.engine.spec import RESULT_STEPPINGS, ExecutionOptions, RunSpec
+from langgap.records import EpisodeRecord
 from langgap.sim.env import CAMERAS, SETTLE_ACTION, SETTLE_STEPS, EnvOptions, TaskEnv
 from langgap.stack import DEFAULT_STEPPING
+from langgap.store import RunStore
 
 SAMPLE_TASKS = (
     "spatial/s0/black-bowl-1-on-plate,spatial/s0/ramekin-on-plate,goal/s7/turn-on-stove,"
@@ -40,14 +42,20 @@ def timed_eval(
     episodes: int,
     policy_args: dict[str, str] | None = None,
     stepping: str = DEFAULT_STEPPING,
+    records: list[EpisodeRecord] | None = None,
     **execution,
 ) -> tuple[float, RunSummary]:
-    """Wall time of one fresh evaluation (spec from the arguments, `execution`: ExecutionOptions fields)."""
+    """Wall time of one fresh evaluation (spec from the arguments, `execution`: ExecutionOptions fields);
+    `records`, if given, receives the stored episodes."""
     spec = RunSpec.create(policy, policy_args=policy_args, tasks=tasks, episodes=episodes, stepping=stepping)
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()
         summary = evaluate(spec, Path(tmp) / "run", ExecutionOptions(progress=False, **execution))
-        return time.perf_counter() - start, summary
+        seconds = time.perf_counter() - start
+        if records is not None:
+            with RunStore.open(Path(tmp) / "run") as store:
+                records.extend(store.records())
+        return seconds, summary
 
 
 class ReplayPolicy:
