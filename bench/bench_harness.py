@@ -28,6 +28,7 @@ import numpy as np
 from langgap.catalog.catalog import load_catalog
 from langgap.engine.evaluate import RunSummary, evaluate
 from langgap.engine.spec import RESULT_STEPPINGS, ExecutionOptions, RunSpec
+from langgap.records import EpisodeRecord
 from langgap.sim.env import CAMERAS, SETTLE_ACTION, SETTLE_STEPS, EnvOptions, TaskEnv
 from langgap.stack import DEFAULT_STEPPING
 from langgap.store import RunStore
@@ -45,7 +46,15 @@ class TimedRun:
     wall_s: float
     driver_cpu_s: float
     summary: RunSummary
-    busy_s: dict[int, float]  # worker -> the sum of its episodes' wall times
+    records: list[EpisodeRecord]
+
+    @property
+    def busy_s(self) -> dict[int, float]:
+        """Each worker's time in episodes (the sum of its episodes' wall times)."""
+        busy: dict[int, float] = {}
+        for record in self.records:
+            busy[record.worker] = busy.get(record.worker, 0.0) + record.wall_time_s
+        return busy
 
 
 def timed_run(
@@ -62,11 +71,8 @@ def timed_run(
         start, cpu = time.perf_counter(), time.process_time()
         summary = evaluate(spec, Path(tmp) / "run", ExecutionOptions(progress=False, **execution))
         wall, cpu = time.perf_counter() - start, time.process_time() - cpu
-        busy: dict[int, float] = {}
         with RunStore.open(Path(tmp) / "run") as store:
-            for record in store.records():
-                busy[record.worker] = busy.get(record.worker, 0.0) + record.wall_time_s
-        return TimedRun(wall, cpu, summary, busy)
+            return TimedRun(wall, cpu, summary, store.records())
 
 
 def timed_eval(policy: str, tasks: str, episodes: int, **arguments) -> tuple[float, RunSummary]:

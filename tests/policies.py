@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from langgap.policies.base import PolicySpec
-from langgap.policies.simple import NoopPolicy
+from langgap.policies.simple import NoopPolicy, RandomPolicy
 
 
 class RaisingPolicy(NoopPolicy):
@@ -58,6 +58,48 @@ class CrashingPolicy(NoopPolicy):
 
     def act(self, observation):
         os._exit(17)
+
+
+class CrashOncePolicy(NoopPolicy):
+    """Kills the process it acts in at its first query ever (a marker file in `marker_dir` remembers it):
+    shared, it takes the policy process down once."""
+
+    def __init__(self, marker_dir: str = ""):
+        self.marker = Path(marker_dir) / "crashed"
+
+    def act(self, observation):
+        if not self.marker.exists():
+            self.marker.write_text(str(os.getpid()))
+            os._exit(17)
+        return super().act(observation)
+
+
+class UnbuildablePolicy(NoopPolicy):
+    """Cannot be built (as a policy whose checkpoint is missing)."""
+
+    def __init__(self):
+        raise FileNotFoundError("no checkpoint at /nowhere")
+
+
+class DyingOnBuildPolicy(NoopPolicy):
+    """Kills the process that builds it (as a policy whose native library aborts on load)."""
+
+    def __init__(self):
+        os._exit(17)
+
+
+class BatchRecorder(RandomPolicy):
+    """`random`, with a batched form that appends each batch's size to `path` (one line per batched call)."""
+
+    def __init__(self, path: str = "", chunk: int = 1):
+        super().__init__(chunk=chunk)
+        self.path = Path(path)
+
+    @staticmethod
+    def act_batch(policies: list[BatchRecorder], observations: list) -> list[np.ndarray]:
+        with policies[0].path.open("a") as handle:
+            handle.write(f"{len(policies)}\n")
+        return [p.act(o) for p, o in zip(policies, observations, strict=True)]
 
 
 class ChunkPolicy:

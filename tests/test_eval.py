@@ -235,6 +235,13 @@ def test_a_replay_that_ends_otherwise_gets_no_clip(short_catalog, tmp_path):
         (["--policy", "noop", "--tasks", "spatial/s0/levitate"], "unknown task"),
         (["--policy", "noop", "--episodes", "51"], "out of range"),
         (["--policy", "noop", "--policy-arg", "oops"], "key=value"),
+        (["--policy", "noop", "--max-batch", "2"], "--max-batch only apply to a shared policy (--shared-policy)"),
+        (["--policy", "noop", "--shared-policy", "--workers", "0"], "--shared-policy needs worker processes"),
+        (["--policy", "noop", "--shared-policy", "--policy-gpus", "1"], "--policy-gpus needs --backend ray"),
+        (
+            ["--policy", "tests.policies:UnbuildablePolicy", "--shared-policy", "--workers", "2"],
+            "the shared policy process could not start: FileNotFoundError: no checkpoint at /nowhere",
+        ),
     ],
 )
 def test_bad_input_is_one_line_and_creates_nothing(tmp_path, extra, message):
@@ -431,27 +438,6 @@ def test_every_flag_of_a_run_reaches_its_effect(short_catalog, tmp_path):
     assert (execution["max_attempts"], execution["timeout_s"], execution["workers"]) == (2, 300, 2)
     quiet = _cli_eval(short_catalog, tmp_path / "quiet", "noop", "--episodes", "1")
     assert quiet.returncode == 0 and quiet.stdout.count("\n") == 1 and "%|" not in quiet.stderr
-
-
-def test_the_shared_policy_server_waits_max_wait_ms_for_a_batch():
-    import asyncio
-
-    from langgap.engine.shared_policy import PolicyServer
-
-    async def two_queries_50_ms_apart(max_wait_ms: float) -> int:
-        server = PolicyServer("noop", {}, max_batch=2, max_wait_ms=max_wait_ms)
-        for slot in (0, 1):
-            await server.reset(slot, None)
-
-        async def later(slot: int, delay: float):
-            await asyncio.sleep(delay)
-            return await server.act(slot, None)
-
-        await asyncio.gather(later(0, 0.0), later(1, 0.05))
-        return server.calls
-
-    assert asyncio.run(two_queries_50_ms_apart(500)) == 1
-    assert asyncio.run(two_queries_50_ms_apart(5)) == 2
 
 
 def test_repeats_run_every_episode_with_more_seeds_and_reports_the_spread(short_catalog, tmp_path):

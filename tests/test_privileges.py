@@ -26,13 +26,14 @@ def _recorded(path) -> list[dict]:
     return [json.loads(line) for line in path.read_text().splitlines()]
 
 
-def test_only_a_privileged_policy_is_told_the_goal_or_shown_the_simulator_state(short_catalog, tmp_path):
-    for policy, workers in (("ContextRecorder", "2"), ("PrivilegedContextRecorder", "0")):
+@pytest.mark.parametrize("shared", [False, True], ids=["own-policy", "shared-policy"])
+def test_only_a_privileged_policy_is_told_the_goal_or_shown_the_simulator_state(short_catalog, tmp_path, shared):
+    for policy, workers in (("ContextRecorder", "2"), ("PrivilegedContextRecorder", "2" if shared else "0")):
         log, run = tmp_path / f"{policy}.jsonl", tmp_path / policy
         result = run_cli(
             "eval", "--policy", f"tests.policies:{policy}", "--policy-arg", f"path={log}", "--catalog", short_catalog,
             "--tasks", TASK, "--episodes", "2", "--condition", "given", "--condition", "shuffled", "--run", str(run),
-            "--workers", workers, "--no-progress", "--quiet",
+            "--workers", workers, "--no-progress", "--quiet", *(["--shared-policy"] if shared else []),
         )  # fmt: skip
         assert result.returncode == 0, result.stderr
         contexts = _recorded(log)

@@ -33,3 +33,9 @@ class DependencyNotInstalled(LangGapError):
 
 class PolicyServerError(LangGapError):
     """A remote policy server is unreachable, timed out, failed, or sent a malformed reply."""
+
+
+def one_line(exc: BaseException) -> str:
+    """`Type: last line of the message`: the same line for the same cause (the scheduler's fail-fast compares them)."""
+    lines = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {lines[-1]}" if lines else type(exc).__name__

@@ -105,7 +105,8 @@ def test_the_instruction_style_reaches_the_plan(catalog):
         ({"max_failure_streak": 0}, "--max-failure-streak"),
         ({"video": "-1"}, "--video must film at least 0 episodes"),
         ({"ray_address": "10.0.0.1:6379"}, "--ray-address needs --backend ray"),
-        ({"shared_policy": True}, "--shared-policy needs --backend ray"),
+        ({"shared_policy": True, "workers": 0}, "--shared-policy needs worker processes"),
+        ({"shared_policy": True, "policy_gpus": 1.0}, "--policy-gpus needs --backend ray"),
         (
             {"backend": "ray", "max_wait_ms": 2.0, "policy_gpus": 1.0},
             "--max-wait-ms, --policy-gpus only apply to a shared",
@@ -132,7 +133,9 @@ def test_execution_defaults():
     )
     # what a valid shared-policy configuration looks like
     shared = ExecutionOptions(backend="ray", workers=4, shared_policy=True, max_batch=8, max_wait_ms=0, policy_gpus=0)
-    assert shared.max_batch == 8
+    assert (shared.batch_limit, shared.batch_wait_ms) == (8, 0)
+    local = ExecutionOptions(workers=2, shared_policy=True)
+    assert (local.batch_limit, local.batch_wait_ms) == (8, 5)
 
 
 def test_an_unknown_backend_is_refused_by_the_pool_registry():

@@ -14,6 +14,8 @@ from langgap.engine.pools import BACKENDS
 from langgap.engine.spec import (
     DEFAULT_FAILURE_STREAK,
     DEFAULT_MAX_ATTEMPTS,
+    DEFAULT_MAX_BATCH,
+    DEFAULT_MAX_WAIT_MS,
     DEFAULT_TIMEOUT_S,
     PAPER_EPISODES,
     RESULT_STEPPINGS,
@@ -105,13 +107,15 @@ def add_parser(subparsers) -> None:
     parser.add_argument(
         "--shared-policy",
         action="store_true",
-        help="ray: one policy actor for all environment actors, batching their queries",
+        help="one policy process (local) or actor (ray) for all environment workers, batching their queries",
     )
-    parser.add_argument("--max-batch", type=int, help="shared policy: largest batch (default: 8)")
+    parser.add_argument("--max-batch", type=int, help=f"shared policy: largest batch (default: {DEFAULT_MAX_BATCH})")
     parser.add_argument(
-        "--max-wait-ms", type=float, help="shared policy: how long a query waits for others (default: 5)"
+        "--max-wait-ms",
+        type=float,
+        help=f"shared policy: how long a query waits for others (default: {DEFAULT_MAX_WAIT_MS:g})",
     )
-    parser.add_argument("--policy-gpus", type=float, help="shared policy: GPUs for the policy actor (default: 0)")
+    parser.add_argument("--policy-gpus", type=float, help="ray's shared policy: GPUs for the policy actor (default: 0)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--quiet", action="store_true", help="print no diagnosis table at the end")
     parser.set_defaults(handler=run)

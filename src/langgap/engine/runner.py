@@ -10,19 +10,28 @@ from __future__ import annotations
 import contextlib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Protocol
 
 from langgap.catalog.catalog import load_catalog
 from langgap.engine.episode import execute_episode, video_hook
 from langgap.engine.filming import VIDEO_DIR, clip_name
 from langgap.engine.plan import PlannedEpisode
 from langgap.engine.rollout import env_options_for
+from langgap.errors import one_line
 from langgap.policies import make_policy
-from langgap.policies.base import config_hash, policy_config
+from langgap.policies.base import Policy, config_hash, policy_config
 from langgap.records import EpisodeRecord
 from langgap.sim.env import CAMERAS, TaskEnv
 from langgap.stack import DEFAULT_STEPPING
 from langgap.video import FRAME_EVERY, VIDEO_SUFFIX
+
+
+class PolicyServerHandle(Protocol):
+    """Where a shared policy is served (`--shared-policy`); picklable, so it can cross into a worker."""
+
+    def connect(self, worker: int) -> Policy:
+        """A `Policy` for `worker` that forwards every call to the shared policy's server."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -35,7 +44,7 @@ class RunnerSetup:
     style: str
     run_dir: str | None = None  # where a filmed episode's clip goes (its `videos` folder)
     stepping: str = DEFAULT_STEPPING  # how physics substeps are computed (`RunSpec.stepping`)
-    policy_server: Any = None  # a shared policy actor (Ray); None: each runner builds its own policy
+    policy_server: PolicyServerHandle | None = None  # a shared policy; None: each runner builds its own
 
 
 class EpisodeFailure(Exception):
@@ -57,17 +66,13 @@ class EpisodeRunner:
             return self._run(planned, attempts)
         except Exception as exc:
             self.close()
-            # One line that is the same for the same cause (the scheduler's fail-fast compares them).
-            lines = str(exc).strip().splitlines()
-            raise EpisodeFailure(f"{type(exc).__name__}: {lines[-1]}" if lines else type(exc).__name__) from exc
+            raise EpisodeFailure(one_line(exc)) from exc
 
     def _run(self, planned: PlannedEpisode, attempts: int) -> EpisodeRecord:
         task = self.catalog.get(planned.key.task_id)
         if self._policy is None:
             if self.setup.policy_server is not None:
-                from langgap.engine.shared_policy import SharedPolicyClient
-
-                self._policy = SharedPolicyClient(self.setup.policy_server, slot=self.worker)
+                self._policy = self.setup.policy_server.connect(self.worker)
             else:
                 self._policy = make_policy(self.setup.policy, self.setup.policy_args)
             self._policy_hash = config_hash(policy_config(self._policy))

@@ -1,17 +1,23 @@
-"""One shared policy for many environment workers, batching their queries (Ray backend).
+"""One policy for many environment workers, batching their queries: the logic every transport shares.
 
-A GPU policy should not be loaded once per environment worker. With `--shared-policy`, the Ray pool
-starts one `PolicyServer` actor (given the GPUs); every environment actor talks to it through a
-`SharedPolicyClient`, which follows the ordinary `Policy` protocol. The server keeps one policy
-instance per worker slot (policies are stateful within an episode) and answers concurrent `act`
+A GPU policy should not be loaded once per environment worker. With `--shared-policy`, one
+`PolicyServer` serves every worker: in a Ray actor (`langgap.engine.pools.ray`) or, on the local
+backend, in one policy process behind a Unix socket (`langgap.engine.pools.policy_process`). Each
+worker talks to it through a client that follows the ordinary `Policy` protocol. The server keeps
+one policy instance per slot (policies are stateful within an episode) and answers concurrent `act`
 calls together: it waits up to `max_wait_ms` for up to `max_batch` queries, then calls the policy
 class's optional `act_batch(policies, observations)` once — or each policy's `act` if the class has
 no batched form.
+
+Privileges are enforced here, whatever a client sends: a policy whose spec is not privileged is
+reset without the privileged context and never shown the simulator state.
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
+from dataclasses import replace
 
 from langgap.policies import make_policy
 from langgap.policies.base import PolicySpec, TaskContext, policy_config
@@ -19,9 +25,9 @@ from langgap.sim.env import Observation
 
 
 class PolicyServer:
-    """The body of the shared policy actor (created with `ray.remote(...)`, async methods)."""
+    """The shared policy's server: one instance per slot, `act` batched (run inside an asyncio loop)."""
 
-    def __init__(self, name: str, args: dict[str, str], max_batch: int = 8, max_wait_ms: float = 5.0):
+    def __init__(self, name: str, args: dict[str, str], max_batch: int, max_wait_ms: float):
         self.name, self.args = name, dict(args)
         self.max_batch = max(1, max_batch)
         self.max_wait_s = max_wait_ms / 1000
@@ -34,20 +40,34 @@ class PolicyServer:
         self.queries = 0  # act() requests answered: queries / calls is the mean batch
 
     def spec(self) -> PolicySpec:
+        """The served policy's spec (what every client's environment must show it)."""
         return self._spec
 
     def config(self) -> dict:
+        """The served policy's configuration, with the batching limits."""
         return {**self._config, "shared": {"max_batch": self.max_batch, "max_wait_ms": self.max_wait_s * 1000}}
 
     def stats(self) -> dict:
+        """How many batched calls answered how many queries."""
         return {"calls": self.calls, "queries": self.queries}
 
     async def reset(self, slot: int, context: TaskContext) -> None:
+        """Start an episode on `slot`'s policy instance (built on its first episode)."""
         if slot not in self.policies:
             self.policies[slot] = make_policy(self.name, self.args)
-        self.policies[slot].reset(context)
+        self.policies[slot].reset(context.for_policy(self._spec))
+
+    def release(self, slot: int) -> None:
+        """Drop `slot`'s policy instance (its worker is gone, or rebuilds its policy after a failure)."""
+        policy = self.policies.pop(slot, None)
+        if policy is not None and hasattr(policy, "close"):
+            with contextlib.suppress(Exception):  # a broken policy's close must not stop the server
+                policy.close()
 
     async def act(self, slot: int, observation: Observation):
+        """`slot`'s policy's action for `observation`, computed in a batch with other slots' queries."""
+        if not self._spec.privileged and observation.privileged is not None:
+            observation = replace(observation, privileged=None)
         self.queries += 1
         future = asyncio.get_running_loop().create_future()
         self._pending.append((slot, observation, future))
@@ -79,30 +99,3 @@ class PolicyServer:
             return
         for (_, _, future), action in zip(batch, actions, strict=True):
             future.set_result(action)
-
-
-class SharedPolicyClient:
-    """The `Policy` an environment actor uses when the policy is shared."""
-
-    def __init__(self, server, slot: int):
-        import ray
-
-        self._ray = ray
-        self.server = server
-        self.slot = slot
-        self.spec = ray.get(server.spec.remote())
-
-    def config(self) -> dict:
-        return self._ray.get(self.server.config.remote())
-
-    def reset(self, context: TaskContext) -> None:
-        self._ray.get(self.server.reset.remote(self.slot, context))
-
-    def act(self, observation: Observation):
-        return self._ray.get(self.server.act.remote(self.slot, observation))
-
-
-def start_server(ray, name: str, args: dict[str, str], *, max_batch: int, max_wait_ms: float, num_gpus: float):
-    """Start the shared policy actor (on a GPU if `num_gpus` > 0); its handle goes into the runner setup."""
-    actor = ray.remote(num_cpus=0, num_gpus=num_gpus, max_concurrency=1024, max_restarts=0)(PolicyServer)
-    return actor.remote(name, args, max_batch, max_wait_ms)

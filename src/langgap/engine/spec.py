@@ -25,6 +25,8 @@ PAPER_EPISODES = 20
 DEFAULT_TIMEOUT_S = 900.0
 DEFAULT_MAX_ATTEMPTS = 3
 DEFAULT_FAILURE_STREAK = 3
+DEFAULT_MAX_BATCH = 8  # shared policy: the largest batch
+DEFAULT_MAX_WAIT_MS = 5.0  # shared policy: how long a query waits for others
 # The fields that only say which episodes a run holds: `--extend` lets a resumed run grow them.
 PLAN_FIELDS = ("selection", "tasks", "inits", "conditions", "repeats")
 # The steppings a run can choose: `robosuite` gives `exact`'s bits, slower (for benchmarks and tests).
@@ -139,10 +141,10 @@ class ExecutionOptions:
     video: str = ""  # which episodes to film (`langgap.engine.filming.VideoSelection`): first:N, per-outcome:N
     progress: bool = True
     ray_address: str | None = None
-    shared_policy: bool = False  # ray: one policy actor batching the queries of all environment actors
-    max_batch: int | None = None  # shared policy: largest batch (default 8)
-    max_wait_ms: float | None = None  # shared policy: how long a query waits for others (default 5)
-    policy_gpus: float | None = None  # shared policy: GPUs for the policy actor (default 0)
+    shared_policy: bool = False  # one policy process (local) or actor (ray) batching every worker's queries
+    max_batch: int | None = None  # shared policy: largest batch (None: DEFAULT_MAX_BATCH)
+    max_wait_ms: float | None = None  # shared policy: how long a query waits for others (None: DEFAULT_MAX_WAIT_MS)
+    policy_gpus: float | None = None  # ray's shared policy: GPUs for the policy actor (default 0)
 
     def __post_init__(self) -> None:
         # The backend's name is checked by `langgap.engine.pools.make_pool`, which owns the registry.
@@ -162,12 +164,14 @@ class ExecutionOptions:
             raise SpecError(str(exc)) from None
         if self.ray_address is not None and self.backend != "ray":
             raise SpecError("--ray-address needs --backend ray")
-        if self.shared_policy and self.backend != "ray":
-            raise SpecError("--shared-policy needs --backend ray")
         batching = {"--max-batch": self.max_batch, "--max-wait-ms": self.max_wait_ms, "--policy-gpus": self.policy_gpus}
         given = [flag for flag, value in batching.items() if value is not None]
         if given and not self.shared_policy:
             raise SpecError(f"{', '.join(given)} only apply to a shared policy (--shared-policy)")
+        if self.shared_policy and self.workers == 0:
+            raise SpecError("--shared-policy needs worker processes to serve (--workers 1 or more)")
+        if self.policy_gpus is not None and self.backend != "ray":
+            raise SpecError("--policy-gpus needs --backend ray (a local policy process uses the GPUs it can see)")
         if self.max_batch is not None and self.max_batch < 1:
             raise SpecError(f"--max-batch must be at least 1, got {self.max_batch}")
         if (self.max_wait_ms or 0) < 0 or (self.policy_gpus or 0) < 0:
@@ -176,6 +180,16 @@ class ExecutionOptions:
     @property
     def video_selection(self) -> VideoSelection:
         return VideoSelection.parse(self.video)
+
+    @property
+    def batch_limit(self) -> int:
+        """The shared policy's largest batch."""
+        return DEFAULT_MAX_BATCH if self.max_batch is None else self.max_batch
+
+    @property
+    def batch_wait_ms(self) -> float:
+        """How long the shared policy's first query of a batch waits for others."""
+        return DEFAULT_MAX_WAIT_MS if self.max_wait_ms is None else self.max_wait_ms
 
     @property
     def episode_timeout_s(self) -> float | None:

@@ -4,7 +4,8 @@ A pool starts workers, hands one planned episode at a time to a worker, and repo
 as typed events. Retries, timeouts, respawns and gaps are the scheduler's, written once for all pools.
 
 Backends by name (`--backend`): `local` (worker processes on this machine, or this process with
-`--workers 0`) and `ray` (actors on a Ray cluster).
+`--workers 0`) and `ray` (actors on a Ray cluster). Both can share one batching policy among their
+workers (`--shared-policy`: a policy process, or a policy actor).
 """
 
 from __future__ import annotations
@@ -83,7 +84,7 @@ def _local(setup: RunnerSetup, options: ExecutionOptions) -> WorkerPool:
         return InProcessPool(setup)
     from langgap.engine.pools.processes import ProcessPool
 
-    return ProcessPool(setup)
+    return ProcessPool(setup, options)
 
 
 def _ray(setup: RunnerSetup, options: ExecutionOptions) -> WorkerPool:

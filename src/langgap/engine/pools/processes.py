@@ -2,7 +2,9 @@
 
 Workers are started with `spawn` (no simulator or GL state crosses a fork), build their environment
 lazily, keep it while consecutive episodes share a scene, and exit on their own if the scheduling
-process dies (so a `kill -9` of `langgap eval` leaves no orphan simulating).
+process dies (so a `kill -9` of `langgap eval` leaves no orphan simulating). With `--shared-policy`
+the workers hold no policy: one policy process serves them all, batching their queries
+(`langgap.engine.pools.policy_process`); it is started with the pool and stopped with it.
 """
 
 from __future__ import annotations
@@ -10,24 +12,22 @@ from __future__ import annotations
 import multiprocessing as mp
 import os
 import queue
-import threading
-import time
+from dataclasses import replace
+from typing import TYPE_CHECKING
 
 from langgap.engine.plan import PlannedEpisode
 from langgap.engine.pools import EpisodeDone, EpisodeFailed, Event, WorkerLost
+from langgap.engine.pools.lifetime import exit_with_parent
+from langgap.engine.pools.policy_process import PolicyProcess
 from langgap.engine.runner import EpisodeFailure, EpisodeRunner, RunnerSetup
 
-
-def _exit_with_parent(parent_pid: int) -> None:
-    while True:
-        if os.getppid() != parent_pid:
-            os._exit(1)
-        time.sleep(0.5)
+if TYPE_CHECKING:
+    from langgap.engine.spec import ExecutionOptions
 
 
 def worker_main(worker: int, setup: RunnerSetup, inbox, outbox, parent_pid: int) -> None:
     """Entry point of a worker process: run the episodes it is sent until it receives None."""
-    threading.Thread(target=_exit_with_parent, args=(parent_pid,), daemon=True).start()
+    exit_with_parent(parent_pid)
     runner = EpisodeRunner(setup, worker=worker)
     try:
         while (item := inbox.get()) is not None:
@@ -41,9 +41,16 @@ def worker_main(worker: int, setup: RunnerSetup, inbox, outbox, parent_pid: int)
 
 
 class ProcessPool:
-    """Worker processes on this machine, one episode at a time each."""
+    """Worker processes on this machine, one episode at a time each (and the shared policy's process)."""
 
-    def __init__(self, setup: RunnerSetup):
+    def __init__(self, setup: RunnerSetup, options: ExecutionOptions):
+        self.server: PolicyProcess | None = None
+        self.server_stats: dict = {}  # the shared policy's counters, read when the pool closes
+        if options.shared_policy:
+            self.server = PolicyProcess(
+                setup.policy, setup.policy_args, max_batch=options.batch_limit, max_wait_ms=options.batch_wait_ms
+            )
+            setup = replace(setup, policy_server=self.server.address)
         self.setup = setup
         self._context = mp.get_context("spawn")
         self._outbox = self._context.Queue()
@@ -95,3 +102,6 @@ class ProcessPool:
             if process.is_alive():
                 process.kill()
         self._workers.clear()
+        if self.server is not None:
+            self.server_stats = self.server.close()
+            self.server = None

@@ -1,26 +1,26 @@
 """The pool of Ray actors: one `EpisodeRunner` per actor, results back to the driver (and its store).
 
 Without `--ray-address` a local Ray instance is started that listens on 127.0.0.1 only (Ray has no
-authentication). With `--shared-policy` one policy actor (given `--policy-gpus`) serves every
-environment actor, batching their queries (`langgap.engine.shared_policy`).
+authentication). With `--shared-policy` one policy actor (a `PolicyServer`, given `--policy-gpus`)
+serves every environment actor, batching their queries (`langgap.engine.shared_policy`).
 """
 
 from __future__ import annotations
 
 import os
-from dataclasses import replace
-from typing import TYPE_CHECKING
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
 
 from langgap.engine.plan import PlannedEpisode
 from langgap.engine.pools import EpisodeDone, EpisodeFailed, Event, WorkerLost
 from langgap.engine.runner import EpisodeFailure, EpisodeRunner, RunnerSetup
-from langgap.engine.shared_policy import start_server
+from langgap.engine.shared_policy import PolicyServer
 from langgap.errors import DependencyNotInstalled, LangGapError
+from langgap.policies.base import TaskContext
+from langgap.sim.env import Observation
 
 if TYPE_CHECKING:
     from langgap.engine.spec import ExecutionOptions
-
-SHARED_DEFAULTS = {"max_batch": 8, "max_wait_ms": 5.0, "policy_gpus": 0.0}
 
 
 def import_ray():
@@ -29,6 +29,35 @@ def import_ray():
     except ImportError:
         raise DependencyNotInstalled("the Ray backend needs Ray: pip install 'langgap[ray]'") from None
     return ray
+
+
+class SharedPolicyClient:
+    """The `Policy` an environment actor uses when the policy is shared: calls on the policy actor."""
+
+    def __init__(self, server, slot: int):
+        self._ray = import_ray()
+        self.server = server
+        self.slot = slot
+        self.spec = self._ray.get(server.spec.remote())
+
+    def config(self) -> dict:
+        return self._ray.get(self.server.config.remote())
+
+    def reset(self, context: TaskContext) -> None:
+        self._ray.get(self.server.reset.remote(self.slot, context))
+
+    def act(self, observation: Observation):
+        return self._ray.get(self.server.act.remote(self.slot, observation))
+
+
+@dataclass(frozen=True)
+class RayPolicyServer:
+    """The shared policy actor as the runners see it (`RunnerSetup.policy_server`): one slot per worker."""
+
+    actor: Any
+
+    def connect(self, worker: int) -> SharedPolicyClient:
+        return SharedPolicyClient(self.actor, slot=worker)
 
 
 class RunnerActor:
@@ -79,19 +108,12 @@ class RayPool:
         self.server_stats: dict = {}
         try:
             if options.shared_policy:
-                shared = {
-                    k: getattr(options, k) if getattr(options, k) is not None else v for k, v in SHARED_DEFAULTS.items()
-                }
-                self._check_gpus(shared["policy_gpus"])
-                self.server = start_server(
-                    ray,
-                    setup.policy,
-                    setup.policy_args,
-                    max_batch=shared["max_batch"],
-                    max_wait_ms=shared["max_wait_ms"],
-                    num_gpus=shared["policy_gpus"],
-                )
-                setup = replace(setup, policy_server=self.server)
+                gpus = options.policy_gpus or 0.0
+                self._check_gpus(gpus)
+                # Async methods and a high concurrency: queries wait together in the actor's event loop.
+                actor = ray.remote(num_cpus=0, num_gpus=gpus, max_concurrency=1024, max_restarts=0)(PolicyServer)
+                self.server = actor.remote(setup.policy, setup.policy_args, options.batch_limit, options.batch_wait_ms)
+                setup = replace(setup, policy_server=RayPolicyServer(self.server))
         except BaseException:
             self.close()
             raise
