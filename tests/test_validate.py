@@ -9,6 +9,7 @@ import yaml
 
 from langgap.bddl import Predicate
 from langgap.catalog.catalog import load_catalog_file
+from langgap.goals import conjunction
 from langgap.validate import goals_exclude, validate
 from tests.conftest import REPO, run_cli
 
@@ -78,10 +79,12 @@ def test_gate_rows_and_checks(probe_registry):
 
 
 def test_goals_exclude():
-    on = Predicate.parse
-    assert goals_exclude((on("(On a plate)"),), (on("(On a stove)"),))
-    assert not goals_exclude((on("(On a plate)"),), (on("(On b plate)"),))
-    assert not goals_exclude((on("(Open drawer)"),), (on("(On a plate)"),))
+    def on(text: str):
+        return conjunction([Predicate.parse(text)])
+
+    assert goals_exclude(on("(On a plate)"), on("(On a stove)"))
+    assert not goals_exclude(on("(On a plate)"), on("(On b plate)"))
+    assert not goals_exclude(on("(Open drawer)"), on("(On a plate)"))
 
 
 def test_cli_validate_writes_report_and_records_verdicts(probe_registry, tmp_path):
