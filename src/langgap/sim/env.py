@@ -189,11 +189,13 @@ class TaskEnv:
 
     # -- episode -----------------------------------------------------------------------------
 
-    def reset(self, init_index: int | None, seed: int = 0) -> Observation:
+    def reset(self, init_index: int | None, seed: int = 0, *, render: bool = True) -> Observation:
         """Reset, then apply init state `init_index`; returns the t0 observation.
 
         `init_index=None` keeps the placement LIBERO's samplers draw from the BDDL regions (seeded by
         `seed`, fixtures included): a fresh start that is none of the fixed init states (demonstrations).
+        `render=False` leaves the images out of the returned observation: a caller that settles before
+        anyone looks (an episode) saves a render of every camera (about 90 ms each at 256², software GL).
         """
         if init_index is not None and not 0 <= init_index < len(self.init_states):
             raise InitStateError(
@@ -223,7 +225,7 @@ class TaskEnv:
         self.steps = 0
         self._restart_goal()
         self._reapply_render_flags()
-        return self.observe()
+        return self.observe(None if render else ())
 
     def _apply_init_state(self, init_index: int) -> None:
         state = self.init_states[init_index]
