@@ -14,18 +14,6 @@ from langgap.sim.env import CAMERAS, TaskEnv
 TASK_ID = "spatial/s0/black-bowl-1-on-plate"
 
 
-class CountingEnv(TaskEnv):
-    """A real environment that counts the camera images it renders."""
-
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, **kwargs)
-        self.renders = 0
-
-    def render(self, camera: str) -> np.ndarray:
-        self.renders += 1
-        return super().render(camera)
-
-
 class Reach:
     """Looks through both cameras every `replan` steps and plays a fixed reach; keeps what it was shown."""
 
@@ -60,7 +48,7 @@ def reference_images(env: TaskEnv, policy: Reach, steps: int) -> list[dict[str, 
 def test_an_episode_renders_each_camera_once_per_query_and_the_same_pixels(short_catalog, replan):
     task = load_catalog_file(short_catalog).get(TASK_ID)
     policy = Reach(replan, task.max_steps)
-    with CountingEnv(task, env_options_for(policy)) as env:
+    with TaskEnv(task, env_options_for(policy)) as env:
         result = run_episode(env, policy, task_context(task, load_catalog_file(short_catalog), init_index=0, seed=0))
         assert result.steps == task.max_steps and result.policy_calls == -(-task.max_steps // replan)
         # Nothing rendered at reset, nor between queries: the saving measured by bench/bench_render.py.

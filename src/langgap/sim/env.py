@@ -108,6 +108,7 @@ class TaskEnv:
         self.init_states = files.init_states(task)
         self.t0_hash: str | None = None
         self.steps = 0
+        self.renders = 0  # camera images rendered since construction (what benchmarks and tests count)
         self._raw_obs: dict | None = None
         self._progress = GoalProgress(task.goal)
         self._holds = False  # the task's goal, as of the last observed step
@@ -317,6 +318,7 @@ class TaskEnv:
     def render(self, camera: str) -> np.ndarray:
         """One upright uint8 image (H, W, 3) from `camera`."""
         size = self.options.image_size
+        self.renders += 1
         self._make_render_context_current()
         raw = self.sim.render(camera_name=camera, width=size, height=size)
         return np.ascontiguousarray(raw[::-1, ::-1])
