@@ -1,6 +1,6 @@
 """Image policies against the renderer, the physical limit on a CPU machine (one run, side by side).
 
-    .venv/bin/python bench/bench_render.py [--task ID] [--steps 60] [--size 256] [--rounds 3] [--png FILE]
+    .venv/bin/python bench/bench_render.py [--task ID] [--steps 60] [--size 256] [--rounds 5] [--png FILE] [--scenes]
 
 Rows, in interleaved rounds (medians): a bare render loop (two cameras per iteration, no physics),
 with and without the reflection pass; a bare physics loop; the LangGap episode loop (`--steps` steps,
@@ -13,7 +13,8 @@ the renders the policy needs would allow.
 Then what the reflection pass changes in the images: both environments take the same actions, and
 at several steps both cameras are compared (pixels that differ, mean and max absolute difference) and
 the differing pixels attributed to the body drawn there (a segmentation render). `--png` saves
-agentview with the pass on, off, and their difference (amplified) side by side.
+agentview with the pass on, off, and their difference (amplified) side by side; `--scenes` counts the
+catalog's scenes that have a surface for the pass to draw.
 """
 
 from __future__ import annotations
@@ -101,6 +102,11 @@ def episode(loop: Loop, size: int) -> None:
     loop.renders_per_step = (loop.env.renders - before) / loop.env.steps
 
 
+def round_ratio(numerators: list[float], denominators: list[float]) -> float:
+    """Median over rounds of one round's ratio: load that drifts between rounds cancels out."""
+    return statistics.median(n / d for n, d in zip(numerators, denominators, strict=True))
+
+
 def rendering_env(task, size: int, reflection: bool = True, kind: type[TaskEnv] = TaskEnv) -> TaskEnv:
     return kind(task, env_options_for(LookingNoop(size, 1), reflection=reflection))
 
@@ -133,8 +139,8 @@ def speed(task, size: int, rounds: int, renders: int) -> None:
     render, plain, step = (statistics.median(v) for v in (render_s[True], render_s[False], step_s))
     print(
         f"{task.id}, {task.max_steps} steps, 2 cameras {size}x{size}, {rounds} rounds; one render "
-        f"{1000 * render:.0f} ms ({1000 * plain:.0f} ms without reflections: {plain / render:.2f}x), "
-        f"one physics step {1000 * step:.0f} ms"
+        f"{1000 * render:.0f} ms ({1000 * plain:.0f} ms without reflections: "
+        f"{round_ratio(render_s[False], render_s[True]):.2f}x), one physics step {1000 * step:.0f} ms"
     )
     print("| loop | renders per step | steps/s | limit (physics + needed renders) | of limit |")
     print("|---|---|---|---|---|")
@@ -143,8 +149,10 @@ def speed(task, size: int, rounds: int, renders: int) -> None:
         rate = statistics.median(loop.rates)
         limit = 1 / (step + loop.renders_per_step * (plain if loop.env is off else render))
         print(f"| {loop.label} | {loop.renders_per_step:.3f} | {rate:.2f} | {limit:.2f} | {rate / limit:.0%} |")
-    chunked, old = statistics.median(loops[2].rates), statistics.median(loops[3].rates)
-    print(f"chunked policy without the render at reset: {chunked / old:.3f}x the steps/s of before")
+    print(
+        f"chunked policy without the render at reset: {round_ratio(loops[2].rates, loops[3].rates):.3f}x "
+        f"the steps/s of before ({loops[3].renders_per_step / loops[2].renders_per_step:.3f}x the renders)"
+    )
 
 
 # -- what the reflection pass changes ------------------------------------------------------------
@@ -212,18 +220,53 @@ def reflection_difference(task, size: int, steps: int, png: Path | None) -> None
         print(f"| {camera} | {differing:.1%} | {stack.mean():.2f} | {stack.max()} | {top} |")
 
 
+def reflective_bodies(env: TaskEnv) -> list[str]:
+    """Bodies with a surface MuJoCo's reflection pass mirrors the scene in: a visible, opaque plane or
+    box whose material reflects (MuJoCo draws the first one's reflection only)."""
+    model = env.sim.model._model
+    bodies = []
+    for geom in range(model.ngeom):
+        material = model.geom_matid[geom]
+        if (
+            model.geom_type[geom] in (mujoco.mjtGeom.mjGEOM_PLANE, mujoco.mjtGeom.mjGEOM_BOX)
+            and material >= 0
+            and model.mat_reflectance[material] > 0
+            and model.geom_group[geom] in (1, 2)  # the groups LIBERO's cameras draw
+            and min(model.geom_rgba[geom][3], model.mat_rgba[material][3]) >= 0.995
+        ):
+            bodies.append(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, int(model.geom_bodyid[geom])))
+    return bodies
+
+
+def reflective_scenes() -> None:
+    """Print in how many of the catalog's scenes the reflection pass has a surface to draw."""
+    first: dict[tuple[str, str], list[str]] = {}
+    for task in load_catalog():
+        if (task.suite, task.scene_task) not in first:
+            with TaskEnv(task) as env:
+                first[(task.suite, task.scene_task)] = reflective_bodies(env)
+    surfaces = Counter(bodies[0] for bodies in first.values() if bodies)
+    print(
+        f"scenes with a reflective surface: {sum(surfaces.values())} of {len(first)} "
+        f"({', '.join(f'{body}: {n}' for body, n in surfaces.items())}); in the others the pass draws nothing"
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--task", default=TASK)
     parser.add_argument("--size", type=int, default=256)
     parser.add_argument("--steps", type=int, default=60, help="episode length (the task's limit is 220)")
-    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--renders", type=int, default=10, help="bare render iterations per round")
     parser.add_argument("--png", type=Path, help="save agentview with reflections on | off | difference")
+    parser.add_argument("--scenes", action="store_true", help="also count the scenes with a reflective surface")
     args = parser.parse_args()
     task = dataclasses.replace(load_catalog().get(args.task), max_steps=args.steps)
     speed(task, args.size, args.rounds, args.renders)
     reflection_difference(task, args.size, min(args.steps, 30), args.png)
+    if args.scenes:
+        reflective_scenes()
 
 
 if __name__ == "__main__":
