@@ -96,7 +96,7 @@ class LangGapLiberoEnv(gym.Env):
             self._env = TaskEnv(self._task, self._options)
         init_index = self._next_init % len(self._env.init_states)
         self._next_init += self._stride
-        self._env.reset(init_index, seed=0 if seed is None else int(seed))
+        self._env.reset(init_index, seed=0 if seed is None else int(seed), render=False)  # shown after settling
         self._env.settle()
         return self._observation(), {"is_success": False, "init_index": init_index}
 

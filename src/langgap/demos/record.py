@@ -141,7 +141,7 @@ def start_episode(env: TaskEnv, demo: Demo) -> None:
     scenes, e.g. libero_spatial task 4 whose cabinet starts open, LIBERO's placement on a rebuilt model
     does not follow from the seed alone) are written into the model, then the recorded state.
     """
-    env.reset(0)
+    env.reset(0, render=False)  # the recorded state replaces this one before anything is shown
     model = env.sim.model
     if model.body_pos.shape != demo.body_pos.shape:
         raise SimulationError(f"{demo.task_id}: the demonstration was recorded in another scene")

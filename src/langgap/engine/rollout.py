@@ -61,7 +61,8 @@ def run_episode(
     Exceptions from the policy propagate; a malformed action raises `PolicyOutputError`.
     """
     spec = policy.spec
-    env.reset(None if sampled_start else context.init_index, seed=context.seed)
+    # The policy first looks after settling: an image of the unsettled start would be thrown away.
+    env.reset(None if sampled_start else context.init_index, seed=context.seed, render=False)
     policy.reset(context.for_policy(spec))  # the goal reaches privileged policies only
     env.settle(settle_steps)
     if on_start is not None:

@@ -108,6 +108,7 @@ class TaskEnv:
         self.init_states = files.init_states(task)
         self.t0_hash: str | None = None
         self.steps = 0
+        self.renders = 0  # camera images rendered since construction (what benchmarks and tests count)
         self._raw_obs: dict | None = None
         self._progress = GoalProgress(task.goal)
         self._holds = False  # the task's goal, as of the last observed step
@@ -189,11 +190,13 @@ class TaskEnv:
 
     # -- episode -----------------------------------------------------------------------------
 
-    def reset(self, init_index: int | None, seed: int = 0) -> Observation:
+    def reset(self, init_index: int | None, seed: int = 0, *, render: bool = True) -> Observation:
         """Reset, then apply init state `init_index`; returns the t0 observation.
 
         `init_index=None` keeps the placement LIBERO's samplers draw from the BDDL regions (seeded by
         `seed`, fixtures included): a fresh start that is none of the fixed init states (demonstrations).
+        `render=False` leaves the images out of the returned observation: a caller that settles before
+        anyone looks (an episode) saves a render of every camera (about 90 ms each at 256², software GL).
         """
         if init_index is not None and not 0 <= init_index < len(self.init_states):
             raise InitStateError(
@@ -223,7 +226,7 @@ class TaskEnv:
         self.steps = 0
         self._restart_goal()
         self._reapply_render_flags()
-        return self.observe()
+        return self.observe(None if render else ())
 
     def _apply_init_state(self, init_index: int) -> None:
         state = self.init_states[init_index]
@@ -315,6 +318,7 @@ class TaskEnv:
     def render(self, camera: str) -> np.ndarray:
         """One upright uint8 image (H, W, 3) from `camera`."""
         size = self.options.image_size
+        self.renders += 1
         self._make_render_context_current()
         raw = self.sim.render(camera_name=camera, width=size, height=size)
         return np.ascontiguousarray(raw[::-1, ::-1])

@@ -1,0 +1,61 @@
+"""An image policy's episode renders only what the policy is shown, and shows it the same pixels."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from langgap.catalog.catalog import load_catalog_file
+from langgap.engine.context import task_context
+from langgap.engine.rollout import env_options_for, run_episode
+from langgap.policies.base import PolicySpec
+from langgap.sim.env import CAMERAS, TaskEnv
+
+TASK_ID = "spatial/s0/black-bowl-1-on-plate"
+
+
+class Reach:
+    """Looks through both cameras every `replan` steps and plays a fixed reach; keeps what it was shown."""
+
+    def __init__(self, replan: int, steps: int):
+        self.spec = PolicySpec(cameras=CAMERAS, image_size=96, chunk=replan, replan=replan)
+        rng = np.random.default_rng(0)
+        self.actions = np.concatenate([rng.uniform(-0.6, 0.6, (steps, 6)), -np.ones((steps, 1))], axis=1)
+        self.shown: list[dict[str, np.ndarray]] = []
+
+    def reset(self, context) -> None:
+        self.shown.clear()
+
+    def act(self, observation):
+        start = len(self.shown) * self.spec.replan
+        self.shown.append(observation.images)
+        return self.actions[start : start + self.spec.chunk]
+
+
+def reference_images(env: TaskEnv, policy: Reach, steps: int) -> list[dict[str, np.ndarray]]:
+    """What the policy must see: a reset that renders, settling, then both cameras at every query step."""
+    env.reset(0, seed=0)
+    env.settle()
+    seen = []
+    for step in range(steps):
+        if step % policy.spec.replan == 0:
+            seen.append(env.observe(CAMERAS).images)
+        env.step(policy.actions[step])
+    return seen
+
+
+@pytest.mark.parametrize("replan", [1, 5])
+def test_an_episode_renders_each_camera_once_per_query_and_the_same_pixels(short_catalog, replan):
+    task = load_catalog_file(short_catalog).get(TASK_ID)
+    policy = Reach(replan, task.max_steps)
+    with TaskEnv(task, env_options_for(policy)) as env:
+        result = run_episode(env, policy, task_context(task, load_catalog_file(short_catalog), init_index=0, seed=0))
+        assert result.steps == task.max_steps and result.policy_calls == -(-task.max_steps // replan)
+        # Nothing rendered at reset, nor between queries: the saving measured by bench/bench_render.py.
+        assert env.renders == result.policy_calls * len(CAMERAS)
+        expected = reference_images(env, policy, result.steps)
+    for step, (shown, reference) in enumerate(zip(policy.shown, expected, strict=True)):
+        for camera in CAMERAS:
+            np.testing.assert_array_equal(shown[camera], reference[camera], err_msg=f"query {step}, {camera}")
+    # The arm moves: a stale image (one render reused across queries) would fail the comparison above.
+    assert not np.array_equal(expected[0]["robot0_eye_in_hand"], expected[-1]["robot0_eye_in_hand"])
