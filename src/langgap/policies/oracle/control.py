@@ -1,8 +1,10 @@
 """From a desired end-effector pose to one OSC_POSE delta action.
 
-LIBERO's controller reads an action as a pose change of at most 5 cm and 0.5 rad (world frame)
-per 20 Hz step, so a proportional command toward the target, scaled by those maxima and clipped,
-is a well-damped servo. Positions saturate as a vector so the end effector moves in a straight line.
+LIBERO's controller reads an action as a pose change of at most 5 cm and 0.5 rad per world axis
+(it clips each component on its own) per 20 Hz step, so a proportional command toward the target,
+scaled by those maxima and clipped, is a well-damped servo. A command beyond the limits is scaled
+down as a whole until its largest component fits: the end effector keeps a straight line, and a
+diagonal motion uses the full range of every axis (up to 1.7 times faster than a Euclidean cap).
 """
 
 from __future__ import annotations
@@ -25,13 +27,14 @@ def servo(
     grip: float,
     speed: float = 1.0,
 ) -> np.ndarray:
-    """One action moving the end effector toward (target_pos, target_mat); `speed` caps the step (0..1]."""
-    move = (np.asarray(target_pos) - eef_pos) / MAX_TRANSLATION
-    norm = float(np.linalg.norm(move))
-    if norm > speed:
-        move *= speed / norm
-    turn = mat_to_axis_angle(np.asarray(target_mat) @ eef_mat.T) / MAX_ROTATION
-    turn_norm = float(np.linalg.norm(turn))
-    if turn_norm > 1.0:
-        turn /= turn_norm
+    """One action moving the end effector toward (target_pos, target_mat); `speed` (0..1] caps each
+    position component of the step."""
+    move = _saturate((np.asarray(target_pos) - eef_pos) / MAX_TRANSLATION, speed)
+    turn = _saturate(mat_to_axis_angle(np.asarray(target_mat) @ eef_mat.T) / MAX_ROTATION, 1.0)
     return np.concatenate([move, turn, [grip]])
+
+
+def _saturate(command: np.ndarray, limit: float) -> np.ndarray:
+    """`command` scaled down, keeping its direction, until no component exceeds `limit`."""
+    largest = float(np.abs(command).max())
+    return command * (limit / largest) if largest > limit else command

@@ -86,6 +86,22 @@ def wrap_half_turn(yaw: float, reference: float) -> float:
     return best
 
 
+# The Panda's last joint, for a top-down hand: its angle is about WRIST_ZERO minus (the closing yaw
+# minus the hand's azimuth from the base), measured; its range is +-2.9 rad, kept with a margin.
+WRIST_ZERO = 2.35
+WRIST_LIMIT = 2.6
+
+
+def wrist_yaw(yaw: float, reference: float, azimuth: float) -> float:
+    """`yaw` or `yaw + pi` for a top-down hand at `azimuth` (radians, seen from the robot's base):
+    the one nearer `reference`, unless it would turn the wrist's last joint past its limit, where
+    the controller stalls."""
+    best = wrap_half_turn(yaw, reference)
+    if abs(math.remainder(WRIST_ZERO - (best - azimuth), 2 * math.pi)) > WRIST_LIMIT:
+        best += math.pi if best < reference else -math.pi
+    return best
+
+
 @dataclass(frozen=True)
 class Boxes:
     """Oriented boxes: centres (n, 3), half extents (n, 3) and rotations (n, 3, 3) (columns = box axes)."""

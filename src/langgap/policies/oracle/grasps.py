@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from langgap.policies.oracle import hand
-from langgap.policies.oracle.geometry import Boxes, closing_yaw, penetration, top_down, wrap_half_turn
+from langgap.policies.oracle.geometry import Boxes, closing_yaw, penetration, top_down, wrist_yaw
 from langgap.policies.oracle.scene import Scene
 
 YAW_STEPS = 12  # candidate closing axes, every 15 degrees over a half turn
@@ -36,6 +36,8 @@ CLEARANCE_WEIGHT = 20.0  # cost per metre of missing clearance around the finger
 WANTED_CLEARANCE = 0.02
 COMFORTABLE_REACH = 0.62  # horizontal distance from the robot's base beyond which the arm nears full stretch
 REACH_WEIGHT = 25.0  # cost per metre beyond the comfortable reach
+FULL_STRETCH = 0.70  # beyond this the arm, moving fast, can lock its elbow straight and stall
+STRETCH_WEIGHT = 50.0  # further cost per metre beyond FULL_STRETCH
 
 
 APPROACHES = (0.05, 0.035, 0.025, 0.015)  # pre-grasp heights above the grasp, highest first
@@ -171,6 +173,12 @@ class _Candidate:
     own: Boxes  # the object's own parts the hand must not touch
 
 
+def stretch_cost(scene: Scene, point: np.ndarray) -> float:
+    """The cost of holding the hand at `point`, rising steeply as the arm nears full stretch."""
+    reach = scene.reach(point)
+    return REACH_WEIGHT * max(0.0, reach - COMFORTABLE_REACH) + STRETCH_WEIGHT * max(0.0, reach - FULL_STRETCH)
+
+
 def has_grasp(scene: Scene, obj: str) -> bool:
     """Whether `obj` has any part narrow enough to grasp at all (before checking for collisions)."""
     bounds = scene.boxes(obj).aabb()
@@ -213,7 +221,7 @@ def plan_grasp(
             at_place = grasp.point + place_shift
             placeable = not hand_hits(at_place, grasp.yaw, place_obstacles)
             cost += 0.0 if placeable else UNPLACEABLE_COST  # still possible, but only if nothing else is
-            cost += REACH_WEIGHT * max(0.0, scene.reach(at_place) - COMFORTABLE_REACH)
+            cost += stretch_cost(scene, at_place)
         if best is None or cost < best.cost:
             best = Grasp(grasp.point, grasp.yaw, grasp.width, grasp.rim, cost, grasp.entry, placeable)
     return best
@@ -235,8 +243,9 @@ def _candidates(scene: Scene, boxes: Boxes, bounds: np.ndarray):
         centre = (pad_bounds[:, :2].min(axis=0) + pad_bounds[:, 3:5].max(axis=0)) / 2.0
         standing = bounds[:, 5] > pad_lo
         below = boxes.select(~standing)  # e.g. a bowl's floor under the fingers
+        azimuth = math.atan2(centre[1] - scene.base_pos[1], centre[0] - scene.base_pos[0])
         for k in range(YAW_STEPS):
-            yaw = wrap_half_turn(k * math.pi / YAW_STEPS, current)
+            yaw = wrist_yaw(k * math.pi / YAW_STEPS, current, azimuth)
             direction = np.array([math.cos(yaw), math.sin(yaw)])
             normal = np.array([-direction[1], direction[0]])
             across = (footprint_corners(pads) - centre) @ normal
@@ -267,7 +276,7 @@ def _candidates(scene: Scene, boxes: Boxes, bounds: np.ndarray):
                     rim = not centred or abs(offset) > STRIP
                     cost = abs(yaw - current) + OFF_CENTRE_WEIGHT * off_centre + OFFSET_WEIGHT * abs(offset)
                     cost += SHALLOW_COST * (GRASP_DEPTHS[0] - depth)
-                    cost += REACH_WEIGHT * max(0.0, scene.reach(point) - COMFORTABLE_REACH)
+                    cost += stretch_cost(scene, point)
                     yield _Candidate(point=point, yaw=yaw, width=width, rim=rim, cost=cost, own=own)
 
 

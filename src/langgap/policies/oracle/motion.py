@@ -86,7 +86,8 @@ def move(
         if len(history) > STALL_STEPS and history[-STALL_STEPS - 1] - history[-1] < STALL_PROGRESS:
             return False  # blocked (an obstacle, the arm's reach): let the caller decide
         if through:
-            aim = agent.scene.eef_pos + error * max(1.0, MAX_STEP / max(distance, 1e-9))
+            # Aimed far enough that the largest component saturates: full speed along the line.
+            aim = agent.scene.eef_pos + error * max(1.0, MAX_STEP / max(float(np.abs(error).max()), 1e-9))
         else:
             if distance < INTEGRAL_ZONE:
                 bias = np.clip(bias + INTEGRAL_GAIN * error, -MAX_BIAS, MAX_BIAS)

@@ -15,15 +15,16 @@ from langgap.policies.oracle.carry import release_route
 from langgap.policies.oracle.control import CLOSE, OPEN
 from langgap.policies.oracle.geometry import bounds_corners_xy
 from langgap.policies.oracle.grasps import APPROACHES, plan_grasp
-from langgap.policies.oracle.motion import Agent, Program, actuate, back_off, move, reorient, travel
+from langgap.policies.oracle.motion import PASS_TOLERANCE, Agent, Program, actuate, back_off, move, reorient, travel
 from langgap.policies.oracle.placement import Spot, flight_path, footprint_at
 
 LIFT = 0.08  # lift after grasping before flying
 GRASP_TOLERANCE = 0.005
 LIFTED = 0.02  # an object that rose this much with the hand is held
 PLACE_CLEARANCE = 0.03  # released objects are lowered from this high above the support
-PLACE_SPEED = 0.35
-CARRY_SPEED = 0.8  # a load held by its rim swings loose when flung about
+PLACE_SPEED = 0.35  # touching down
+SLOW_ZONE = 0.04  # above the release point the descent slows from the carrying speed to PLACE_SPEED
+CARRY_SPEED = 1.0  # loads are carried at full speed (lowered gently: PLACE_SPEED)
 SAG = 0.3  # allowance for a pinched load's far side drooping, per metre of its reach beyond the fingers
 PICK_ATTEMPTS = 3
 SPOT_TRIES = 6  # spots tried for a grasp whose hand also fits where the object goes
@@ -35,6 +36,11 @@ PLACE_STALL = 5  # steps without descending after which the load is released whe
 def _hang(agent: Agent, obj: str) -> float:
     """How far the held object reaches below the grip site."""
     return float(agent.scene.eef_pos[2] - agent.scene.bbox(obj)[2])
+
+
+def _descent_speed(height: float) -> float:
+    """How fast to lower a load `height` above its release point: fast from high up, gently near it."""
+    return float(np.clip(height / SLOW_ZONE * CARRY_SPEED, PLACE_SPEED, CARRY_SPEED))
 
 
 def pick(agent: Agent, obj: str, spots: Sequence[Spot] = ()) -> Program:
@@ -68,7 +74,8 @@ def pick(agent: Agent, obj: str, spots: Sequence[Spot] = ()) -> Program:
         yield from move(agent, grasp.point, tol=GRASP_TOLERANCE, steps=40, speed=0.8)
         yield from actuate(agent, CLOSE)
         lift_to = agent.scene.eef_pos + np.array([0.0, 0.0, LIFT])
-        yield from move(agent, lift_to, tol=0.015, steps=30, speed=0.6)
+        # Not stopping up there: the flight to the place continues from wherever the lift ends.
+        yield from move(agent, lift_to, tol=PASS_TOLERANCE, steps=30, speed=0.6, through=True)
         if agent.scene.touches_gripper(obj) and agent.scene.pos(obj)[2] - start_z > LIFTED:
             return spot if spot is not None else True
         yield from actuate(agent, OPEN)
@@ -111,7 +118,7 @@ def place(agent: Agent, obj: str, spot: Spot) -> Program:
             break  # the hand rests on something (a basket's rim): release from here
         correction = spot.xy - scene.pos(obj)[:2]
         target = np.array([*(scene.eef_pos[:2] + correction), floor - 0.01])
-        yield agent.command(target, speed=PLACE_SPEED)
+        yield agent.command(target, speed=_descent_speed(scene.eef_pos[2] - release[2]))
     yield from actuate(agent, OPEN, min_steps=RELEASE_STEPS, max_steps=RELEASE_STEPS)
     if len(route) > 2:  # came in from the side: leave the same way
         back = route[-2] + np.array([0.0, 0.0, agent.scene.eef_pos[2] - route[-1][2]])

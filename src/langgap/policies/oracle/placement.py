@@ -19,6 +19,7 @@ BLOCKED_COST = 10.0  # per loose object in the way of a spot
 ASIDE_DISTANCES = (0.12, 0.16, 0.2, 0.25)
 ASIDE_DIRECTIONS = 12
 ASIDE_MAX_REACH = 0.72
+ASIDE_MARGIN = 0.015  # room around a load put aside: held, it may tilt and grow its bounding box
 WRIST_HEIGHT = 0.2  # the hand and wrist rise this far above the grip site
 ESCAPE_DISTANCES = (0.05, 0.08, 0.12)
 HAND_HALF_WIDTH = 0.03
@@ -94,27 +95,38 @@ def spots_in_region(scene: Scene, obj: str, region_name: str, *, inside: bool) -
     return [best] + sorted(free, key=lambda spot: scene.reach(spot.xy))
 
 
-def spot_aside(scene: Scene, obj: str, keep_clear: np.ndarray) -> Spot | None:
-    """A free spot on the table near `obj` but outside the box `keep_clear` (lo xyz, hi xyz)."""
+def spots_aside(scene: Scene, obj: str, keep_clear: np.ndarray) -> list[Spot]:
+    """Free spots on the table near `obj` but outside the box `keep_clear` (lo xyz, hi xyz), best first.
+
+    The best is the one with the shortest flight there (one beside a tall fixture needs a climb
+    over it); several are offered so that the grasp can be chosen for a spot where the hand, too,
+    fits (not against a fixture).
+    """
     everything = scene.obstacles(exclude=(obj,))
     table = min(scene.bbox(e)[2] for e in scene.entities if scene.movable(e))
     here = scene.pos(obj)[:2]
+    box = scene.bbox(obj) + np.array([-ASIDE_MARGIN, -ASIDE_MARGIN, 0.0, ASIDE_MARGIN, ASIDE_MARGIN, 0.0])
+    height = float(box[5] - box[2])
+    start = np.array([*here, box[5]])
+    scored = []
     for distance in ASIDE_DISTANCES:
-        best, best_reach = None, np.inf
         for k in range(ASIDE_DIRECTIONS):
             angle = 2 * np.pi * k / ASIDE_DIRECTIONS
             xy = here + distance * np.array([np.cos(angle), np.sin(angle)])
-            placed = footprint_at(scene, obj, xy, table + LIFT_GAP)
-            bounds = placed.aabb()
-            low, high = bounds[:, :2].min(axis=0), bounds[:, 3:5].max(axis=0)
+            # The object's bounding box, as the carrying hand's collision checks see the load (with
+            # room for it tilting in the fingers).
+            shift = np.array([*(xy - here), table + LIFT_GAP - box[2]])
+            placed = Boxes.from_local((box + np.tile(shift, 2))[None, :], np.eye(3), np.zeros(3))
+            low, high = placed.aabb()[0, :2], placed.aabb()[0, 3:5]
             inside = bool(np.all(high > keep_clear[:2]) and np.all(low < keep_clear[3:5]))
             if inside or boxes_hit(placed, everything, 0.001) or scene.reach(xy) > ASIDE_MAX_REACH:
                 continue
-            if scene.reach(xy) < best_reach:
-                best, best_reach = Spot(xy=xy, support=table), scene.reach(xy)
-        if best is not None:
-            return best
-    return None
+            end = np.array([*xy, table + height])
+            # Held by its rim, a load may reach its full width beyond the hand.
+            path = flight_path(scene, start, end, exclude=(obj,), hang=height, reach=float(np.max(high - low)))
+            length = np.sum(np.linalg.norm(np.diff(np.vstack([start, path]), axis=0), axis=1)) + path[-1][2] - end[2]
+            scored.append((float(length), scene.reach(xy), Spot(xy=xy, support=table)))
+    return [spot for *_, spot in sorted(scored, key=lambda item: item[:2])]
 
 
 def _nearest_free_distance(placed: np.ndarray, obstacles: np.ndarray, support: float, cap: float = 0.05) -> float:

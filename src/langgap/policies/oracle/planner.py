@@ -15,7 +15,7 @@ from langgap.errors import LangGapError
 from langgap.policies.oracle import drawers, hinges, pick_place, pushing
 from langgap.policies.oracle.grasps import has_grasp
 from langgap.policies.oracle.motion import Agent, Program, hold
-from langgap.policies.oracle.placement import spot_aside, spot_on_object, spots_in_region
+from langgap.policies.oracle.placement import spot_on_object, spots_aside, spots_in_region
 from langgap.policies.oracle.predicates import holds, region_box
 from langgap.policies.oracle.scene import Scene
 
@@ -85,8 +85,9 @@ def _achieve(agent: Agent, predicate: Predicate) -> Program:
                 # `On` a region needs contact with its surface: clear the way first.
                 keep_clear = np.concatenate(region_box(scene.region(target), inside=False))
                 for blocker in spots[0].blockers:
-                    aside = spot_aside(agent.scene, blocker, keep_clear)
-                    if aside is not None and (yield from pick_place.pick(agent, blocker, [aside])):
+                    asides = spots_aside(agent.scene, blocker, keep_clear)
+                    aside = (yield from pick_place.pick(agent, blocker, asides)) if asides else None
+                    if aside is not None:
                         yield from pick_place.place(agent, blocker, aside)
                 scene = agent.scene
                 spots = spots_in_region(scene, obj, target, inside=False)
