@@ -2,8 +2,8 @@
 
 Each configuration is measured in this one run, side by side, so the ratios are comparable even on a
 noisy machine. A step with cameras means one physics step plus one render of every camera (what an
-image policy queried at every step costs). The first two rows give the gain of LangGap's
-bit-identical fast stepping (sim/stepping.py) over robosuite's.
+image policy queried at every step costs). The steppings themselves (exact, fast, robosuite's own)
+are compared with raw physics by bench_step.py.
 
     .venv/bin/python bench/bench_env.py [--task ID] [--steps N] [--resets N]
 """
@@ -21,7 +21,6 @@ from langgap.sim.env import CAMERAS, EnvOptions, TaskEnv
 
 CONFIGS = {
     "no rendering": EnvOptions(),
-    "no rendering, robosuite's own stepping": EnvOptions(stepping="robosuite"),
     "2 cameras 128x128": EnvOptions(cameras=CAMERAS, image_size=128),
     "2 cameras 256x256": EnvOptions(cameras=CAMERAS, image_size=256),
     "2 cameras 256x256, reflection off": EnvOptions(cameras=CAMERAS, image_size=256, reflection=False),

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Callable
 
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
 from langgap.catalog.generate import (
@@ -51,23 +52,16 @@ def add_parser(subparsers) -> None:
 
 
 def summary_lines(tasks: list[Task]) -> list[str]:
-    """Counts per scene and per dimension, the paper's tasks found, and the gate's verdicts if it ran."""
-    scenes: dict[str, Counter] = {}
-    for task in tasks:
-        scenes.setdefault(task.source, Counter())[task.dimension] += 1
+    """Counts per scene, suite and dimension, the paper's tasks found, and the gate's verdicts if it ran."""
+    scenes = _counts(tasks, lambda t: t.source)
+    suites = _counts(tasks, lambda t: t.suite)
     width = max(len(s) for s in scenes)
     present = {t.dimension for t in tasks}
     columns = [d for d in DIMENSIONS if d in present]
-    lines = [f"{'scene (source task)':<{width}}  " + "  ".join(columns)]
-    for scene, counts in scenes.items():
-        lines.append(f"{scene:<{width}}  " + "  ".join(f"{counts[c]:>{len(c)}}" for c in columns))
-    suites: dict[str, Counter] = {}
-    for task in tasks:
-        suites.setdefault(task.suite, Counter())[task.dimension] += 1
-    for suite, counts in suites.items():
-        lines.append(f"{suite:<{width}}  " + "  ".join(f"{counts[c]:>{len(c)}}" for c in columns))
     total = Counter(t.dimension for t in tasks)
-    lines.append(f"{'total':<{width}}  " + "  ".join(f"{total[c]:>{len(c)}}" for c in columns))
+    lines = [f"{'scene (source task)':<{width}}  " + "  ".join(columns)]
+    for name, counts in [*scenes.items(), *suites.items(), ("total", total)]:
+        lines.append(f"{name:<{width}}  " + "  ".join(f"{counts[c]:>{len(c)}}" for c in columns))
     extended = len(tasks) - total["original"]
     lines.append(f"{len(tasks)} tasks: {total['original']} original, {extended} extended")
 
@@ -82,6 +76,14 @@ def summary_lines(tasks: list[Task]) -> list[str]:
     )
 
     return lines
+
+
+def _counts(tasks: list[Task], key: Callable[[Task], str]) -> dict[str, Counter]:
+    """Tasks per dimension, for each value of `key`, in order of first appearance."""
+    counts: dict[str, Counter] = {}
+    for task in tasks:
+        counts.setdefault(key(task), Counter())[task.dimension] += 1
+    return counts
 
 
 def run(args) -> int:

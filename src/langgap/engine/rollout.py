@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
@@ -85,12 +84,11 @@ def run_episode(
             queue = list(chunk[: spec.replan])
         action = queue.pop(0)
         success = env.step(action)
-        truth = functools.cache(env.predicate_holds)  # scene goals share atoms: each is read once a step
         for name, progress in pending.items():
-            if progress.observe(env.steps, truth) and name not in reached:
+            if progress.observe(env.steps, env.predicate_holds) and name not in reached:
                 reached[name] = env.steps
         if ordered is not None:
-            ordered.observe(env.steps, truth)
+            ordered.observe(env.steps, env.predicate_holds)
         if on_step is not None:
             on_step(env, env.steps, action)
         if success:

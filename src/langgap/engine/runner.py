@@ -114,16 +114,15 @@ class EpisodeRunner:
         return record
 
     def _env_options(self, film: bool):
+        filming = {}
         if film:
             # Videos show both cameras. A policy that reads no images sees none of them, so its clips skip
             # the reflection pass (~40 % of a render); a policy's own images keep the renderer settings it
             # was declared with.
-            if self._policy.spec.cameras:
-                return env_options_for(self._policy, cameras=CAMERAS, stepping=self.setup.stepping)
-            return env_options_for(
-                self._policy, cameras=CAMERAS, image_size=256, reflection=False, stepping=self.setup.stepping
-            )
-        return env_options_for(self._policy, stepping=self.setup.stepping)
+            filming = {"cameras": CAMERAS}
+            if not self._policy.spec.cameras:
+                filming |= {"image_size": 256, "reflection": False}
+        return env_options_for(self._policy, stepping=self.setup.stepping, **filming)
 
     def _close_env(self) -> None:
         if self._env is not None:

@@ -30,7 +30,7 @@ DEFAULT_MAX_WAIT_MS = 5.0  # shared policy: how long a query waits for others
 # The fields that only say which episodes a run holds: `--extend` lets a resumed run grow them.
 PLAN_FIELDS = ("selection", "tasks", "inits", "conditions", "repeats")
 # The steppings a run can choose: `robosuite` gives `exact`'s bits, slower (for benchmarks and tests).
-RESULT_STEPPINGS = ("exact", "fast")
+RESULT_STEPPINGS = tuple(s for s in stack.STEPPINGS if s != "robosuite")
 
 
 class SpecError(LangGapError):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from langgap.catalog.labels import DIMENSION_LABEL, EXTENDED_DIMENSIONS, SPLIT_LABEL, SUITE_LABEL, SUITE_ORDER, label
@@ -325,30 +326,29 @@ def _paired_cells(t: PairedTest) -> list[str]:
     return [t.name, str(t.pairs), pct(d["rate_a"]), pct(d["rate_b"]), str(t.only_a), str(t.only_b), f"{t.p_value:.3g}"]
 
 
+def _paired_table(
+    title: str, run: RunResults, tests: list[PairedTest], a: str, b: str, last: tuple[str, Callable]
+) -> Table | None:
+    """`run`'s paired tests (McNemar) as a table: `a` against `b` episode by episode, then one column
+    `last` (its header, and its cell from a test); None without tests."""
+    if not tests:
+        return None
+    header, cell = last
+    headers = ["Comparison", "Pairs", f"{a} %", f"{b} %", f"Only {a.lower()}", f"Only {b.lower()}", "p", header]
+    rows = [[*_paired_cells(t), cell(t)] for t in tests]
+    return Table(f"{title}, paired episode by episode (McNemar) — {run.label}", headers, rows)
+
+
 def wording_table(run: RunResults) -> Table | None:
     """Paraphrases and attribute references against their sources' original sentences, episode by episode."""
-    if not run.wording:
-        return None
-    rows = [[*_paired_cells(t), f"{100 * (t.successes_b - t.successes_a) / t.pairs:+.1f}"] for t in run.wording]
-    headers = ["Comparison", "Pairs", "Original %", "Reworded %", "Only original", "Only reworded", "p"]
-    return Table(
-        f"Same goal, other words, paired episode by episode (McNemar) — {run.label}",
-        [*headers, "Difference (points)"],
-        rows,
-    )
+    difference = ("Difference (points)", lambda t: f"{100 * (t.successes_b - t.successes_a) / t.pairs:+.1f}")
+    return _paired_table("Same goal, other words", run, run.wording, "Original", "Reworded", difference)
 
 
 def condition_table(run: RunResults) -> Table | None:
     """Language conditions against `given`, episode by episode."""
-    if not run.conditions:
-        return None
-    rows = [[*_paired_cells(t), pct(t.changed / t.pairs)] for t in run.conditions]
-    headers = ["Comparison", "Pairs", "Given %", "Condition %", "Only given", "Only condition", "p"]
-    return Table(
-        f"Language conditions, paired episode by episode (McNemar) — {run.label}",
-        [*headers, "Behaviour changed %"],
-        rows,
-    )
+    changed = ("Behaviour changed %", lambda t: pct(t.changed / t.pairs))
+    return _paired_table("Language conditions", run, run.conditions, "Given", "Condition", changed)
 
 
 def comparison_table(summary: Summary) -> Table | None:

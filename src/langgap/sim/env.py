@@ -112,6 +112,8 @@ class TaskEnv:
         self._raw_obs: dict | None = None
         self._progress = GoalProgress(task.goal)
         self._holds = False  # the task's goal, as of the last observed step
+        self._truth: dict[Predicate, bool] = {}  # atoms read in the state `_truth_of` names
+        self._truth_of: tuple | None = None
         bddl = files.task_bddl_path(task)
         configure_rendering()
         # Imported here: robosuite and MuJoCo load only when an environment is built (after the GL choice).
@@ -294,8 +296,16 @@ class TaskEnv:
         return holds_now(goal, self.predicate_holds)
 
     def predicate_holds(self, predicate: Predicate) -> bool:
-        """Whether one atom holds in the current state (LIBERO's predicate)."""
-        return bool(self._inner._eval_predicate(predicate.as_libero()))
+        """Whether one atom holds in the current state (LIBERO's predicate). Each atom is read once per
+        state: the task's goal and every scene goal watched beside it share atoms."""
+        data = self.sim.data._data
+        state = (id(data), data.time, data.qpos.tobytes())
+        if state != self._truth_of:
+            self._truth, self._truth_of = {}, state
+        value = self._truth.get(predicate)
+        if value is None:
+            value = self._truth[predicate] = bool(self._inner._eval_predicate(predicate.as_libero()))
+        return value
 
     # -- observations ------------------------------------------------------------------------
 

@@ -71,7 +71,6 @@ class OscSubsteps:
             and controller.interpolator_ori is None
             and robot.has_gripper
             and robot.gripper.dof == 1
-            and len(robot.gripper.actuators) == 2
         )
 
     def controls(self, env) -> bool:
@@ -107,12 +106,7 @@ class OscSubsteps:
         torques = np.dot(c.J_full.T, decoupled_wrench) + data.qfrc_bias[self.qvel_index]
         torques += nullspace_torques(c.mass_matrix, nullspace_matrix, c.initial_joint, c.joint_pos, c.joint_vel)
         c.torques = torques
-        c.new_update = True
-        # SingleArm.control and grip_action
-        self.robot.torques = np.clip(torques, self.torque_low, self.torque_high)
-        gripper_action = self.robot.gripper.format_action(action[self.arm_dims :])
-        data.ctrl[self.gripper_actuators] = self.gripper_bias + self.gripper_weight * gripper_action
-        data.ctrl[self.arm_actuators] = self.robot.torques
+        self._write_controls(action, np.clip(torques, self.torque_low, self.torque_high))
 
     def _control_compiled(self, action: np.ndarray) -> None:
         c, model, data = self.controller, self.model, self.data
@@ -137,17 +131,15 @@ class OscSubsteps:
             self.torque_low,
             self.torque_high,
         )
+        self._write_controls(action, torques)
+
+    def _write_controls(self, action: np.ndarray, torques: np.ndarray) -> None:
+        """`SingleArm.control`'s end: the clipped arm torques and the gripper's controls (`grip_action`)."""
+        self.controller.new_update = True  # the next `update()` recomputes, as after `run_controller`
         self.robot.torques = torques
-        c.new_update = True
-        # PandaGripper.format_action on scalars: the fingers' targets move by `speed` towards the sign
-        gripper = self.robot.gripper
-        sign, speed = float(np.sign(action[self.arm_dims])), gripper.speed
-        held = gripper.current_action
-        gripper.current_action = np.array(
-            [min(max(held[0] - speed * sign, -1.0), 1.0), min(max(held[1] + speed * sign, -1.0), 1.0)]
-        )
-        data.ctrl[self.gripper_actuators] = self.gripper_bias + self.gripper_weight * gripper.current_action
-        data.ctrl[self.arm_actuators] = torques
+        gripper_action = self.robot.gripper.format_action(action[self.arm_dims :])
+        self.data.ctrl[self.gripper_actuators] = self.gripper_bias + self.gripper_weight * gripper_action
+        self.data.ctrl[self.arm_actuators] = torques
 
     def _update_controller(self) -> None:
         """The controller's `update()` after its `sim.forward()`: end-effector pose and velocity, joint

@@ -5,6 +5,8 @@ LIBERO's controller reads an action as a pose change of at most 5 cm and 0.5 rad
 scaled by those maxima and clipped, is a well-damped servo. A command beyond the limits is scaled
 down as a whole until its largest component fits: the end effector keeps a straight line, and a
 diagonal motion uses the full range of every axis (up to 1.7 times faster than a Euclidean cap).
+Turns keep the Euclidean cap (0.5 rad per step about any axis): turning at the full rate about every
+axis at once shook held bowls loose (goal/s3's bowl-in-drawer lost init states 3 and 11 of 0–11).
 """
 
 from __future__ import annotations
@@ -30,8 +32,9 @@ def servo(
     """One action moving the end effector toward (target_pos, target_mat); `speed` (0..1] caps each
     position component of the step."""
     move = _saturate((np.asarray(target_pos) - eef_pos) / MAX_TRANSLATION, speed)
-    turn = _saturate(mat_to_axis_angle(np.asarray(target_mat) @ eef_mat.T) / MAX_ROTATION, 1.0)
-    return np.concatenate([move, turn, [grip]])
+    turn = mat_to_axis_angle(np.asarray(target_mat) @ eef_mat.T) / MAX_ROTATION
+    turn_norm = float(np.linalg.norm(turn))
+    return np.concatenate([move, turn / max(turn_norm, 1.0), [grip]])
 
 
 def _saturate(command: np.ndarray, limit: float) -> np.ndarray:
