@@ -1,4 +1,4 @@
-"""Misbehaving policies for the harness's reliability tests (loaded by workers as `tests.policies:Name`)."""
+"""Misbehaving policies for the harness's tests (loaded by workers as `tests.policies:Name`)."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from langgap.policies.base import PolicySpec
+from langgap.policies.oracle import OraclePolicy
 from langgap.policies.simple import NoopPolicy, RandomPolicy
 
 
@@ -160,3 +161,11 @@ class ErrsOnInitsPolicy(NoopPolicy):
     def act(self, observation):
         self.calls += 1
         return np.full(7, np.nan) if self.erring and self.calls == 5 else super().act(observation)
+
+
+class OrderBlindOracle(OraclePolicy):
+    """The oracle given only the goal's atoms (its witness), not their order: it reaches every part of an
+    ordered goal in its own habitual order (fixtures first), as a policy that skips "first ... then" would."""
+
+    def goal_of(self, context):
+        return context.goal

@@ -107,7 +107,7 @@ def test_paraphrase_and_attribute_keep_the_source_goal(beyond):
 
 
 ORDER_SOURCE = "goal/s8/black-bowl-on-plate"
-IN_ORDER = "goal/s8/first-turn-on-stove-then-black-bowl-on-plate"  # the oracle turns knobs first
+IN_ORDER = "goal/s8/first-turn-on-stove-then-black-bowl-on-plate"  # fixtures first, as the oracle would unordered
 OUT_OF_ORDER = "goal/s8/first-black-bowl-on-plate-then-turn-on-stove"
 NEGATED = "goal/s8/black-bowl-on-plate~not-where"
 
@@ -125,9 +125,9 @@ def _run(policy: str, tasks: str, path) -> dict:
 
 @pytest.mark.slow
 def test_an_ordered_goal_reached_in_the_wrong_order_fails_as_wrong_order(tmp_path):
-    # The oracle sees the goal's atoms only and does articulations first (what it must learn: README),
-    # so it meets one order and breaks the other: the outcome tells them apart.
-    records = _run("oracle", f"{IN_ORDER},{OUT_OF_ORDER}", tmp_path / "oracle")
+    # A policy blind to order (the oracle given the atoms only: fixtures first) meets one order and
+    # breaks the other: the outcome tells them apart.
+    records = _run("tests.policies:OrderBlindOracle", f"{IN_ORDER},{OUT_OF_ORDER}", tmp_path / "order-blind")
     assert records[IN_ORDER].success and records[IN_ORDER].outcome == "success"
     wrong = records[OUT_OF_ORDER]
     assert not wrong.success and wrong.outcome == "wrong_order"
@@ -135,6 +135,22 @@ def test_an_ordered_goal_reached_in_the_wrong_order_fails_as_wrong_order(tmp_pat
     # what it did instead: the stove first, then the bowl, which is the other order's task
     reached = wrong.reached
     assert reached["goal/s7/turn-on-stove"] < reached[ORDER_SOURCE] == reached[IN_ORDER]
+
+
+@pytest.mark.slow
+def test_the_oracle_follows_the_order_a_goal_states(tmp_path):
+    records = _run("oracle", f"{IN_ORDER},{OUT_OF_ORDER}", tmp_path / "oracle")
+    assert all(r.success and r.outcome == "success" for r in records.values())
+    # each order's own task was reached first: the bowl before the stove in the order that says so
+    reached = records[OUT_OF_ORDER].reached
+    assert reached[ORDER_SOURCE] < reached["goal/s7/turn-on-stove"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("task_id", [NEGATED, "goal/s8/black-bowl-on-plate~not-what"])
+def test_the_oracle_meets_a_negated_goal_without_the_negated_task(tmp_path, task_id):
+    episode = _run("oracle", task_id, tmp_path / "oracle")[task_id]
+    assert episode.success and ORDER_SOURCE not in episode.goals_at_end
 
 
 @pytest.mark.slow

@@ -105,7 +105,7 @@ def test_blind_follows_the_source_goal_whatever_the_instruction(catalog):
 
 def _context(catalog, goal: tuple[str, ...]) -> TaskContext:
     base = task_context(catalog.get("spatial/s0/black-bowl-1-on-plate"), catalog, init_index=0, seed=0)
-    return replace(base, privileged=replace(base.privileged, goal=goal))
+    return replace(base, privileged=replace(base.privileged, goal=goal, goal_expression=""))
 
 
 def test_the_oracle_refuses_a_context_without_its_privileged_part(catalog):

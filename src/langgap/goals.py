@@ -19,8 +19,9 @@ Nothing here touches the simulator: truth of atoms comes from a function the cal
 
 from __future__ import annotations
 
+import itertools
 import re
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 
 from langgap.bddl import Predicate
@@ -232,6 +233,19 @@ def stages(goal: Goal) -> tuple[tuple[Predicate, ...], ...]:
     done = {p for g in groups for p in g}
     groups[-1] += tuple(p for p in witness(goal) if p not in done)
     return tuple(groups)
+
+
+def choices(goal: Goal) -> Iterator[Goal]:
+    """Every way to meet `goal` without a disjunction left: each `Or` outside a `Not` replaced by one of
+    its parts, first parts first (so the first choice is the one `witness` states)."""
+    if isinstance(goal, Atom | Not):
+        yield goal
+    elif isinstance(goal, Or):
+        for part in goal.parts:
+            yield from choices(part)
+    else:
+        for parts in itertools.product(*(tuple(choices(p)) for p in goal.parts)):
+            yield type(goal)(parts)
 
 
 # -- evaluation over an episode -------------------------------------------------------------------

@@ -14,6 +14,7 @@ from langgap.goals import (
     Or,
     Then,
     atoms,
+    choices,
     conjunction,
     goal_from_strings,
     goal_strings,
@@ -143,3 +144,21 @@ def test_a_goal_whose_first_alternative_contradicts_it_has_no_witness():
         witness(And((Atom(BOWL_ON_PLATE), Not(Atom(BOWL_ON_PLATE)))))
     with pytest.raises(BddlError, match="no witness"):
         witness(Not(Atom(BOWL_ON_PLATE)))
+
+
+def test_choices_resolve_each_alternative_first_parts_first_and_keep_negations():
+    either = Or((Atom(BOWL_ON_RAMEKIN), Atom(BOWL_IN_DRAWER)))
+    goal = And((either, Not(Or((Atom(BOWL_ON_PLATE), Atom(OPEN_DRAWER))))))
+    found = list(choices(goal))
+    # Each choice is the goal with its `Or` replaced by one part; the `Or` under `Not` stays (it is a ban).
+    assert found == [
+        And((Atom(BOWL_ON_RAMEKIN), goal.parts[1])),
+        And((Atom(BOWL_IN_DRAWER), goal.parts[1])),
+    ]
+    assert stages(found[0]) == stages(goal)  # the first choice is the witness
+    ordered = Then((Or((Atom(OPEN_DRAWER), Atom(BOWL_ON_RAMEKIN))), Atom(BOWL_ON_PLATE)))
+    assert [stages(c) for c in choices(ordered)] == [
+        ((OPEN_DRAWER,), (BOWL_ON_PLATE,)),
+        ((BOWL_ON_RAMEKIN,), (BOWL_ON_PLATE,)),
+    ]
+    assert list(choices(Atom(BOWL_ON_PLATE))) == [Atom(BOWL_ON_PLATE)]

@@ -1,17 +1,21 @@
-"""From goal predicates to one program of skills: order the sub-goals, then achieve each in turn.
+"""From a goal to one program of skills: order the sub-goals, then achieve each in turn.
 
-Sub-goals that change a fixture's state come first (turn a knob, open a drawer — also when a goal
-puts something into a closed drawer), then the pick-and-place ones in goal order, then closing
-(put things in before shutting them). Each round skips what already holds; a second round retries
-what did not stick.
+The goal (`langgap.goals`) is met through one of its choices (each `Or` resolved to one part, first
+parts first) and, within a choice, stage by stage (`goals.stages`: the parts of a `Then` in order).
+Within a stage, sub-goals that change a fixture's state come first (turn a knob, open a drawer —
+also when a goal puts something into a closed drawer), then the pick-and-place ones in goal order,
+then closing (put things in before shutting them). Each round skips what already holds; later rounds
+retry what did not stick. When a choice ends without meeting the goal (a `Not` broken, a placement
+that failed), the next choice is pursued from where the scene is.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from langgap import goals
 from langgap.bddl import Predicate
-from langgap.errors import LangGapError
+from langgap.errors import BddlError, LangGapError
 from langgap.policies.oracle import drawers, hinges, pick_place, pushing
 from langgap.policies.oracle.grasps import has_grasp
 from langgap.policies.oracle.motion import Agent, Program, hold
@@ -29,14 +33,15 @@ class OracleError(LangGapError):
     """The oracle cannot act on this goal in this scene."""
 
 
-def parse_goal(goal: tuple[str, ...] | list[str]) -> tuple[Predicate, ...]:
-    """Parse goal strings such as `(On bowl_1 plate_1)`; an empty or malformed goal is an OracleError."""
-    if not goal:
+def parse_goal(expressions: tuple[str, ...] | list[str]) -> goals.Goal:
+    """Parse a goal given as registry expressions (`(On bowl_1 plate_1)`, `(Then ...)`: their conjunction);
+    an empty or malformed goal is an OracleError."""
+    if not expressions:
         raise OracleError("the oracle needs a goal, got none")
     try:
-        return tuple(Predicate.parse(text) for text in goal)
+        return goals.goal_from_strings(expressions)
     except LangGapError as exc:
-        raise OracleError(f"the oracle cannot read goal {list(goal)}: {exc}") from None
+        raise OracleError(f"the oracle cannot read goal {list(expressions)}: {exc}") from None
 
 
 def check_goal(scene: Scene, goal: tuple[Predicate, ...]) -> None:
@@ -110,15 +115,31 @@ def _achieve(agent: Agent, predicate: Predicate) -> Program:
     raise OracleError(f"the oracle cannot {name.lower()} {part!r} (a hinged door)")
 
 
-def program(agent: Agent, goal: tuple[Predicate, ...]) -> Program:
-    """The whole episode: pursue the ordered sub-goals for a few rounds, then hold still."""
-    check_goal(agent.scene, goal)
-    steps = order_goal(agent.scene, goal)
+def _pursue(agent: Agent, atoms: tuple[Predicate, ...]) -> Program:
+    """Rounds over the ordered sub-goals, each round skipping what already holds."""
+    steps = order_goal(agent.scene, atoms)
     for _ in range(ROUNDS):
         pending = [p for p in steps if not holds(agent.scene, p)]
         if not pending:
-            break
+            return
         for predicate in pending:
             if not holds(agent.scene, predicate):
                 yield from _achieve(agent, predicate)
+
+
+def program(agent: Agent, goal: goals.Goal) -> Program:
+    """The whole episode: pursue the goal choice by choice, stage by stage, then hold still."""
+    check_goal(agent.scene, goals.atoms(goal))
+    for choice in goals.choices(goal):
+        try:
+            plan = goals.stages(choice)
+        except BddlError:
+            continue  # this choice contradicts a `Not` of the goal
+        for stage in plan:
+            yield from _pursue(agent, stage)
+        if len(plan) > 1:
+            # a later stage may have undone an earlier one; re-achieving it keeps the order (first times stay)
+            yield from _pursue(agent, tuple(p for stage in plan for p in stage))
+        if goals.holds_now(goal, lambda p: holds(agent.scene, p)):
+            break
     return (yield from hold(agent))

@@ -12,7 +12,7 @@ from langgap.sim.env import Observation
 
 
 class OraclePolicy:
-    """Solves a task from its goal predicates and the privileged simulator state.
+    """Solves a task from its goal (order, negation and alternatives included) and the privileged simulator state.
 
     It reads the world only from `observation.privileged` and the goal only from the context, and
     answers with the 7-D OSC_POSE delta + gripper action at 20 Hz like any policy. `noise` adds
@@ -35,8 +35,8 @@ class OraclePolicy:
         return {"noise": self.noise}
 
     def goal_of(self, context: PrivilegedContext) -> tuple[str, ...]:
-        """The goal this policy pursues: the task's own."""
-        return context.goal
+        """The goal this policy pursues: the task's own, with any order and negation it states."""
+        return (context.goal_expression,) if context.goal_expression else context.goal
 
     def reset(self, context: TaskContext) -> None:
         if context.privileged is None:
