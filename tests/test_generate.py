@@ -297,3 +297,13 @@ def test_no_candidate_goal_holds_at_t0_in_simulation():
             env.settle()
             holding += [t.id for t in extended if all(env.predicate_holds(p) for p in t.bddl_goal)]
     assert holding == []
+
+
+@pytest.mark.slow
+def test_generate_gates_every_candidate_and_records_how(tmp_path):
+    out = tmp_path / "object.yaml"
+    args = ["generate", "--suites", "libero_object", "--out", str(out), "--gate-inits", "1", "--stepping", "fast"]
+    assert main([*args, "--workers", "2", "--no-progress"]) == 0
+    catalog = load_catalog_file(out)
+    assert len(catalog.tasks) == 60 and all(t.gate is not None and t.gate.inits == 1 for t in catalog.tasks)
+    assert all(t.gate.made_by.endswith(", fast stepping") for t in catalog.tasks)  # the flag reached the record

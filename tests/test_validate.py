@@ -11,6 +11,7 @@ from langgap.bddl import Predicate
 from langgap.catalog.catalog import load_catalog_file
 from langgap.goals import conjunction
 from langgap.validate import goals_exclude, validate
+from langgap.version import code_version
 from tests.conftest import REPO, run_cli
 
 
@@ -112,8 +113,11 @@ def test_cli_validate_writes_report_and_records_verdicts(probe_registry, tmp_pat
     assert [c["holds"] for c in report["claims"]] == [True, False]  # the plate's goal holds at t0
     assert {"episodes", "successes", "rate", "mean_steps", "max_steps", "feasible", "reason"} <= set(rows[0])
     catalog = load_catalog_file(probe_registry)
-    assert catalog.get("spatial/s0/ramekin-on-plate").gate is not None
+    gate = catalog.get("spatial/s0/ramekin-on-plate").gate
+    assert gate is not None and gate.made_by == f"noop, langgap {code_version()}, exact stepping"
     assert catalog.get("spatial/s0/black-bowl-1-on-plate").gate is None
+    shown = run_cli("tasks", "show", "spatial/s0/ramekin-on-plate", "--catalog", str(probe_registry))
+    assert f"made by: {gate.made_by}" in shown.stdout
 
 
 def test_claims_only_resets_every_task_without_a_policy(probe_registry, tmp_path):

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import tempfile
 from collections import Counter
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -336,7 +336,14 @@ def record(
         "physics": physics_stack(stepping),
         "code_version": code_version(),
     }
-    return record_verdicts(registry_path(catalog_name), {r.id: r.verdict(inits) for r in rows}, about)
+    made_by = made_by_text(policy, about["code_version"], stepping)
+    verdicts = {r.id: replace(r.verdict(inits), made_by=made_by) for r in rows}
+    return record_verdicts(registry_path(catalog_name), verdicts, about)
+
+
+def made_by_text(policy: str, version: str, stepping: str) -> str:
+    """How a recorded verdict was made, as `GateResult.made_by` states it."""
+    return f"{policy}, langgap {version}, {stepping} stepping"
 
 
 def report(found: Validation) -> dict:

@@ -29,7 +29,9 @@ class GateResult:
     The gate runs init states 0..`inits`-1; `failed_inits` lists those the oracle failed (None in
     verdicts recorded before per-init results were kept), so the oracle's ceiling can be given for
     exactly the init states a run used. `certificate` is the evidence, from the simulator, that a
-    task no robot can do within its step limit (empty when none was made).
+    task no robot can do within its step limit (empty when none was made). `made_by` says which
+    policy, code version and stepping ran the gate for this verdict (a file mixes verdicts of several
+    recordings when tasks are re-validated one by one; empty in verdicts recorded before it was kept).
     """
 
     episodes: int
@@ -39,6 +41,7 @@ class GateResult:
     inits: int = 0
     failed_inits: tuple[int, ...] | None = None
     certificate: str = ""
+    made_by: str = ""
 
     def __post_init__(self) -> None:
         if not 0 <= self.successes <= self.episodes:

@@ -101,5 +101,5 @@ def run(args) -> int:
 
         rows = run_gate(args, str(path), "all", args.gate_inits).rows
         print(gate_summary(rows))
-        print(f"recorded verdicts in {record(str(path), rows, inits=args.gate_inits)}")
+        print(f"recorded verdicts in {record(str(path), rows, inits=args.gate_inits, stepping=args.stepping)}")
     return 0

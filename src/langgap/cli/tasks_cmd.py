@@ -126,4 +126,6 @@ def _gate_lines(gate) -> list[str]:
         lines.append(f"oracle failed on init states {', '.join(map(str, gate.failed_inits))}")
     if gate.certificate:
         lines.append(f"certified infeasible: {gate.certificate}")
+    if gate.made_by:
+        lines.append(f"made by: {gate.made_by}")
     return lines
