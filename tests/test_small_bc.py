@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from langgap.training.text import Vocabulary, words
+from langgap.policies.small_bc.text import Vocabulary, words
 from tests.conftest import TINY_TASK, run_cli, store_rows
 
 torch = pytest.importorskip("torch", reason="small-bc needs PyTorch (pip install 'langgap[train]')")
@@ -44,7 +44,7 @@ def checkpoint(tiny_collection, tmp_path_factory):
 
 
 def test_training_is_deterministic_and_checkpoint_round_trips(tiny_collection, checkpoint, tmp_path):
-    from langgap.training.small_bc import load_checkpoint
+    from langgap.policies.small_bc.model import load_checkpoint
     from langgap.training.train_small_bc import TrainConfig, train
 
     facts = train(
@@ -93,7 +93,7 @@ def test_eval_runs_small_bc_in_a_worker(checkpoint, tmp_path):
 
 def test_missing_or_foreign_checkpoint_is_a_clear_error(tmp_path):
     from langgap.policies import make_policy
-    from langgap.training.small_bc import CheckpointError
+    from langgap.policies.small_bc.model import CheckpointError
 
     with pytest.raises(CheckpointError, match="no small-bc checkpoint"):
         make_policy("small-bc", {"checkpoint": str(tmp_path / "none.safetensors")})

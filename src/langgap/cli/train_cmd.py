@@ -43,7 +43,7 @@ def _small_bc_config(args):
     import yaml
 
     from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
-    from langgap.training.small_bc import ModelConfig
+    from langgap.policies.small_bc.model import ModelConfig
     from langgap.training.train_small_bc import TrainConfig
 
     values: dict = {}

@@ -20,7 +20,7 @@ REGISTRY: dict[str, str] = {
     "lerobot": "langgap.policies.lerobot:LeRobotPolicy",
     "oracle": "langgap.policies.oracle:OraclePolicy",
     "blind": "langgap.policies.oracle:BlindPolicy",
-    "small-bc": "langgap.policies.small_bc:SmallBCPolicy",
+    "small-bc": "langgap.policies.small_bc.policy:SmallBCPolicy",
 }
 
 

@@ -1,1 +1,1 @@
-"""Training: the `small-bc` policy (CPU, PyTorch) and the paper's LeRobot fine-tuning experiments."""
+"""Training: the `small-bc` trainer (CPU, PyTorch) and the paper's LeRobot fine-tuning experiments."""

@@ -18,9 +18,9 @@ import torch
 from langgap.demos.compact import load_demos
 from langgap.demos.record import Demo
 from langgap.errors import LangGapError
-from langgap.training import features
-from langgap.training.small_bc import ModelConfig, Normalizer, SmallBC, save_checkpoint
-from langgap.training.text import Vocabulary
+from langgap.policies.small_bc import features
+from langgap.policies.small_bc.model import ModelConfig, Normalizer, SmallBC, save_checkpoint
+from langgap.policies.small_bc.text import Vocabulary
 
 
 @dataclass(frozen=True)

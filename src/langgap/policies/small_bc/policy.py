@@ -17,7 +17,7 @@ class SmallBCPolicy:
     """`--policy-arg checkpoint=PATH` (required); `replan=k` executes the first k actions of each chunk."""
 
     def __init__(self, checkpoint: str = "", replan: int = 2):
-        from langgap.training.small_bc import CheckpointError, load_checkpoint
+        from langgap.policies.small_bc.model import CheckpointError, load_checkpoint
 
         if not checkpoint:
             raise CheckpointError("small-bc needs --policy-arg checkpoint=PATH (a file written by `langgap train`)")
@@ -43,7 +43,7 @@ class SmallBCPolicy:
         self._names = None
 
     def act(self, observation: Observation) -> np.ndarray:
-        from langgap.training import features
+        from langgap.policies.small_bc import features
 
         torch = self._torch
         privileged = observation.privileged

@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from langgap.errors import DependencyNotInstalled, LangGapError
-from langgap.training.features import ENTITY_DIM, PROPRIO_DIM
-from langgap.training.text import Vocabulary
+from langgap.policies.small_bc.features import ENTITY_DIM, PROPRIO_DIM
+from langgap.policies.small_bc.text import Vocabulary
 
 try:
     import torch
