@@ -130,6 +130,18 @@ def test_object_not_in_scene_is_a_clear_error(catalog):
             policy.act(observation)
 
 
+def test_a_goal_no_choice_can_meet_is_a_clear_error(catalog):
+    task = catalog.get("spatial/s0/black-bowl-1-on-plate")
+    policy = make_policy("oracle")
+    contradiction = "(And (On akita_black_bowl_1 plate_1) (Not (On akita_black_bowl_1 plate_1)))"
+    with TaskEnv(task, env_options_for(policy)) as env:
+        observation = env.reset(0)
+        base = task_context(task, catalog, init_index=0, seed=0)
+        policy.reset(replace(base, privileged=replace(base.privileged, goal_expression=contradiction)))
+        with pytest.raises(LangGapError, match="cannot plan goal"):
+            policy.act(observation)
+
+
 def test_oracle_needs_privileged_observations(catalog):
     task = catalog.get("spatial/s0/black-bowl-1-on-plate")
     policy = make_policy("oracle")

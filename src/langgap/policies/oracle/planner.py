@@ -130,11 +130,13 @@ def _pursue(agent: Agent, atoms: tuple[Predicate, ...]) -> Program:
 def program(agent: Agent, goal: goals.Goal) -> Program:
     """The whole episode: pursue the goal choice by choice, stage by stage, then hold still."""
     check_goal(agent.scene, goals.atoms(goal))
+    planned = False
     for choice in goals.choices(goal):
         try:
             plan = goals.stages(choice)
         except BddlError:
             continue  # this choice contradicts a `Not` of the goal
+        planned = True
         for stage in plan:
             yield from _pursue(agent, stage)
         if len(plan) > 1:
@@ -142,4 +144,6 @@ def program(agent: Agent, goal: goals.Goal) -> Program:
             yield from _pursue(agent, tuple(p for stage in plan for p in stage))
         if goals.holds_now(goal, lambda p: holds(agent.scene, p)):
             break
+    if not planned:
+        raise OracleError(f"the oracle cannot plan goal {goal}: every choice contradicts it or orders it twice")
     return (yield from hold(agent))
