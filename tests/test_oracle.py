@@ -103,9 +103,19 @@ def test_blind_follows_the_source_goal_whatever_the_instruction(catalog):
     assert "source" in result.reached  # it did achieve what the original task asks
 
 
-def _context(catalog, goal: tuple[str, ...]) -> TaskContext:
+def _context(catalog, expression: str) -> TaskContext:
+    """Init state 0 of spatial/s0's original task, with another goal expression for the oracle to read."""
     base = task_context(catalog.get("spatial/s0/black-bowl-1-on-plate"), catalog, init_index=0, seed=0)
-    return replace(base, privileged=replace(base.privileged, goal=goal, goal_expression=""))
+    return replace(base, privileged=replace(base.privileged, goal_expression=expression))
+
+
+def _first_action(catalog, expression: str) -> None:
+    """The oracle's first action toward `expression` on init state 0 of spatial/s0's scene."""
+    policy = make_policy("oracle")
+    with TaskEnv(catalog.get("spatial/s0/black-bowl-1-on-plate"), env_options_for(policy)) as env:
+        observation = env.reset(0)
+        policy.reset(_context(catalog, expression))
+        policy.act(observation)
 
 
 def test_the_oracle_refuses_a_context_without_its_privileged_part(catalog):
@@ -117,29 +127,17 @@ def test_the_oracle_refuses_a_context_without_its_privileged_part(catalog):
 def test_unknown_predicate_is_a_clear_error(catalog):
     policy = make_policy("oracle")
     with pytest.raises(LangGapError, match="cannot read goal"):
-        policy.reset(_context(catalog, ("(Levitate akita_black_bowl_1)",)))
+        policy.reset(_context(catalog, "(Levitate akita_black_bowl_1)"))
 
 
 def test_object_not_in_scene_is_a_clear_error(catalog):
-    task = catalog.get("spatial/s0/black-bowl-1-on-plate")
-    policy = make_policy("oracle")
-    with TaskEnv(task, env_options_for(policy)) as env:
-        observation = env.reset(0)
-        policy.reset(_context(catalog, ("(On ketchup_1 plate_1)",)))
-        with pytest.raises(LangGapError, match="no object 'ketchup_1' in this scene"):
-            policy.act(observation)
+    with pytest.raises(LangGapError, match="no object 'ketchup_1' in this scene"):
+        _first_action(catalog, "(On ketchup_1 plate_1)")
 
 
 def test_a_goal_no_choice_can_meet_is_a_clear_error(catalog):
-    task = catalog.get("spatial/s0/black-bowl-1-on-plate")
-    policy = make_policy("oracle")
-    contradiction = "(And (On akita_black_bowl_1 plate_1) (Not (On akita_black_bowl_1 plate_1)))"
-    with TaskEnv(task, env_options_for(policy)) as env:
-        observation = env.reset(0)
-        base = task_context(task, catalog, init_index=0, seed=0)
-        policy.reset(replace(base, privileged=replace(base.privileged, goal_expression=contradiction)))
-        with pytest.raises(LangGapError, match="cannot plan goal"):
-            policy.act(observation)
+    with pytest.raises(LangGapError, match="cannot plan goal"):
+        _first_action(catalog, "(And (On akita_black_bowl_1 plate_1) (Not (On akita_black_bowl_1 plate_1)))")
 
 
 def test_oracle_needs_privileged_observations(catalog):

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import tempfile
 from collections import Counter
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -66,8 +66,8 @@ class TaskValidation:
     checks: dict[str, bool] = field(default_factory=dict)
     failed_inits: list[int] = field(default_factory=list)  # judged episodes the oracle failed
 
-    def verdict(self, inits: int) -> GateResult:
-        """The verdict to record, for a gate that ran init states 0..`inits`-1."""
+    def verdict(self, inits: int, made_by: str = "") -> GateResult:
+        """The verdict to record, for a gate that ran init states 0..`inits`-1 as `made_by` says."""
         return GateResult(
             episodes=self.episodes,
             successes=self.successes,
@@ -75,6 +75,7 @@ class TaskValidation:
             reason=self.reason,
             inits=inits,
             failed_inits=tuple(self.failed_inits),
+            made_by=made_by,
         )
 
 
@@ -336,14 +337,8 @@ def record(
         "physics": physics_stack(stepping),
         "code_version": code_version(),
     }
-    made_by = made_by_text(policy, about["code_version"], stepping)
-    verdicts = {r.id: replace(r.verdict(inits), made_by=made_by) for r in rows}
-    return record_verdicts(registry_path(catalog_name), verdicts, about)
-
-
-def made_by_text(policy: str, version: str, stepping: str) -> str:
-    """How a recorded verdict was made, as `GateResult.made_by` states it."""
-    return f"{policy}, langgap {version}, {stepping} stepping"
+    made_by = f"{policy}, langgap {about['code_version']}, {stepping} stepping"
+    return record_verdicts(registry_path(catalog_name), {r.id: r.verdict(inits, made_by) for r in rows}, about)
 
 
 def report(found: Validation) -> dict:

@@ -32,6 +32,7 @@ CONTEXT = TaskContext(
         condition="given",
         goal=("(On akita_black_bowl_1 plate_1)",),
         source_goal=("(On akita_black_bowl_1 plate_1)",),
+        goal_expression="(And (On akita_black_bowl_1 plate_1))",
     ),
 )
 SEEN = Observation(state=np.zeros(8, dtype=np.float32), privileged={"eef_pos": np.zeros(3)})

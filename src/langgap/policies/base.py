@@ -48,7 +48,7 @@ class PrivilegedContext:
     condition: str
     goal: tuple[str, ...]  # atoms that satisfy the goal (`Task.bddl_goal`): the whole goal for LIBERO-style tasks
     source_goal: tuple[str, ...]
-    goal_expression: str = ""  # the goal itself (`langgap.goals`), with any Or, Not and order (Then)
+    goal_expression: str  # the goal itself (`langgap.goals`), with any Or, Not and order (Then)
 
 
 @dataclass(frozen=True)

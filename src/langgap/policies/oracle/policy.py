@@ -35,8 +35,8 @@ class OraclePolicy:
         return {"noise": self.noise}
 
     def goal_of(self, context: PrivilegedContext) -> tuple[str, ...]:
-        """The goal this policy pursues: the task's own, with any order and negation it states."""
-        return (context.goal_expression,) if context.goal_expression else context.goal
+        """The goal this policy pursues: the task's own expression, with any order and negation it states."""
+        return (context.goal_expression,)
 
     def reset(self, context: TaskContext) -> None:
         if context.privileged is None:
