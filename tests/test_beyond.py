@@ -84,8 +84,10 @@ def test_negation_fails_on_the_source_goal_and_holds_on_its_witness(beyond):
 
 def test_ordering_comes_in_both_orders_ending_in_the_same_state(beyond):
     ordered = {t.id: t for t in beyond.select("ordering")}
+    (two_part_steps,) = {t.max_steps for t in beyond.select("original") if t.suite == "libero_10"}
     for task in ordered.values():
         assert isinstance(task.goal, Then) and len(task.goal.parts) == 2
+        assert task.max_steps == two_part_steps, task.id  # two sub-goals: the step limit of LIBERO's two-part tasks
         reverse = Then(task.goal.parts[::-1])
         (twin,) = [t for t in ordered.values() if t.goal == reverse and t.source == task.source]
         assert set(twin.bddl_goal) == set(task.bddl_goal) and twin.goal != task.goal

@@ -36,16 +36,20 @@ from langgap.stack import SUITES
 
 # The negation variants: which part of a pick-and-place goal the sentence negates.
 NEGATED_PARTS = {"not-where": "where", "not-what": "what"}
+# An ordering task asks for two sub-goals one after the other, as LIBERO's two-part tasks do: it gets
+# their suite's step limit, not its single-goal source's (220 steps do not fit a bowl and a drawer).
+TWO_PART_SUITE = "libero_10"
 
 
 def generate_beyond(suites: Iterable[str] = SUITES) -> list[Task]:
     """Every `langgap-beyond` task of `suites`: each source, then its new tasks by dimension and id."""
     sources = source_tasks(suites)
+    two_part_steps = source_tasks((TWO_PART_SUITE,))[0].max_steps
     tasks: list[Task] = []
     for source in sources:
         scene = files.scene_problem(source)
         new = [
-            *_ordering(source, scene, sources),
+            *_ordering(source, scene, sources, two_part_steps),
             *_negation(source, scene),
             *_paraphrase(source, scene),
             *_attribute(source, scene),
@@ -59,7 +63,9 @@ def _as_beyond(source: Task) -> Task:
     return replace(source, catalog=BEYOND_CATALOG, in_langgap99=True)
 
 
-def _task(source: Task, scene: BddlProblem, dimension: str, slug: str, goal: Goal, sentences: dict) -> Task:
+def _task(
+    source: Task, scene: BddlProblem, dimension: str, slug: str, goal: Goal, sentences: dict, max_steps: int = 0
+) -> Task:
     return Task(
         id=f"{SUITE_SHORT[source.suite]}/s{source.scene_index}/{slug}",
         catalog=BEYOND_CATALOG,
@@ -73,7 +79,7 @@ def _task(source: Task, scene: BddlProblem, dimension: str, slug: str, goal: Goa
         goal=goal,
         obj_of_interest=obj_of_interest(atoms(goal), scene),
         instructions=sentences,
-        max_steps=source.max_steps,
+        max_steps=max(source.max_steps, max_steps),
     )
 
 
@@ -126,7 +132,7 @@ def order_pairs(source: Task, scene: BddlProblem, sources: list[Task]) -> list[t
     return [pair for a, b in pairs for pair in ((a, b), (b, a))]
 
 
-def _ordering(source: Task, scene: BddlProblem, sources: list[Task]) -> list[Task]:
+def _ordering(source: Task, scene: BddlProblem, sources: list[Task], max_steps: int) -> list[Task]:
     out = []
     for a, b in order_pairs(source, scene, sources):
         sentences = {
@@ -137,7 +143,7 @@ def _ordering(source: Task, scene: BddlProblem, sources: list[Task]) -> list[Tas
             for style in INSTRUCTION_STYLES
         }
         slug = f"first-{goal_slug((a,), scene)}-then-{goal_slug((b,), scene)}"
-        out.append(_task(source, scene, "ordering", slug, Then((Atom(a), Atom(b))), sentences))
+        out.append(_task(source, scene, "ordering", slug, Then((Atom(a), Atom(b))), sentences, max_steps))
     return out
 
 
