@@ -205,23 +205,31 @@ def plan_grasp(
     fixed = scene.obstacles(exclude=(obj,), fixtures_only=True)
     loose = Boxes.concat([scene.boxes(e) for e in scene.entities if e != obj and scene.movable(e)])
     candidates = sorted(_candidates(scene, boxes, bounds), key=lambda c: c.cost)
+    placing = place_shift is not None and place_obstacles is not None
     lowest = {}
     best: Grasp | None = None
     for candidate in candidates:
         if best is not None and candidate.cost >= best.cost:
             break
+        placeable, penalty, stretch = True, 0.0, 0.0
+        if placing:
+            at_place = candidate.point + place_shift
+            stretch = stretch_cost(scene, at_place)
+            # The costs at the place are known before the (costly) collision checks at the object, and
+            # those only add to a cost: a candidate already no cheaper than the best cannot win.
+            if best is not None and candidate.cost + stretch >= best.cost:
+                continue
+            placeable = not hand_hits(at_place, candidate.yaw, place_obstacles)
+            penalty = 0.0 if placeable else UNPLACEABLE_COST  # still possible, but only if nothing else is
+            if best is not None and candidate.cost + penalty + stretch >= best.cost:
+                continue
         z = candidate.point[2]
         if z not in lowest:
             lowest[z] = bounds[:, 5].max() - z + hand.TIP + 0.005
         grasp = _evaluate(scene, candidate, fixed, loose, approach, lowest[z])
         if grasp is None:
             continue
-        cost, placeable = grasp.cost, True
-        if place_shift is not None and place_obstacles is not None:
-            at_place = grasp.point + place_shift
-            placeable = not hand_hits(at_place, grasp.yaw, place_obstacles)
-            cost += 0.0 if placeable else UNPLACEABLE_COST  # still possible, but only if nothing else is
-            cost += stretch_cost(scene, at_place)
+        cost = grasp.cost + penalty + stretch if placing else grasp.cost
         if best is None or cost < best.cost:
             best = Grasp(grasp.point, grasp.yaw, grasp.width, grasp.rim, cost, grasp.entry, placeable)
     return best
