@@ -18,7 +18,7 @@ from langgap.policies.oracle.geometry import (
     wrap_half_turn,
 )
 from langgap.policies.oracle.grasps import PENETRATION_TOLERANCE, REACH_WEIGHT, hand_hits
-from langgap.policies.oracle.motion import Agent, Program, actuate, back_off, move, reorient, travel
+from langgap.policies.oracle.motion import START_ROT, Agent, Program, actuate, back_off, move, reorient, travel
 from langgap.policies.oracle.placement import flight_path
 from langgap.policies.oracle.scene import Articulation
 
@@ -45,7 +45,7 @@ def _pointing(approach: np.ndarray, reference: np.ndarray) -> np.ndarray:
     """A gripper frame pointing along `approach` (horizontal) with its fingers closing vertically.
 
     Of the two such frames (a parallel gripper is symmetric) the one nearer `reference` is used,
-    which keeps the wrist within its joint limits when turning from a top-down pose.
+    which keeps the wrist within its joint limits when turning from that top-down pose.
     """
     candidates = []
     for up in (1.0, -1.0):
@@ -73,7 +73,9 @@ def _handle_grasp(agent: Agent, art: Articulation, direction: np.ndarray) -> tup
     local = hand.local_boxes(hand.PAD_GAP_OPEN)
     best, best_cost = None, np.inf
     for approach, grasp in options:
-        rot = _pointing(approach, agent.scene.eef_mat)
+        # Nearer the hand's start than its present turn: from a hand turned by an earlier grasp, the
+        # frame nearer it can lie beyond the wrist's range (its last joints at their limits).
+        rot = _pointing(approach, START_ROT)
         ready = grasp - HANDLE_APPROACH * approach
         # The hand at the grasp, where it starts sliding onto the bar, and on its way down there.
         poses = [grasp, ready] + [ready + np.array([0.0, 0.0, lift]) for lift in (0.05, 0.1, 0.15)]

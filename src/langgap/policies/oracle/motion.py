@@ -31,6 +31,7 @@ STALL_PROGRESS = 0.002
 RETREAT = 0.08  # how far the hand lifts after letting go
 LARGE_TURN = 0.8  # radians; larger reorientations are done near the base
 TURNING_REACH = 0.55  # horizontal distance from the base where the arm turns freely
+START_ROT = top_down(math.pi / 2)  # the hand's orientation when an episode starts
 
 
 class Agent:
@@ -38,7 +39,7 @@ class Agent:
 
     def __init__(self) -> None:
         self.scene: Scene | None = None
-        self.rot = top_down(math.pi / 2)
+        self.rot = START_ROT
         self.grip = OPEN
         self.steps = 0
 
