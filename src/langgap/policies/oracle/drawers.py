@@ -11,8 +11,8 @@ from langgap.policies.oracle.control import CLOSE, OPEN
 from langgap.policies.oracle.geometry import (
     Boxes,
     boxes_hit,
-    closing_yaw,
     depth,
+    hand_yaw,
     leaning,
     top_down,
     wrap_half_turn,
@@ -145,7 +145,7 @@ def push_closed(agent: Agent, region: str) -> Program:
     art = agent.scene.articulation(region)
     direction = opening_direction(art)
     face, axis, half_length = drawer_front(art, direction)
-    yaw = wrap_half_turn(math.atan2(axis[1], axis[0]), closing_yaw(agent.scene.eef_mat))
+    yaw = wrap_half_turn(math.atan2(axis[1], axis[0]), hand_yaw(agent.scene.eef_mat))
     rot = top_down(yaw)
     # On the handle (finger tips below the bar so they cannot slip over it) or beside it, wherever
     # the hand meets nothing else from the start to the end of the push; nearer the base is better.

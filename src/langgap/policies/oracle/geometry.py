@@ -60,8 +60,16 @@ def top_down(yaw: float) -> np.ndarray:
     return np.array([[c, s, 0.0], [s, -c, 0.0], [0.0, 0.0, -1.0]])
 
 
-def closing_yaw(rot: np.ndarray) -> float:
-    """The yaw of the finger-closing axis of gripper frame `rot`."""
+START_YAW = math.pi / 2  # the closing yaw of the (top-down) hand when an episode starts
+DOWNWARD = -0.7  # a hand whose approach axis points lower than this (z) points down, leaning or not
+
+
+def hand_yaw(rot: np.ndarray) -> float:
+    """The closing yaw to measure the next turn of a hand with frame `rot` from: its own while it
+    points down; the start's when it does not (a hand that pulled a drawer closes vertically, its
+    closing axis has no yaw to keep)."""
+    if rot[2, 2] > DOWNWARD:
+        return START_YAW
     return math.atan2(rot[1, 0], rot[0, 0])
 
 

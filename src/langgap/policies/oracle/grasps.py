@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from langgap.policies.oracle import hand
-from langgap.policies.oracle.geometry import Boxes, closing_yaw, penetration, top_down, wrist_yaw
+from langgap.policies.oracle.geometry import Boxes, hand_yaw, penetration, top_down, wrist_yaw
 from langgap.policies.oracle.scene import Scene
 
 YAW_STEPS = 12  # candidate closing axes, every 15 degrees over a half turn
@@ -237,7 +237,7 @@ def plan_grasp(
 
 def _candidates(scene: Scene, boxes: Boxes, bounds: np.ndarray):
     """Every grasp line (yaw, offset) at every depth whose material between the pads is narrow enough."""
-    current = closing_yaw(scene.eef_mat)
+    current = hand_yaw(scene.eef_mat)
     reach = hand.PAD_GAP_OPEN / 2 + hand.FINGER_THICKNESS
     corners_all = footprint_corners(boxes)
     for depth in GRASP_DEPTHS:

@@ -8,7 +8,7 @@ import numpy as np
 
 from langgap.policies.oracle import hand
 from langgap.policies.oracle.control import CLOSE, OPEN
-from langgap.policies.oracle.geometry import closing_yaw, rotation_about, top_down, wrap_half_turn
+from langgap.policies.oracle.geometry import hand_yaw, rotation_about, top_down, wrap_half_turn
 from langgap.policies.oracle.grasps import APPROACHES
 from langgap.policies.oracle.motion import Agent, Program, actuate, back_off, move, reorient, travel
 from langgap.policies.oracle.placement import flight_path
@@ -27,7 +27,7 @@ def turn(agent: Agent, fixture: str, state: str) -> Program:
     extent = grip_slab[:, 3:5].max(axis=0) - grip_slab[:, :2].min(axis=0)
     # Close across the knob's narrow side.
     yaw = 0.0 if extent[0] < extent[1] else math.pi / 2
-    yaw = wrap_half_turn(yaw, closing_yaw(agent.scene.eef_mat))
+    yaw = wrap_half_turn(yaw, hand_yaw(agent.scene.eef_mat))
     above = grasp_point + np.array([0.0, 0.0, APPROACHES[0]])
     yield from reorient(agent, top_down(yaw))
     path = flight_path(agent.scene, agent.scene.eef_pos, above, hang=hand.TIP, reach=hand.REACH)
@@ -77,7 +77,7 @@ def close_door(agent: Agent, fixture: str) -> Program:
     point, tangent, height = _door_contact(art, sense)
     standoff = hand.FINGER_DEPTH + 0.015
     start = np.array([*(point - tangent * standoff), height])
-    yaw = wrap_half_turn(math.atan2(tangent[1], tangent[0]) + math.pi / 2, closing_yaw(agent.scene.eef_mat))
+    yaw = wrap_half_turn(math.atan2(tangent[1], tangent[0]) + math.pi / 2, hand_yaw(agent.scene.eef_mat))
     yield from actuate(agent, CLOSE, max_steps=8)
     yield from reorient(agent, top_down(yaw))
     path = flight_path(agent.scene, agent.scene.eef_pos, start + np.array([0.0, 0.0, 0.05]), hang=hand.TIP, reach=0.05)
@@ -89,7 +89,7 @@ def close_door(agent: Agent, fixture: str) -> Program:
         point, tangent, _ = _door_contact(art, sense)
         # Stay on the door's face and push along its motion; turn the hand with the door.
         aim = np.array([*(point - tangent * (standoff - 0.03)), height])
-        yaw = wrap_half_turn(math.atan2(tangent[1], tangent[0]) + math.pi / 2, closing_yaw(agent.scene.eef_mat))
+        yaw = wrap_half_turn(math.atan2(tangent[1], tangent[0]) + math.pi / 2, hand_yaw(agent.scene.eef_mat))
         yield agent.command(aim, rot=top_down(yaw), speed=0.6)
     yield from back_off(agent)
     return agent.scene.articulation(fixture).holds("close")

@@ -6,13 +6,12 @@ newest observation. Primitives compose with `yield from`, so a skill reads as a 
 
 from __future__ import annotations
 
-import math
 from collections.abc import Generator
 
 import numpy as np
 
 from langgap.policies.oracle.control import OPEN, servo
-from langgap.policies.oracle.geometry import mat_to_axis_angle, top_down
+from langgap.policies.oracle.geometry import START_YAW, mat_to_axis_angle, top_down
 from langgap.policies.oracle.scene import Scene
 
 Program = Generator[np.ndarray, None, bool]
@@ -31,7 +30,7 @@ STALL_PROGRESS = 0.002
 RETREAT = 0.08  # how far the hand lifts after letting go
 LARGE_TURN = 0.8  # radians; larger reorientations are done near the base
 TURNING_REACH = 0.55  # horizontal distance from the base where the arm turns freely
-START_ROT = top_down(math.pi / 2)  # the hand's orientation when an episode starts
+START_ROT = top_down(START_YAW)  # the hand's orientation when an episode starts
 
 
 class Agent:

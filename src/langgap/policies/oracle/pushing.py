@@ -11,8 +11,8 @@ from langgap.policies.oracle.control import CLOSE
 from langgap.policies.oracle.geometry import (
     Boxes,
     boxes_hit,
-    closing_yaw,
     depth,
+    hand_yaw,
     leaning,
     top_down,
     wrap_half_turn,
@@ -50,7 +50,7 @@ def _push_pose(
     push = np.array([*direction, 0.0])
     for lean in PUSH_LEANS:
         for turn in PUSH_TURNS:  # a turned hand reaches less far sideways
-            yaw = wrap_half_turn(across + turn, closing_yaw(scene.eef_mat))
+            yaw = wrap_half_turn(across + turn, hand_yaw(scene.eef_mat))
             rot = leaning(top_down(yaw), -push, lean) if lean else top_down(yaw)
             start = _behind(target, table, origin, direction, rot)
             poses = [start + np.array([0.0, 0.0, lift]) for lift in (0.0, 0.05, 0.1)]
@@ -167,7 +167,7 @@ def push_to(agent: Agent, obj: str, spot: Spot, *, tolerance: float = 0.01) -> P
 
 def _push_pose_upright(scene: Scene, obj: str, direction: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The upright pushing pose, used when no pose is clear (the best that can be done)."""
-    yaw = wrap_half_turn(math.atan2(direction[1], direction[0]) + math.pi / 2, closing_yaw(scene.eef_mat))
+    yaw = wrap_half_turn(math.atan2(direction[1], direction[0]) + math.pi / 2, hand_yaw(scene.eef_mat))
     origin = scene.pos(obj)[:2]
     table = float(scene.bbox(obj)[2])
     return _behind(scene.boxes(obj), table, origin, direction, top_down(yaw)), top_down(yaw)
