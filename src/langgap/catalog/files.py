@@ -10,12 +10,12 @@ from __future__ import annotations
 import functools
 import hashlib
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from langgap import stack
+from langgap.atomic import write_text_atomically
 from langgap.bddl import BddlProblem, parse_bddl, rewrite_task_sections, strip_task_sections
 from langgap.catalog.task import Task
 from langgap.errors import BddlError
@@ -88,11 +88,7 @@ def task_bddl_path(task: Task) -> Path:
     text = task_bddl_text(task)
     path = cache_dir() / "bddl" / task.catalog / f"{task.id}.bddl"
     if not path.is_file() or path.read_text(encoding="utf-8") != text:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        # Write-then-rename: concurrent workers never see a half-written file.
-        with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp", encoding="utf-8") as tmp:
-            tmp.write(text)
-        os.replace(tmp.name, path)
+        write_text_atomically(path, text)  # concurrent workers never see a half-written file
     return path
 
 

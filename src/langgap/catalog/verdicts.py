@@ -9,11 +9,10 @@ definitions. A verdict names the task id it belongs to; one for an id the regist
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from dataclasses import asdict, replace
 from pathlib import Path
 
+from langgap.atomic import write_text_atomically
 from langgap.catalog.task import GateResult
 from langgap.errors import CatalogError
 
@@ -48,9 +47,5 @@ def record_verdicts(registry: str | Path, verdicts: dict[str, GateResult], about
     if about is None:
         about = json.loads(path.read_text(encoding="utf-8")).get("about", {}) if path.is_file() else {}
     data = {"about": about, "tasks": {k: asdict(merged[k]) for k in sorted(merged)}}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp", encoding="utf-8") as tmp:
-        json.dump(data, tmp, indent=1, sort_keys=True)
-        tmp.write("\n")
-    os.replace(tmp.name, path)
+    write_text_atomically(path, json.dumps(data, indent=1, sort_keys=True) + "\n")
     return path
