@@ -31,4 +31,5 @@ def test_the_bottom_drawer_is_blocked_by_the_table_and_the_drawer_above(catalog)
 
 def test_only_drawer_tasks_can_be_certified(tmp_path):
     result = run_cli("certify", "spatial/s0/black-bowl-1-on-plate")
-    assert result.returncode == 2 and result.stderr.startswith("error: certify analyses tasks that open a drawer")
+    assert result.returncode == 2
+    assert result.stderr.startswith("error: certify analyses tasks whose goal needs one drawer opened")

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import math
 
-from langgap.certify import TOLERANCE_M, HandleReach, PoseResult
+from langgap.bddl import Predicate
+from langgap.certify import TOLERANCE_M, HandleReach, PoseResult, required_opening
+from langgap.goals import parse_goal
 
 
 def _pose(hand: float, arm: float = 0.0, reachable: bool = True) -> PoseResult:
@@ -39,3 +41,16 @@ def test_an_arm_collision_alone_does_not_certify():
     found = _reach(_pose(0.0, arm=0.05), _pose(0.03))
     assert not found.clear and not found.certified
     assert not _reach(_pose(TOLERANCE_M), _pose(0.03)).certified  # within the tolerance is clear
+
+
+def test_the_drawer_a_goal_needs_in_every_way_of_meeting_it():
+    bottom = Predicate("Open", ("wooden_cabinet_1_bottom_region",))
+    assert required_opening(parse_goal("(And (Open wooden_cabinet_1_bottom_region))")) == bottom
+    ordered = "(Then (Open wooden_cabinet_1_bottom_region) (On akita_black_bowl_1 plate_1))"
+    assert required_opening(parse_goal(ordered)) == bottom
+    # a goal that can be met without the drawer, or that needs two, is not this drawer's to certify
+    either = "(Or (Open wooden_cabinet_1_bottom_region) (On akita_black_bowl_1 plate_1))"
+    assert required_opening(parse_goal(either)) is None
+    both = "(And (Open wooden_cabinet_1_bottom_region) (Open wooden_cabinet_1_top_region))"
+    assert required_opening(parse_goal(both)) is None
+    assert required_opening(parse_goal("(And (On akita_black_bowl_1 plate_1))")) is None

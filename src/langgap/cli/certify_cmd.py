@@ -16,7 +16,9 @@ def add_parser(subparsers) -> None:
         "certify",
         help="reachability of a drawer's handle: every gripper pose that holds it, solved and collision-checked",
     )
-    parser.add_argument("task", metavar="TASK", help="a task that opens a drawer")
+    parser.add_argument(
+        "task", metavar="TASK", help="a task whose goal needs one drawer opened (alone, or with other sub-goals)"
+    )
     parser.add_argument("--catalog", default=DEFAULT_CATALOG, help="catalog name or registry file")
     parser.add_argument("--init", type=int, default=0, help="the init state to analyse (default: %(default)s)")
     parser.add_argument("--out", metavar="FILE", help="write every pose's result as JSON")
