@@ -12,6 +12,9 @@
 # Each is evaluated on all 13 tasks of the scene on the fixed init states 0..EPISODES-1, beside `blind` (the
 # oracle doing the scene's original task whatever the instruction says: a policy that ignores language);
 # the first seed's `diluted` also on all 40 original tasks, to show it learned the data it was diluted with.
+# Then the first seed's four policies, `blind` and the oracle on the scene's tasks of `langgap-beyond`
+# (ordering, negation, paraphrase): does a policy trained on the original task do the negated task, does it
+# keep the order it was trained in, does it survive a rewording? (report-beyond.md)
 #
 #   experiments/small_scale.sh [OUT]        (default OUT: runs/small_scale; re-running skips finished steps)
 # Environment: DEMOS (per task, default 12), NOISE (execution noise of the demonstrations, default 0.3),
@@ -43,8 +46,8 @@ collect "$OUT/demos-originals" "original&!$SCENE"  # the other 39 scenes' origin
 declare -A TRAIN=([original]="$SCENE&original" [extended]="$SCENE&train" [mixed]="$SCENE&original,$SCENE&train"
     [diluted]="original,$SCENE&train")
 suffix() { [ "$1" = 0 ] || echo "-seed$1"; }  # seed 0 keeps the plain names
-evaluate() {  # evaluate RUN TASKS POLICY [POLICY-ARG]
-    langgap eval --policy "$3" ${4:+--policy-arg "$4"} --tasks "$2" --episodes "$EPISODES" --run "$OUT/runs/$1" \
+evaluate() {  # [CATALOG=NAME] evaluate RUN TASKS POLICY [POLICY-ARG]
+    langgap eval ${CATALOG:+--catalog "$CATALOG"} --policy "$3" ${4:+--policy-arg "$4"} --tasks "$2" --episodes "$EPISODES" --run "$OUT/runs/$1" \
         --workers "$WORKERS" --resume --no-progress --quiet
 }
 
@@ -67,3 +70,14 @@ s=$(suffix "${SEEDS%% *}")
 evaluate "diluted-originals$s" original small-bc "checkpoint=$OUT/diluted$s.safetensors"
 langgap report "$OUT/runs/diluted-originals$s" > "$OUT/report-diluted-originals$s.md"
 echo "wrote $OUT/report-diluted-originals$s.md"
+
+# The same policies on the scene's tasks of langgap-beyond, beside blind and the oracle.
+for name in blind oracle; do
+    CATALOG=langgap-beyond evaluate "beyond-$name" "$SCENE" "$name"
+done
+for name in original extended mixed diluted; do
+    CATALOG=langgap-beyond evaluate "beyond-$name$s" "$SCENE" small-bc "checkpoint=$OUT/$name$s.safetensors"
+done
+langgap report "$OUT/runs/beyond-original$s" --compare "$OUT/runs/beyond-extended$s" "$OUT/runs/beyond-mixed$s" \
+    "$OUT/runs/beyond-diluted$s" "$OUT/runs/beyond-blind" "$OUT/runs/beyond-oracle" > "$OUT/report-beyond$s.md"
+echo "wrote $OUT/report-beyond$s.md"
