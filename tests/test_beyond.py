@@ -114,7 +114,8 @@ OUT_OF_ORDER = "goal/s8/first-black-bowl-on-plate-then-turn-on-stove"
 NEGATED = "goal/s8/black-bowl-on-plate~not-where"
 
 
-def _run(policy: str, tasks: str, path, episodes: int = 1) -> dict:
+def _records(policy: str, tasks: str, path, episodes: int = 1) -> list:
+    """The episode records of `policy` on `tasks`, init states 0..`episodes`-1, run in this process."""
     from langgap.engine.evaluate import evaluate
     from langgap.engine.spec import ExecutionOptions, RunSpec
     from langgap.report.load import load_runs
@@ -122,7 +123,12 @@ def _run(policy: str, tasks: str, path, episodes: int = 1) -> dict:
     spec = RunSpec.create(policy, catalog=BEYOND_CATALOG, tasks=tasks, episodes=episodes)
     evaluate(spec, path, ExecutionOptions(workers=0, progress=False))
     (run,) = load_runs([path])
-    return {(r.task_id, r.init_index) if episodes > 1 else r.task_id: r for r in run.records}
+    return run.records
+
+
+def _run(policy: str, tasks: str, path) -> dict:
+    """One episode (init state 0) per task, by task id."""
+    return {r.task_id: r for r in _records(policy, tasks, path)}
 
 
 @pytest.mark.slow
@@ -163,8 +169,8 @@ def test_the_oracle_picks_up_after_opening_a_drawer(tmp_path):
     # The hand that pulled the drawer closes vertically: its next grasp is chosen from the start's
     # wrist turn (init states 2 and 3 failed when it was chosen from that vertical hand's).
     task_id = "spatial/s8/first-open-cabinet-top-drawer-then-black-bowl-1-on-plate"
-    records = _run("oracle", task_id, tmp_path / "oracle", episodes=4)
-    assert [records[task_id, init].success for init in range(4)] == [True] * 4
+    records = {r.init_index: r for r in _records("oracle", task_id, tmp_path / "oracle", episodes=4)}
+    assert [records[init].success for init in range(4)] == [True] * 4
 
 
 @pytest.mark.slow

@@ -3,20 +3,18 @@
 from __future__ import annotations
 
 import os
-import tempfile
+import secrets
 from pathlib import Path
 
 
 def write_text_atomically(path: Path, text: str) -> None:
-    """Write `text` to `path` through a temporary file in the same directory and a rename.
+    """Write `text` to `path` through a new file beside it and a rename.
 
-    Concurrent readers (workers, another run) see the old file or the new one, never a part. The
-    file gets the permissions a plain `open` would give it (a temporary file's are owner-only).
+    Concurrent readers (workers, another run) see the old file or the new one, never a part. The new
+    file is created like any other (mode 0o666 less the umask), not owner-only as `tempfile`'s are.
     """
     path.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp", encoding="utf-8") as tmp:
-        tmp.write(text)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp.name, 0o666 & ~umask)
-    os.replace(tmp.name, path)
+    partial = path.with_name(f".{path.name}.{secrets.token_hex(8)}.tmp")
+    with open(os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666), "w", encoding="utf-8") as out:
+        out.write(text)
+    os.replace(partial, path)

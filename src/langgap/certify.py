@@ -24,7 +24,7 @@ import numpy as np
 from langgap import goals
 from langgap.bddl import Predicate
 from langgap.catalog.task import Task
-from langgap.errors import BddlError, LangGapError
+from langgap.errors import LangGapError
 from langgap.policies.oracle.hand import FINGER_THICKNESS
 
 TOLERANCE_M = 0.002  # contact deeper than this is a collision (MuJoCo's soft contacts overlap slightly)
@@ -194,12 +194,9 @@ def required_opening(goal: goals.Goal) -> Predicate | None:
     """The one `Open` that every way of meeting `goal` needs (a drawer task, or an ordering with it),
     or None when there is none or more than one: only then is the drawer's reachability the task's."""
     needed: set[Predicate] | None = None
-    for choice in goals.choices(goal):
-        try:
-            reached = {p for stage in goals.stages(choice) for p in stage if p.name == "Open"}
-        except BddlError:
-            continue  # a choice that contradicts the goal meets nothing
-        needed = reached if needed is None else needed & reached
+    for plan in goals.plans(goal):
+        opened = {p for stage in plan for p in stage if p.name == "Open"}
+        needed = opened if needed is None else needed & opened
     return next(iter(needed)) if needed is not None and len(needed) == 1 else None
 
 

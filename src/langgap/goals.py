@@ -248,6 +248,16 @@ def choices(goal: Goal) -> Iterator[Goal]:
             yield type(goal)(parts)
 
 
+def plans(goal: Goal) -> Iterator[tuple[tuple[Predicate, ...], ...]]:
+    """The `stages` of every choice of `goal` that can be met, in `choices`' order (a choice that
+    contradicts one of its `Not`s, or orders more than one part, has none and is left out)."""
+    for choice in choices(goal):
+        try:
+            yield stages(choice)
+        except BddlError:
+            continue
+
+
 # -- evaluation over an episode -------------------------------------------------------------------
 
 

@@ -22,6 +22,7 @@ from langgap.goals import (
     is_ordered,
     parse_goal,
     plain_atoms,
+    plans,
     stages,
     unordered,
     witness,
@@ -162,3 +163,12 @@ def test_choices_resolve_each_alternative_first_parts_first_and_keep_negations()
         ((BOWL_ON_RAMEKIN,), (BOWL_ON_PLATE,)),
     ]
     assert list(choices(Atom(BOWL_ON_PLATE))) == [Atom(BOWL_ON_PLATE)]
+
+
+def test_plans_are_the_stages_of_the_choices_that_can_be_met():
+    # the first choice contradicts the goal's ban (the bowl on the plate, and not on the plate)
+    goal = And((Or((Atom(BOWL_ON_PLATE), Atom(BOWL_ON_RAMEKIN))), Not(Atom(BOWL_ON_PLATE))))
+    assert list(plans(goal)) == [((BOWL_ON_RAMEKIN,),)]
+    ordered = Then((Atom(OPEN_DRAWER), Atom(BOWL_ON_PLATE)))
+    assert list(plans(ordered)) == [stages(ordered)]
+    assert list(plans(And((Atom(BOWL_ON_PLATE), Not(Atom(BOWL_ON_PLATE)))))) == []

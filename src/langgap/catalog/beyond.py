@@ -64,7 +64,13 @@ def _as_beyond(source: Task) -> Task:
 
 
 def _task(
-    source: Task, scene: BddlProblem, dimension: str, slug: str, goal: Goal, sentences: dict, max_steps: int = 0
+    source: Task,
+    scene: BddlProblem,
+    dimension: str,
+    slug: str,
+    goal: Goal,
+    sentences: dict,
+    max_steps: int | None = None,
 ) -> Task:
     return Task(
         id=f"{SUITE_SHORT[source.suite]}/s{source.scene_index}/{slug}",
@@ -79,7 +85,7 @@ def _task(
         goal=goal,
         obj_of_interest=obj_of_interest(atoms(goal), scene),
         instructions=sentences,
-        max_steps=max(source.max_steps, max_steps),
+        max_steps=source.max_steps if max_steps is None else max_steps,
     )
 
 

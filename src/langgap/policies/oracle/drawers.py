@@ -41,17 +41,18 @@ def opening_direction(art: Articulation) -> np.ndarray:
     return direction / np.linalg.norm(direction)
 
 
-def _pointing(approach: np.ndarray, reference: np.ndarray) -> np.ndarray:
+def _pointing(approach: np.ndarray) -> np.ndarray:
     """A gripper frame pointing along `approach` (horizontal) with its fingers closing vertically.
 
-    Of the two such frames (a parallel gripper is symmetric) the one nearer `reference` is used,
-    which keeps the wrist within its joint limits when turning from that top-down pose.
+    Of the two such frames (a parallel gripper is symmetric) the one nearer the hand's start is
+    used: the wrist can turn to it from there. (From a hand turned by an earlier grasp, the frame
+    nearer that hand can lie beyond the wrist's range: its last joints stall at their limits.)
     """
     candidates = []
     for up in (1.0, -1.0):
         x = np.array([0.0, 0.0, up])
         candidates.append(np.stack([x, np.cross(approach, x), approach], axis=1))
-    return min(candidates, key=lambda rot: np.linalg.norm(rot - reference))
+    return min(candidates, key=lambda rot: np.linalg.norm(rot - START_ROT))
 
 
 def _handle_grasp(agent: Agent, art: Articulation, direction: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -73,9 +74,7 @@ def _handle_grasp(agent: Agent, art: Articulation, direction: np.ndarray) -> tup
     local = hand.local_boxes(hand.PAD_GAP_OPEN)
     best, best_cost = None, np.inf
     for approach, grasp in options:
-        # Nearer the hand's start than its present turn: from a hand turned by an earlier grasp, the
-        # frame nearer it can lie beyond the wrist's range (its last joints at their limits).
-        rot = _pointing(approach, START_ROT)
+        rot = _pointing(approach)
         ready = grasp - HANDLE_APPROACH * approach
         # The hand at the grasp, where it starts sliding onto the bar, and on its way down there.
         poses = [grasp, ready] + [ready + np.array([0.0, 0.0, lift]) for lift in (0.05, 0.1, 0.15)]

@@ -229,7 +229,7 @@ def plan_grasp(
         grasp = _evaluate(scene, candidate, fixed, loose, approach, lowest[z])
         if grasp is None:
             continue
-        cost = grasp.cost + penalty + stretch if placing else grasp.cost
+        cost = grasp.cost + penalty + stretch
         if best is None or cost < best.cost:
             best = Grasp(grasp.point, grasp.yaw, grasp.width, grasp.rim, cost, grasp.entry, placeable)
     return best

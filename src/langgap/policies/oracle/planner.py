@@ -15,7 +15,7 @@ import numpy as np
 
 from langgap import goals
 from langgap.bddl import Predicate
-from langgap.errors import BddlError, LangGapError
+from langgap.errors import LangGapError
 from langgap.policies.oracle import drawers, hinges, pick_place, pushing
 from langgap.policies.oracle.grasps import has_grasp
 from langgap.policies.oracle.motion import Agent, Program, hold
@@ -131,11 +131,7 @@ def program(agent: Agent, goal: goals.Goal) -> Program:
     """The whole episode: pursue the goal choice by choice, stage by stage, then hold still."""
     check_goal(agent.scene, goals.atoms(goal))
     planned = False
-    for choice in goals.choices(goal):
-        try:
-            plan = goals.stages(choice)
-        except BddlError:
-            continue  # this choice contradicts a `Not` of the goal
+    for plan in goals.plans(goal):
         planned = True
         for stage in plan:
             yield from _pursue(agent, stage)
