@@ -1,4 +1,4 @@
-"""`langgap tasks list` and `langgap tasks show`."""
+"""`langgap tasks list`, `langgap tasks show` and `langgap tasks gate`."""
 
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ def add_catalog_options(parser) -> None:
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser("tasks", help="list and inspect tasks")
-    verbs = parser.add_subparsers(dest="tasks_verb", required=True, metavar="list|show")
+    verbs = parser.add_subparsers(dest="tasks_verb", required=True, metavar="list|show|gate")
 
     listing = verbs.add_parser("list", help="list tasks, optionally filtered")
     add_catalog_options(listing)
@@ -44,6 +44,16 @@ def add_parser(subparsers) -> None:
     show.add_argument("id", help="task id (see `langgap tasks list`)")
     show.add_argument("--json", action="store_true")
     show.set_defaults(handler=run_show)
+
+    gate = verbs.add_parser(
+        "gate", help="the feasibility gate's verdicts counted per suite and dimension (what is proven)"
+    )
+    gate.add_argument("--catalog", default=DEFAULT_CATALOG, help="catalog name or registry file (default: %(default)s)")
+    gate.add_argument(
+        "--tasks", metavar="SELECTION", default="all", help="selection expression (default: every task, gated or not)"
+    )
+    gate.add_argument("--markdown", action="store_true", help="print a Markdown table")
+    gate.set_defaults(handler=run_gate)
 
 
 def _filtered(args) -> list[Task]:
@@ -111,6 +121,13 @@ def run_show(args) -> int:
         print(f"{'gate':<12} {line}")
     for note in task.notes:
         print(f"{'note':<12} {note}")
+    return 0
+
+
+def run_gate(args) -> int:
+    from langgap.catalog.coverage import coverage_table, gate_counts
+
+    print(coverage_table(gate_counts(load_catalog(args.catalog).select(args.tasks)), markdown=args.markdown))
     return 0
 
 

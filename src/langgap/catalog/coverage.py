@@ -1,0 +1,95 @@
+"""How much of a catalog the feasibility gate has proven: its verdicts counted per suite and dimension.
+
+A task is *gated* when a verdict is recorded for it, *accepted* when the oracle met the gate's rate,
+*certified* when it was rejected and carries an infeasibility certificate (`langgap certify`), and
+*open* when it was rejected without one: a task nobody has yet shown to be doable or impossible.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from langgap.catalog.task import DIMENSIONS, Task
+from langgap.stack import SUITES
+
+TOTAL = "total"
+EVERY = "all"
+
+
+@dataclass(frozen=True)
+class GateCount:
+    """The gate's verdicts on one group of tasks (a suite and dimension, or a total)."""
+
+    suite: str
+    dimension: str
+    tasks: int
+    gated: int
+    accepted: int
+    certified: int
+    episodes: int  # the oracle's, over the gated tasks
+    successes: int
+
+    @property
+    def rejected(self) -> int:
+        return self.gated - self.accepted
+
+    @property
+    def open(self) -> int:
+        """Rejected tasks with no certificate."""
+        return self.rejected - self.certified
+
+
+def _count(suite: str, dimension: str, tasks: list[Task]) -> GateCount:
+    gated = [t.gate for t in tasks if t.gate is not None]
+    return GateCount(
+        suite=suite,
+        dimension=dimension,
+        tasks=len(tasks),
+        gated=len(gated),
+        accepted=sum(g.feasible for g in gated),
+        certified=sum(not g.feasible and bool(g.certificate) for g in gated),
+        episodes=sum(g.episodes for g in gated),
+        successes=sum(g.successes for g in gated),
+    )
+
+
+def gate_counts(tasks: list[Task]) -> list[GateCount]:
+    """One count per suite and dimension that has tasks (suites in LIBERO's order, dimensions in the
+    catalog's), then, when the tasks span suites, one per dimension over them (suite `total`), then
+    the grand total (suite `total`, dimension `all`)."""
+    counts = []
+    dimensions = [d for d in DIMENSIONS if any(t.dimension == d for t in tasks)]
+    for suite in SUITES:
+        for dimension in dimensions:
+            group = [t for t in tasks if t.suite == suite and t.dimension == dimension]
+            if group:
+                counts.append(_count(suite, dimension, group))
+    if len({t.suite for t in tasks}) > 1:
+        counts += [_count(TOTAL, d, [t for t in tasks if t.dimension == d]) for d in dimensions]
+    counts.append(_count(TOTAL, EVERY, tasks))
+    return counts
+
+
+HEADER = ("suite", "dimension", "tasks", "gated", "accepted", "rejected", "certified", "open", "oracle")
+
+
+def _cells(count: GateCount) -> tuple[str, ...]:
+    oracle = f"{count.successes}/{count.episodes}" if count.episodes else "-"
+    numbers = (count.tasks, count.gated, count.accepted, count.rejected, count.certified, count.open)
+    return (count.suite, count.dimension, *map(str, numbers), oracle)
+
+
+def coverage_table(counts: list[GateCount], *, markdown: bool = False) -> str:
+    """The counts as a printed table, or a Markdown one."""
+    rows = [HEADER, *map(_cells, counts)]
+    if markdown:
+        lines = ["| " + " | ".join(row) + " |" for row in rows]
+        lines.insert(1, "|" + "---|" * 2 + "---:|" * (len(HEADER) - 2))
+        return "\n".join(lines)
+    widths = [max(len(row[i]) for row in rows) for i in range(len(HEADER))]
+
+    def line(row: tuple[str, ...]) -> str:
+        cells = zip(row, widths, strict=True)
+        return "  ".join(cell.ljust(w) if i < 2 else cell.rjust(w) for i, (cell, w) in enumerate(cells))  # names left
+
+    return "\n".join(map(line, rows))

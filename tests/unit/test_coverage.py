@@ -1,0 +1,54 @@
+"""What the gate has proven, counted per suite and dimension from the recorded verdicts."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+from langgap.catalog.catalog import load_catalog, registry_path
+from langgap.catalog.coverage import gate_counts
+from langgap.catalog.task import GateResult
+from langgap.cli.main import main
+
+
+def test_verdicts_are_counted_as_accepted_certified_open_or_not_gated():
+    tasks = load_catalog("langgap99").select("spatial/s0/*,object/s0/*")
+    verdicts = [
+        GateResult(5, 5, True),
+        GateResult(5, 0, False, certificate="no handle grasp is reachable"),
+        GateResult(5, 3, False),
+        None,
+    ]
+    tasks = [dataclasses.replace(t, gate=verdicts[i % 4]) for i, t in enumerate(tasks)]
+    counts = gate_counts(tasks)
+    total = counts[-1]
+    assert (total.suite, total.dimension, total.tasks) == ("total", "all", len(tasks))
+    assert total.gated == sum(t.gate is not None for t in tasks)
+    assert total.accepted == sum(t.gate is not None and t.gate.feasible for t in tasks)
+    assert total.certified == sum(t.gate is not None and bool(t.gate.certificate) for t in tasks)
+    assert total.open == total.rejected - total.certified == sum(t.gate == verdicts[2] for t in tasks)
+    assert (total.successes, total.episodes) == (
+        sum(t.gate.successes for t in tasks if t.gate),
+        sum(t.gate.episodes for t in tasks if t.gate),
+    )
+    per_suite = [c for c in counts if c.suite != "total"]
+    assert {c.suite for c in per_suite} == {"libero_spatial", "libero_object"}
+    for field in ("tasks", "gated", "accepted", "certified", "episodes"):
+        assert sum(getattr(c, field) for c in per_suite) == getattr(total, field)
+        by_dimension = [c for c in counts if c.suite == "total" and c.dimension != "all"]
+        assert sum(getattr(c, field) for c in by_dimension) == getattr(total, field)
+
+
+def test_tasks_gate_prints_the_recorded_verdicts(capsys):
+    recorded = json.loads(registry_path("langgap99").with_suffix(".gate.json").read_text())["tasks"]
+    accepted = sum(v["feasible"] for v in recorded.values())
+    certified = sum(not v["feasible"] and bool(v.get("certificate")) for v in recorded.values())
+    episodes = sum(v["episodes"] for v in recorded.values())
+    successes = sum(v["successes"] for v in recorded.values())
+    assert main(["tasks", "gate", "--markdown"]) == 0
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    rejected = len(recorded) - accepted
+    assert last == (
+        f"| total | all | 99 | {len(recorded)} | {accepted} | {rejected} | {certified} | {rejected - certified} "
+        f"| {successes}/{episodes} |"
+    )
