@@ -206,6 +206,13 @@ def articulations(scene: BddlProblem) -> list[Predicate]:
     return out
 
 
+def is_push(predicate: Predicate, scene: BddlProblem) -> bool:
+    """Whether the placement is done by pushing: the plate lies flat and is pushed, not lifted, to a
+    spot on the table."""
+    obj, target = predicate.args
+    return scene.objects.get(obj) == "plate" and (receiver_kind(target, scene) or "").startswith("table.")
+
+
 def is_articulation(predicate: Predicate) -> bool:
     """Open, Close, Turnon, Turnoff: an action on a fixture rather than a pick-and-place."""
     return predicate.name not in ("On", "In")

@@ -159,10 +159,17 @@ def _ordering(source: Task, scene: BddlProblem, sources: list[Task], max_steps: 
 def negation_goal(predicate: Predicate, scene: BddlProblem, part: str) -> Goal | None:
     """The goal of `predicate` with its destination (`where`) or object (`what`) negated: the object on
     another receiver that takes it (or another object on the receiver), and not `predicate`; None
-    when the scene offers no alternative."""
+    when the scene offers no alternative. A pushed object's alternatives are pushed too (the plate
+    slides to another spot on the table; it cannot be pushed up onto the stove)."""
     obj, target = predicate.args
     if part == "where":
-        alternatives = [p for p in affordances.placements(scene) if p.args[0] == obj and p.args[1] != target]
+        alternatives = [
+            p
+            for p in affordances.placements(scene)
+            if p.args[0] == obj
+            and p.args[1] != target
+            and affordances.is_push(p, scene) == affordances.is_push(predicate, scene)
+        ]
     else:
         alternatives = [p for p in affordances.placements(scene) if p.args[1] == target and p.args[0] != obj]
     if not alternatives:

@@ -198,8 +198,7 @@ def _placement(suite: str, style: str, predicate: Predicate, scene: BddlProblem)
     if suite == "libero_goal":
         if kind in _DRAWER_TARGETS:
             return f"open the {_drawer_level(target, scene)} drawer and put {subject} inside"
-        # The plate lies flat and is pushed, not lifted, to a spot on the table.
-        verb = "push" if scene.objects[obj] == "plate" and kind.startswith("table.") else "put"
+        verb = "push" if affordances.is_push(predicate, scene) else "put"
         return f"{verb} {subject} {_target(suite, style, target, scene)}"
     if suite == "libero_object":
         verb = "Pick" if style == "paper" else "pick up"
