@@ -17,6 +17,7 @@ Runs on one init state (fixtures do not move between init states).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -198,6 +199,14 @@ def required_opening(goal: goals.Goal) -> Predicate | None:
         opened = {p for stage in plan for p in stage if p.name == "Open"}
         needed = opened if needed is None else needed & opened
     return next(iter(needed)) if needed is not None and len(needed) == 1 else None
+
+
+def sharing(tasks: Iterable[Task], task: Task) -> list[Task]:
+    """The tasks of `tasks` a certificate for `task` holds for: those needing the same drawer opened on
+    the same source's scene. The analysis reads the fixtures and the robot of the source's init state
+    (one t0 state per source and init state, a claim the gate checks), so it is the same for each."""
+    opening = required_opening(task.goal)
+    return [t for t in tasks if t.source == task.source and opening and required_opening(t.goal) == opening]
 
 
 def handle_reach(

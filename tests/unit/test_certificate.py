@@ -5,7 +5,8 @@ from __future__ import annotations
 import math
 
 from langgap.bddl import Predicate
-from langgap.certify import TOLERANCE_M, HandleReach, PoseResult, required_opening
+from langgap.catalog.catalog import load_catalog
+from langgap.certify import TOLERANCE_M, HandleReach, PoseResult, required_opening, sharing
 from langgap.goals import parse_goal
 
 
@@ -54,3 +55,13 @@ def test_the_drawer_a_goal_needs_in_every_way_of_meeting_it():
     both = "(And (Open wooden_cabinet_1_bottom_region) (Open wooden_cabinet_1_top_region))"
     assert required_opening(parse_goal(both)) is None
     assert required_opening(parse_goal("(And (On akita_black_bowl_1 plate_1))")) is None
+
+
+def test_a_certificate_holds_for_every_task_needing_the_drawer_on_the_same_scene():
+    beyond = load_catalog("langgap-beyond")
+    task = beyond.get("spatial/s0/first-black-bowl-1-on-plate-then-open-cabinet-bottom-drawer")
+    assert [t.id for t in sharing(beyond, task)] == [
+        "spatial/s0/first-black-bowl-1-on-plate-then-open-cabinet-bottom-drawer",
+        "spatial/s0/first-open-cabinet-bottom-drawer-then-black-bowl-1-on-plate",
+    ]  # not the middle drawer's tasks, nor spatial/s1's bottom drawer (another scene)
+    assert sharing(beyond, beyond.get("spatial/s0/black-bowl-1-on-plate")) == []

@@ -25,7 +25,8 @@ def add_parser(subparsers) -> None:
     parser.add_argument(
         "--record",
         action="store_true",
-        help="store the certificate with the task's gate verdict (only when no pose is reachable and clear)",
+        help="store the certificate with the gate verdict of the task and of every task needing the same drawer "
+        "opened on the same source's scene (only when no pose is reachable and clear)",
     )
     parser.set_defaults(handler=run)
 
@@ -33,7 +34,7 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     from langgap.catalog.task import GateResult
     from langgap.catalog.verdicts import read_verdicts, record_verdicts
-    from langgap.certify import TOLERANCE_M, handle_reach
+    from langgap.certify import TOLERANCE_M, handle_reach, sharing
 
     catalog = load_catalog(args.catalog)
     task = catalog.get(args.task)
@@ -63,7 +64,10 @@ def run(args) -> int:
     print(f"certified infeasible: {found.certificate()}")
     if args.record:
         registry = registry_path(args.catalog)
-        verdict = read_verdicts(registry).get(task.id) or GateResult(0, 0, False, reason="certified infeasible")
-        path = record_verdicts(registry, {task.id: replace(verdict, certificate=found.certificate())}, None)
-        print(f"recorded the certificate in {path}")
+        recorded = read_verdicts(registry)
+        unvalidated = GateResult(0, 0, False, reason="certified infeasible")
+        holders = [t.id for t in sharing(catalog, task)]
+        certified = {i: replace(recorded.get(i) or unvalidated, certificate=found.certificate()) for i in holders}
+        path = record_verdicts(registry, certified, None)
+        print(f"recorded the certificate in {path} for {', '.join(holders)}")
     return 0
