@@ -206,7 +206,9 @@ def sharing(tasks: Iterable[Task], task: Task) -> list[Task]:
     the same source's scene. The analysis reads the fixtures and the robot of the source's init state
     (one t0 state per source and init state, a claim the gate checks), so it is the same for each."""
     opening = required_opening(task.goal)
-    return [t for t in tasks if t.source == task.source and opening and required_opening(t.goal) == opening]
+    if opening is None:
+        return []
+    return [t for t in tasks if t.source == task.source and required_opening(t.goal) == opening]
 
 
 def handle_reach(
