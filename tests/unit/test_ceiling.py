@@ -66,3 +66,20 @@ def test_a_task_is_capped_by_a_low_oracle_or_a_certificate():
     assert capped_because(fine, GateResult(20, 19, True)) is None
     assert capped_because(fine, GateResult(20, 19, True, certificate="…")) == "certified infeasible"
     assert capped_because(fine, None) is None
+
+
+def _record_many(registry: str, worker: int) -> None:
+    for i in range(25):
+        record_verdicts(registry, {f"spatial/s{worker}/task-{i}": GateResult(5, 5, True)}, {})
+
+
+def test_concurrent_recordings_lose_no_verdict(tmp_path):
+    import multiprocessing
+
+    registry = str(tmp_path / "mine.yaml")
+    workers = [multiprocessing.get_context("fork").Process(target=_record_many, args=(registry, w)) for w in range(4)]
+    for process in workers:
+        process.start()
+    for process in workers:
+        process.join()
+    assert len(read_verdicts(registry)) == 4 * 25

@@ -8,7 +8,11 @@ definitions. A verdict names the task id it belongs to; one for an id the regist
 
 from __future__ import annotations
 
+import fcntl
 import json
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import asdict, replace
 from pathlib import Path
 
@@ -34,18 +38,31 @@ def read_verdicts(registry: str | Path) -> dict[str, GateResult]:
         raise CatalogError(f"cannot read feasibility verdicts {path}: {exc}") from None
 
 
+@contextmanager
+def _exclusive(directory: Path) -> Iterator[None]:
+    """Hold an exclusive lock on `directory` (the verdict file itself is replaced, so cannot hold one)."""
+    directory.mkdir(parents=True, exist_ok=True)
+    fd = os.open(directory, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)  # and with it the lock
+
+
 def record_verdicts(registry: str | Path, verdicts: dict[str, GateResult], about: dict | None) -> Path:
     """Merge `verdicts` into the registry's verdict file (atomically); `about` describes how they were made
     (None keeps the file's: a certificate added to a verdict does not change how the gate ran)."""
     path = verdicts_path(registry)
-    old = read_verdicts(registry)
-    # A certificate is evidence made once, apart from the gate: re-running the gate keeps it.
-    merged = old | {
-        k: v if v.certificate or k not in old else replace(v, certificate=old[k].certificate)
-        for k, v in verdicts.items()
-    }
-    if about is None:
-        about = json.loads(path.read_text(encoding="utf-8")).get("about", {}) if path.is_file() else {}
-    data = {"about": about, "tasks": {k: asdict(merged[k]) for k in sorted(merged)}}
-    write_text_atomically(path, json.dumps(data, indent=1, sort_keys=True) + "\n")
+    with _exclusive(path.parent):  # read, merge and write as one step: a concurrent recording is not lost
+        old = read_verdicts(registry)
+        # A certificate is evidence made once, apart from the gate: re-running the gate keeps it.
+        merged = old | {
+            k: v if v.certificate or k not in old else replace(v, certificate=old[k].certificate)
+            for k, v in verdicts.items()
+        }
+        if about is None:
+            about = json.loads(path.read_text(encoding="utf-8")).get("about", {}) if path.is_file() else {}
+        data = {"about": about, "tasks": {k: asdict(merged[k]) for k in sorted(merged)}}
+        write_text_atomically(path, json.dumps(data, indent=1, sort_keys=True) + "\n")
     return path
