@@ -36,5 +36,6 @@ def code_version() -> str:
     except metadata.PackageNotFoundError:
         version = "unknown"
     root = Path(__file__).resolve().parents[2]
+    # Only LangGap's own checkout: installed into another project's repository, git would name that one's commit.
     commit = checkout_commit(root) if (root / ".git").exists() else None
     return f"{version}+{commit}" if commit else version

@@ -163,12 +163,11 @@ def negation_goal(predicate: Predicate, scene: BddlProblem, part: str) -> Goal |
     slides to another spot on the table; it cannot be pushed up onto the stove)."""
     obj, target = predicate.args
     if part == "where":
+        pushed = affordances.is_push(predicate, scene)  # the sentence's verb binds its alternatives too
         alternatives = [
             p
             for p in affordances.placements(scene)
-            if p.args[0] == obj
-            and p.args[1] != target
-            and affordances.is_push(p, scene) == affordances.is_push(predicate, scene)
+            if p.args[0] == obj and p.args[1] != target and affordances.is_push(p, scene) == pushed
         ]
     else:
         alternatives = [p for p in affordances.placements(scene) if p.args[1] == target and p.args[0] != obj]

@@ -8,7 +8,8 @@ from collections import defaultdict
 from dataclasses import asdict, replace
 from pathlib import Path
 
-from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog, registry_path
+from langgap.catalog.catalog import load_catalog, registry_path
+from langgap.cli.tasks_cmd import add_catalog_option
 
 
 def add_parser(subparsers) -> None:
@@ -19,7 +20,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument(
         "task", metavar="TASK", help="a task whose goal needs one drawer opened (alone, or with other sub-goals)"
     )
-    parser.add_argument("--catalog", default=DEFAULT_CATALOG, help="catalog name or registry file")
+    add_catalog_option(parser)
     parser.add_argument("--init", type=int, default=0, help="the init state to analyse (default: %(default)s)")
     parser.add_argument("--out", metavar="FILE", help="write every pose's result as JSON")
     parser.add_argument(

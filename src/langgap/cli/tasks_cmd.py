@@ -10,11 +10,16 @@ from langgap.catalog.task import DEFAULT_STYLE, DIMENSIONS, INSTRUCTION_STYLES, 
 from langgap.stack import SUITES
 
 
-def add_catalog_options(parser) -> None:
-    """`--catalog` and `--style`, shared by every verb that works on tasks."""
+def add_catalog_option(parser) -> None:
+    """`--catalog`, shared by every verb that works on tasks."""
     parser.add_argument(
         "--catalog", default=DEFAULT_CATALOG, help="catalog name or registry file (default: %(default)s)"
     )
+
+
+def add_catalog_options(parser) -> None:
+    """`--catalog` and `--style`, for verbs that also show or send instructions."""
+    add_catalog_option(parser)
     parser.add_argument(
         "--style",
         default=DEFAULT_STYLE,
@@ -48,7 +53,7 @@ def add_parser(subparsers) -> None:
     gate = verbs.add_parser(
         "gate", help="the feasibility gate's verdicts counted per suite and dimension (what is proven)"
     )
-    gate.add_argument("--catalog", default=DEFAULT_CATALOG, help="catalog name or registry file (default: %(default)s)")
+    add_catalog_option(gate)
     gate.add_argument(
         "--tasks", metavar="SELECTION", default="all", help="selection expression (default: every task, gated or not)"
     )

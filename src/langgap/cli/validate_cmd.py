@@ -5,8 +5,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from langgap.catalog.catalog import DEFAULT_CATALOG
 from langgap.cli.eval_cmd import add_stepping_option
+from langgap.cli.tasks_cmd import add_catalog_option
 from langgap.errors import LangGapError
 from langgap.validate import FEASIBLE_RATE, FULL_INITS
 
@@ -25,7 +25,7 @@ def add_parser(subparsers) -> None:
         "validate", help=f"prove tasks doable: the scripted oracle must reach {FEASIBLE_RATE:.0%} on their init states"
     )
     parser.add_argument("tasks", nargs="?", default="all", metavar="SELECTION", help="task selection (default: all)")
-    parser.add_argument("--catalog", default=DEFAULT_CATALOG, help="catalog name or registry file")
+    add_catalog_option(parser)
     parser.add_argument("--inits", type=int, default=FULL_INITS, help="first K init states per task (default: all 50)")
     parser.add_argument(
         "--policy", default="oracle", help="the scripted policy that proves tasks (default: %(default)s)"
