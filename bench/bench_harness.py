@@ -251,6 +251,17 @@ def protocol(policy: str, run: str | None, stepping: str) -> None:
         f"episodes run in {wall / 60:.1f} min = {summary.ran / wall * 3600:.0f} episodes/h ({summary.successes} "
         f"successes, {summary.gaps} gaps) | target <= 25 min |"
     )
+    with RunStore.open(directory) as store:
+        records = store.records()
+    if summary.ran < len(records):
+        return  # resumed: the wall time covers only part of the episodes
+    steps = sum(r.steps + r.settle_steps for r in records)
+    busy = TimedRun(wall, 0.0, summary, records).busy_s
+    print(
+        f"  where the time went: {steps} control steps (settling included); each worker in episodes "
+        + ", ".join(f"{b / wall:.0%} of the wall" for b in busy.values())
+        + f"; {1e3 * sum(busy.values()) / steps:.1f} ms per control step all in (physics, oracle, goal checks, store)"
+    )
 
 
 def validation(workers: int, run: str | None, stepping: str) -> None:
