@@ -100,14 +100,31 @@ WRIST_ZERO = 2.35
 WRIST_LIMIT = 2.6
 
 
+def wrist_angle(yaw: float, azimuth: float) -> float:
+    """The estimated angle of the Panda's last joint for a top-down hand closing along `yaw` at `azimuth`."""
+    return math.remainder(WRIST_ZERO - (yaw - azimuth), 2 * math.pi)
+
+
 def wrist_yaw(yaw: float, reference: float, azimuth: float) -> float:
     """`yaw` or `yaw + pi` for a top-down hand at `azimuth` (radians, seen from the robot's base):
     the one nearer `reference`, unless it would turn the wrist's last joint past its limit, where
     the controller stalls."""
     best = wrap_half_turn(yaw, reference)
-    if abs(math.remainder(WRIST_ZERO - (best - azimuth), 2 * math.pi)) > WRIST_LIMIT:
+    if abs(wrist_angle(best, azimuth)) > WRIST_LIMIT:
         best += math.pi if best < reference else -math.pi
     return best
+
+
+def sweeping_yaw(yaw: float, azimuth: float, sweep: float) -> float:
+    """`yaw` or `yaw + pi` for a top-down hand at `azimuth` that will turn by `sweep` radians while it
+    works (following a door round its hinge): the one that keeps the wrist's last joint furthest from
+    its limits over the whole turn. Turning the other way round ends against a limit mid-push."""
+
+    def worst(candidate: float) -> float:
+        start = wrist_angle(candidate, azimuth)
+        return max(abs(start), abs(start - sweep))  # the joint turns against the hand's yaw
+
+    return min((yaw, yaw + math.pi), key=worst)
 
 
 @dataclass(frozen=True)

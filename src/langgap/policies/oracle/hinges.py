@@ -8,7 +8,7 @@ import numpy as np
 
 from langgap.policies.oracle import hand
 from langgap.policies.oracle.control import CLOSE, OPEN
-from langgap.policies.oracle.geometry import hand_yaw, rotation_about, top_down, wrap_half_turn
+from langgap.policies.oracle.geometry import hand_yaw, rotation_about, sweeping_yaw, top_down, wrap_half_turn
 from langgap.policies.oracle.grasps import APPROACHES
 from langgap.policies.oracle.motion import Agent, Program, actuate, back_off, move, reorient, travel
 from langgap.policies.oracle.placement import flight_path
@@ -77,7 +77,10 @@ def close_door(agent: Agent, fixture: str) -> Program:
     point, tangent, height = _door_contact(art, sense)
     standoff = hand.FINGER_DEPTH + 0.015
     start = np.array([*(point - tangent * standoff), height])
-    yaw = wrap_half_turn(math.atan2(tangent[1], tangent[0]) + math.pi / 2, hand_yaw(agent.scene.eef_mat))
+    # The hand turns with the door all the way shut: of its two equivalent yaws, the one whose wrist
+    # has room for that whole turn (the other stalls the arm on its way in).
+    azimuth = math.atan2(start[1] - agent.scene.base_pos[1], start[0] - agent.scene.base_pos[0])
+    yaw = sweeping_yaw(math.atan2(tangent[1], tangent[0]) + math.pi / 2, azimuth, (goal - art.qpos) * art.axis[2])
     yield from actuate(agent, CLOSE, max_steps=8)
     yield from reorient(agent, top_down(yaw))
     path = flight_path(agent.scene, agent.scene.eef_pos, start + np.array([0.0, 0.0, 0.05]), hang=hand.TIP, reach=0.05)
