@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from langgap.demos.compact import load_demos
+from langgap.demos.compact import load_demos, read_manifest
 from langgap.demos.record import Demo
 from langgap.errors import LangGapError
 from langgap.policies.small_bc import features
@@ -78,17 +78,32 @@ def build_samples(demos: list[Demo], vocab: Vocabulary, config: ModelConfig) -> 
     return Samples(**{k: np.concatenate(v) for k, v in parts.items()})
 
 
-def select_demos(config: TrainConfig) -> list[Demo]:
-    demos = load_demos([Path(p) for p in config.data])
+def select_demos(config: TrainConfig, log=print) -> list[Demo]:
+    """The demonstrations of `config.tasks` (all if None). A selected task that a collection attempted
+    and kept none of (the oracle failed every attempt) is skipped with a note: training goes on with
+    what there is. One that no collection attempted is an error (wrong data or a mistyped selection)."""
+    roots = [Path(p) for p in config.data]
+    demos = load_demos(roots)
     if config.tasks is not None:
         wanted = set(config.tasks)
         demos = [d for d in demos if d.task_id in wanted]
         missing = wanted - {d.task_id for d in demos}
-        if missing:
-            raise LangGapError(f"no demonstrations of {len(missing)} selected task(s), e.g. {sorted(missing)[0]}")
+        never = missing - _attempted(roots)
+        if never:
+            raise LangGapError(f"no demonstrations of {len(never)} selected task(s), e.g. {sorted(never)[0]}")
+        if missing and log:
+            log(
+                f"note: {len(missing)} selected task(s) were collected but kept no demonstration, e.g. "
+                f"{sorted(missing)[0]} (see collection.json): training without them"
+            )
     if not demos:
         raise LangGapError("no demonstrations to train on")
     return demos
+
+
+def _attempted(roots: list[Path]) -> set[str]:
+    """Every task the collections in `roots` attempted, whether or not they kept a demonstration."""
+    return {task for root in roots for task in read_manifest(root).get("tasks", {})}
 
 
 def _lr_factor(step: int, total: int) -> float:
@@ -107,7 +122,7 @@ def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=pri
     started = time.perf_counter()
     torch.set_num_threads(config.threads)
     torch.manual_seed(config.seed)
-    demos = select_demos(config)
+    demos = select_demos(config, log)
     vocab = build_vocabulary(demos)
     samples = build_samples(demos, vocab, config.model)
     tensors = {k: torch.from_numpy(np.ascontiguousarray(v)) for k, v in asdict(samples).items()}
