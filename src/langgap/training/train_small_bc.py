@@ -88,7 +88,7 @@ def select_demos(config: TrainConfig, log=print) -> list[Demo]:
         wanted = set(config.tasks)
         demos = [d for d in demos if d.task_id in wanted]
         missing = wanted - {d.task_id for d in demos}
-        never = missing - _attempted(roots)
+        never = missing - _attempted(roots) if missing else set()
         if never:
             raise LangGapError(f"no demonstrations of {len(never)} selected task(s), e.g. {sorted(never)[0]}")
         if missing and log:

@@ -251,7 +251,7 @@ def _candidates(scene: Scene, boxes: Boxes, bounds: np.ndarray):
         centre = (pad_bounds[:, :2].min(axis=0) + pad_bounds[:, 3:5].max(axis=0)) / 2.0
         standing = bounds[:, 5] > pad_lo
         below = boxes.select(~standing)  # e.g. a bowl's floor under the fingers
-        azimuth = math.atan2(centre[1] - scene.base_pos[1], centre[0] - scene.base_pos[0])
+        azimuth = scene.azimuth(centre)
         for k in range(YAW_STEPS):
             yaw = wrist_yaw(k * math.pi / YAW_STEPS, current, azimuth)
             direction = np.array([math.cos(yaw), math.sin(yaw)])

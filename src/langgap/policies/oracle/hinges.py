@@ -79,8 +79,8 @@ def close_door(agent: Agent, fixture: str) -> Program:
     start = np.array([*(point - tangent * standoff), height])
     # The hand turns with the door all the way shut: of its two equivalent yaws, the one whose wrist
     # has room for that whole turn (the other stalls the arm on its way in).
-    azimuth = math.atan2(start[1] - agent.scene.base_pos[1], start[0] - agent.scene.base_pos[0])
-    yaw = sweeping_yaw(math.atan2(tangent[1], tangent[0]) + math.pi / 2, azimuth, (goal - art.qpos) * art.axis[2])
+    sweep = (goal - art.qpos) * art.axis[2]
+    yaw = sweeping_yaw(math.atan2(tangent[1], tangent[0]) + math.pi / 2, agent.scene.azimuth(start), sweep)
     yield from actuate(agent, CLOSE, max_steps=8)
     yield from reorient(agent, top_down(yaw))
     path = flight_path(agent.scene, agent.scene.eef_pos, start + np.array([0.0, 0.0, 0.05]), hang=hand.TIP, reach=0.05)

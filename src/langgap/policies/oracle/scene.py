@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -81,6 +82,11 @@ class Scene:
     def reach(self, point: np.ndarray) -> float:
         """Horizontal distance from the robot's base to `point`."""
         return float(np.linalg.norm(np.asarray(point)[:2] - self.base_pos[:2]))
+
+    def azimuth(self, point: np.ndarray) -> float:
+        """Direction of `point` seen from the robot's base (radians, horizontal)."""
+        x, y = np.asarray(point)[:2] - self.base_pos[:2]
+        return math.atan2(y, x)
 
     def has_entity(self, name: str) -> bool:
         return f"body/{name}" in self.raw
