@@ -97,7 +97,8 @@ def pull_open(agent: Agent, region: str) -> Program:
     yield from reorient(agent, rot)
     path = flight_path(agent.scene, agent.scene.eef_pos, ready, hang=hand.PALM_HALF_LENGTH, reach=hand.REACH)
     yield from travel(agent, ready, path=path, rot=rot, grip=OPEN, tol=0.01)
-    yield from move(agent, grasp, tol=0.006, steps=40, speed=0.5)
+    # Level: sagging on the way, the lower finger catches the front of the drawer below (goal/s3's top drawer).
+    yield from move(agent, grasp, tol=0.006, steps=40, speed=0.5, level=True)
     yield from actuate(agent, CLOSE)
     goal = art.target("open")
     start = art.qpos

@@ -64,13 +64,16 @@ def move(
     steps: int = 80,
     speed: float = 1.0,
     through: bool = False,
+    level: bool = False,
 ) -> Program:
     """Servo to `pos` until within `tol` (and the orientation within ROTATION_TOLERANCE).
 
     `through` marks a waypoint the hand only passes: it keeps full speed instead of slowing down,
     and does not wait there for the hand to finish turning.
     Near the target an integral term removes the controller's steady-state offset (a few mm when
-    the arm is stretched).
+    the arm is stretched). `level` keeps the hand at its height on the way too: the integral acts
+    on the vertical error from the start (a hand sliding out level sags below its aim, more than a
+    centimetre with the arm stretched and the hand horizontal).
     """
     target = np.asarray(pos, dtype=np.float64)
     if rot is not None:
@@ -91,6 +94,8 @@ def move(
         else:
             if distance < INTEGRAL_ZONE:
                 bias = np.clip(bias + INTEGRAL_GAIN * error, -MAX_BIAS, MAX_BIAS)
+            elif level:
+                bias[2] = np.clip(bias[2] + INTEGRAL_GAIN * error[2], -MAX_BIAS, MAX_BIAS)
             aim = agent.scene.eef_pos + GAIN * error + bias
         yield agent.command(aim, grip=grip, speed=speed)
     return False
