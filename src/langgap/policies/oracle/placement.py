@@ -95,12 +95,12 @@ def spots_in_region(scene: Scene, obj: str, region_name: str, *, inside: bool) -
     return [best] + sorted(free, key=lambda spot: scene.reach(spot.xy))
 
 
-def spots_aside(scene: Scene, obj: str, keep_clear: np.ndarray) -> list[Spot]:
+def spots_aside(scene: Scene, obj: str, keep_clear: np.ndarray, then: np.ndarray | None = None) -> list[Spot]:
     """Free spots on the table near `obj` but outside the box `keep_clear` (lo xyz, hi xyz), best first.
 
     The best is the one with the shortest flight there (one beside a tall fixture needs a climb
-    over it); several are offered so that the grasp can be chosen for a spot where the hand, too,
-    fits (not against a fixture).
+    over it) and, with `then` (where the hand goes next), on from there; several are offered so
+    that the grasp can be chosen for a spot where the hand, too, fits (not against a fixture).
     """
     everything = scene.obstacles(exclude=(obj,))
     table = min(scene.bbox(e)[2] for e in scene.entities if scene.movable(e))
@@ -125,6 +125,8 @@ def spots_aside(scene: Scene, obj: str, keep_clear: np.ndarray) -> list[Spot]:
             # Held by its rim, a load may reach its full width beyond the hand.
             path = flight_path(scene, start, end, exclude=(obj,), hang=height, reach=float(np.max(high - low)))
             length = np.sum(np.linalg.norm(np.diff(np.vstack([start, path]), axis=0), axis=1)) + path[-1][2] - end[2]
+            if then is not None:
+                length += float(np.linalg.norm(then[:2] - xy))
             scored.append((float(length), scene.reach(xy), Spot(xy=xy, support=table)))
     return [spot for *_, spot in sorted(scored, key=lambda item: item[:2])]
 

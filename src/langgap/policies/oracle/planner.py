@@ -92,7 +92,7 @@ def _achieve(agent: Agent, predicate: Predicate) -> Program:
                 # `On` a region needs contact with its surface: clear the way first.
                 keep_clear = np.concatenate(region_box(scene.region(target), inside=False))
                 for blocker in spots[0].blockers:
-                    asides = spots_aside(agent.scene, blocker, keep_clear)
+                    asides = spots_aside(agent.scene, blocker, keep_clear, then=agent.scene.pos(obj))
                     aside = (yield from pick_place.pick(agent, blocker, asides)) if asides else None
                     if aside is not None:
                         yield from pick_place.place(agent, blocker, aside)
