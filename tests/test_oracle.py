@@ -88,6 +88,14 @@ def test_a_blocker_set_aside_toward_what_is_picked_next(catalog):
     assert result.success, result.steps
 
 
+def test_a_load_rises_before_it_crosses(catalog):
+    # goal/s3, init state 1: the cream cheese is lifted in front of the open top drawer; climbing on a
+    # diagonal toward the drawer, the hand ran under the drawer's bottom, the arm stalled at its torque
+    # limit and the episode ran out of steps. Lifted straight up first, it clears the drawer.
+    (result,) = _episodes(catalog, "goal/s3/cream-cheese-in-cabinet-top-drawer", "oracle", (1,), as_gate=True)
+    assert result.success, result.steps
+
+
 def _actions(catalog, task_id: str, init: int, seed: int, noise: float) -> np.ndarray:
     task = catalog.get(task_id)
     policy = make_policy("oracle", {"noise": str(noise)})

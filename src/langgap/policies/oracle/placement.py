@@ -176,7 +176,9 @@ def flight_path(
     # In free space the height changes linearly from the start's to the end's.
     base = start[2] + np.linspace(0.0, 1.0, count) * (end[2] - start[2])
     heights = np.maximum(needed, base)
-    heights[0] = max(heights[0], start[2])
+    # Rise above the start before crossing: a diagonal first stretch drags a load lifted beside a
+    # fixture (an open drawer's underside) sideways into it while it climbs.
+    heights[0] = max(heights[0], start[2], heights[1])
     # No dips between two higher stretches: rise once, cross, descend once.
     heights = np.minimum(np.maximum.accumulate(heights), np.maximum.accumulate(heights[::-1])[::-1])
     path = [np.array([*samples[0], heights[0]])]
