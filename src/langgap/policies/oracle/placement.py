@@ -172,13 +172,12 @@ def flight_path(
     needed = own.copy()
     needed[1:] = np.maximum(needed[1:], own[:-1])
     needed[:-1] = np.maximum(needed[:-1], own[1:])
-    needed[0] = own[0]  # where the load already is
     # In free space the height changes linearly from the start's to the end's.
     base = start[2] + np.linspace(0.0, 1.0, count) * (end[2] - start[2])
     heights = np.maximum(needed, base)
-    # Rise above the start before crossing: a diagonal first stretch drags a load lifted beside a
-    # fixture (an open drawer's underside) sideways into it while it climbs.
-    heights[0] = max(heights[0], start[2], heights[1])
+    # Rise straight above the start to the first stretch's height, then cross: a diagonal first stretch
+    # drags a load lifted beside a fixture (an open drawer's underside) sideways into it while it climbs.
+    heights[0] = max(start[2], heights[1])
     # No dips between two higher stretches: rise once, cross, descend once.
     heights = np.minimum(np.maximum.accumulate(heights), np.maximum.accumulate(heights[::-1])[::-1])
     path = [np.array([*samples[0], heights[0]])]
