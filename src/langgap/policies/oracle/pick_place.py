@@ -16,7 +16,7 @@ from langgap.policies.oracle.control import CLOSE, OPEN
 from langgap.policies.oracle.geometry import bounds_corners_xy
 from langgap.policies.oracle.grasps import APPROACHES, plan_grasp
 from langgap.policies.oracle.motion import PASS_TOLERANCE, Agent, Program, actuate, back_off, move, reorient, travel
-from langgap.policies.oracle.placement import Spot, flight_path, footprint_at
+from langgap.policies.oracle.placement import HAND_HALF_WIDTH, LOAD_MARGIN, Spot, flight_path, footprint_at
 
 LIFT = 0.08  # lift after grasping before flying
 GRASP_TOLERANCE = 0.005
@@ -89,17 +89,21 @@ def place(agent: Agent, obj: str, spot: Spot) -> Program:
     offset = scene.eef_pos - scene.pos(obj)
     goal_xy = spot.xy + offset[:2]
     box = scene.bbox(obj)
-    corners = bounds_corners_xy(box)
-    reach = float(np.max(np.linalg.norm(corners - scene.eef_pos[:2], axis=1)))
+    span = float(np.max(np.linalg.norm(bounds_corners_xy(box) - scene.eef_pos[:2], axis=1)))
     # A load pinched off-centre pivots in the fingers: its far side may sag this much lower.
-    hang = _hang(agent, obj) + SAG * max(0.0, reach - hand.PAD_GAP_OPEN)
-    reach += 0.015
+    hang = _hang(agent, obj) + SAG * max(0.0, span - hand.PAD_GAP_OPEN)
+    # What the hand carries, around the grip site: the load as it hangs there and the fingers.
+    fingers = np.array([-HAND_HALF_WIDTH, -HAND_HALF_WIDTH, HAND_HALF_WIDTH, HAND_HALF_WIDTH])
+    carried = box[[0, 1, 3, 4]] - np.tile(scene.eef_pos[:2], 2)
+    extent = np.concatenate([np.minimum(carried[:2], fingers[:2]), np.maximum(carried[2:], fingers[2:])])
     release = np.array([*goal_xy, spot.support + _hang(agent, obj) + RELEASE_GAP])
     route = release_route(scene, obj, release, scene.eef_mat.copy(), PLACE_CLEARANCE + hang - _hang(agent, obj))
     above = route[0]
     above_z = above[2]
     footprint = scene.bbox(obj)[[0, 1, 3, 4]] + np.array([-0.01, -0.01, 0.01, 0.01])
-    path = flight_path(scene, scene.eef_pos, above, exclude=(obj,), hang=hang, reach=reach, footprint=footprint)
+    path = flight_path(
+        scene, scene.eef_pos, above, exclude=(obj,), hang=hang, reach=LOAD_MARGIN, extent=extent, footprint=footprint
+    )
     yield from travel(agent, above, path=path, tol=0.012, speed=CARRY_SPEED)
     for waypoint in route[1:-1]:
         yield from move(agent, waypoint, tol=0.01, steps=30, speed=0.5)

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from langgap.policies.oracle import hand
 from langgap.policies.oracle.geometry import Boxes, boxes_hit
 from langgap.policies.oracle.predicates import region_box, region_frame_points
 from langgap.policies.oracle.scene import Scene
@@ -23,6 +24,7 @@ ASIDE_MARGIN = 0.015  # room around a load put aside: held, it may tilt and grow
 WRIST_HEIGHT = 0.2  # the hand and wrist rise this far above the grip site
 ESCAPE_DISTANCES = (0.05, 0.08, 0.12)
 HAND_HALF_WIDTH = 0.03
+LOAD_MARGIN = 0.02  # a carried load passes obstacles this far apart (it swings a little in the fingers)
 
 
 @dataclass(frozen=True)
@@ -108,6 +110,7 @@ def spots_aside(scene: Scene, obj: str, keep_clear: np.ndarray, then: np.ndarray
     box = scene.bbox(obj) + np.array([-ASIDE_MARGIN, -ASIDE_MARGIN, 0.0, ASIDE_MARGIN, ASIDE_MARGIN, 0.0])
     height = float(box[5] - box[2])
     start = np.array([*here, box[5]])
+    extent = scene.bbox(obj)[[0, 1, 3, 4]] - np.tile(here, 2)
     scored = []
     for distance in ASIDE_DISTANCES:
         for k in range(ASIDE_DIRECTIONS):
@@ -122,8 +125,7 @@ def spots_aside(scene: Scene, obj: str, keep_clear: np.ndarray, then: np.ndarray
             if inside or boxes_hit(placed, everything, 0.001) or scene.reach(xy) > ASIDE_MAX_REACH:
                 continue
             end = np.array([*xy, table + height])
-            # Held by its rim, a load may reach its full width beyond the hand.
-            path = flight_path(scene, start, end, exclude=(obj,), hang=height, reach=float(np.max(high - low)))
+            path = flight_path(scene, start, end, exclude=(obj,), hang=height, reach=LOAD_MARGIN, extent=extent)
             length = np.sum(np.linalg.norm(np.diff(np.vstack([start, path]), axis=0), axis=1)) + path[-1][2] - end[2]
             if then is not None:
                 length += float(np.linalg.norm(then[:2] - xy))
@@ -149,26 +151,28 @@ def flight_path(
     exclude: tuple[str, ...] = (),
     hang: float = 0.0,
     reach: float = 0.05,
+    extent: np.ndarray | None = None,
     footprint: np.ndarray | None = None,
 ) -> np.ndarray:
     """Waypoints (n, 3) from `start` to above `end` that keep a load clear of every obstacle.
 
     `hang` is how far the load (or the fingers) reaches below the grip site, `reach` how far it
-    reaches sideways; `footprint` (x/y lo, x/y hi) is its extent at the start. The path slides out
-    from under anything overhanging the load, rises, flies at the height each stretch needs and
-    ends straight above `end`, so the last move is a vertical descent.
+    reaches sideways beyond `extent` (x/y lo, x/y hi around the path's points: what the hand carries,
+    as the hand holds it; a point when None); `footprint` (x/y lo, x/y hi) is its extent at the
+    start. The path slides out from under anything overhanging the load, rises, flies at the height
+    each stretch needs and ends straight above `end`, so the last move is a vertical descent.
     """
     obstacles = scene.obstacles(exclude=exclude).aabb()
     length = float(np.linalg.norm(end[:2] - start[:2]))
     count = max(2, int(length / PATH_SPACING) + 1)
     samples = start[None, :2] + np.linspace(0.0, 1.0, count)[:, None] * (end[:2] - start[:2])[None, :]
-    gap = np.maximum(
-        np.maximum(obstacles[None, :, :2] - samples[:, None, :], samples[:, None, :] - obstacles[None, :, 3:5]), 0.0
-    )
-    near = np.linalg.norm(gap, axis=2) <= reach
-    tops = np.where(near, obstacles[None, :, 5], -np.inf).max(axis=1)
+    own = _tops_near(obstacles, samples, np.zeros(4) if extent is None else extent, reach) + hang + CLEARANCE
+    if extent is not None:
+        # The palm and wrist above a load may reach beyond it, but they only need to clear their own height.
+        own = np.maximum(
+            own, _tops_near(obstacles, samples, np.zeros(4), hand.PALM_HALF_LENGTH) + hand.PALM + CLEARANCE
+        )
     # Between two samples the load passes near what either sample is near: take the larger need.
-    own = tops + hang + CLEARANCE
     needed = own.copy()
     needed[1:] = np.maximum(needed[1:], own[:-1])
     needed[:-1] = np.maximum(needed[:-1], own[1:])
@@ -186,6 +190,14 @@ def flight_path(
         footprint = np.concatenate([start[:2] - HAND_HALF_WIDTH, start[:2] + HAND_HALF_WIDTH])
     escape = _escape(obstacles, start, footprint, float(heights.max()), hang)
     return np.array(([escape] if escape is not None else []) + path)
+
+
+def _tops_near(obstacles: np.ndarray, samples: np.ndarray, extent: np.ndarray, reach: float) -> np.ndarray:
+    """Per sample (x, y), the highest top of the obstacles within `reach` of the rectangle `extent` around it."""
+    low, high = samples[:, None, :] + extent[:2], samples[:, None, :] + extent[2:]
+    gap = np.maximum(np.maximum(obstacles[None, :, :2] - high, low - obstacles[None, :, 3:5]), 0.0)
+    near = np.linalg.norm(gap, axis=2) <= reach
+    return np.where(near, obstacles[None, :, 5], -np.inf).max(axis=1)
 
 
 def _overhead(obstacles: np.ndarray, footprint: np.ndarray, low: float, high: float) -> bool:
