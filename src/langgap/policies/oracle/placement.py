@@ -158,9 +158,10 @@ def flight_path(
 
     `hang` is how far the load (or the fingers) reaches below the grip site, `reach` how far it
     reaches sideways beyond `extent` (x/y lo, x/y hi around the path's points: what the hand carries,
-    as the hand holds it; a point when None); `footprint` (x/y lo, x/y hi) is its extent at the
-    start. The path slides out from under anything overhanging the load, rises, flies at the height
-    each stretch needs and ends straight above `end`, so the last move is a vertical descent.
+    as the hand holds it; a point when None; given, the palm and wrist above the load are kept clear
+    too, by their own height); `footprint` (x/y lo, x/y hi) is its extent at the start. The path
+    slides out from under anything overhanging the load, rises, flies at the height each stretch
+    needs and ends straight above `end`, so the last move is a vertical descent.
     """
     obstacles = scene.obstacles(exclude=exclude).aabb()
     length = float(np.linalg.norm(end[:2] - start[:2]))
