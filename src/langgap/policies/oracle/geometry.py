@@ -85,6 +85,13 @@ def bounds_corners_xy(bounds: np.ndarray) -> np.ndarray:
     return np.array([[x, y] for x in (bounds[0], bounds[3]) for y in (bounds[1], bounds[4])])
 
 
+def bounds_xy(bounds: np.ndarray, origin: np.ndarray | None = None) -> np.ndarray:
+    """The horizontal rectangle (x/y lo, x/y hi) of axis-aligned bounds (min xyz, max xyz), relative to
+    `origin` (x, y) when given."""
+    rect = bounds[[0, 1, 3, 4]]
+    return rect if origin is None else rect - np.tile(origin[:2], 2)
+
+
 def wrap_half_turn(yaw: float, reference: float) -> float:
     """`yaw` or `yaw + pi` (a parallel gripper is symmetric), whichever is nearer `reference`."""
     best = yaw

@@ -13,7 +13,7 @@ import numpy as np
 from langgap.policies.oracle import hand
 from langgap.policies.oracle.carry import release_route
 from langgap.policies.oracle.control import CLOSE, OPEN
-from langgap.policies.oracle.geometry import bounds_corners_xy
+from langgap.policies.oracle.geometry import bounds_corners_xy, bounds_xy
 from langgap.policies.oracle.grasps import APPROACHES, plan_grasp
 from langgap.policies.oracle.motion import PASS_TOLERANCE, Agent, Program, actuate, back_off, move, reorient, travel
 from langgap.policies.oracle.placement import HAND_HALF_WIDTH, LOAD_MARGIN, Spot, flight_path, footprint_at
@@ -93,14 +93,13 @@ def place(agent: Agent, obj: str, spot: Spot) -> Program:
     # A load pinched off-centre pivots in the fingers: its far side may sag this much lower.
     hang = _hang(agent, obj) + SAG * max(0.0, span - hand.PAD_GAP_OPEN)
     # What the hand carries, around the grip site: the load as it hangs there and the fingers.
-    fingers = np.array([-HAND_HALF_WIDTH, -HAND_HALF_WIDTH, HAND_HALF_WIDTH, HAND_HALF_WIDTH])
-    carried = box[[0, 1, 3, 4]] - np.tile(scene.eef_pos[:2], 2)
-    extent = np.concatenate([np.minimum(carried[:2], fingers[:2]), np.maximum(carried[2:], fingers[2:])])
+    carried = bounds_xy(box, scene.eef_pos)
+    extent = np.concatenate([np.minimum(carried[:2], -HAND_HALF_WIDTH), np.maximum(carried[2:], HAND_HALF_WIDTH)])
     release = np.array([*goal_xy, spot.support + _hang(agent, obj) + RELEASE_GAP])
     route = release_route(scene, obj, release, scene.eef_mat.copy(), PLACE_CLEARANCE + hang - _hang(agent, obj))
     above = route[0]
     above_z = above[2]
-    footprint = scene.bbox(obj)[[0, 1, 3, 4]] + np.array([-0.01, -0.01, 0.01, 0.01])
+    footprint = bounds_xy(box) + np.array([-0.01, -0.01, 0.01, 0.01])
     path = flight_path(
         scene, scene.eef_pos, above, exclude=(obj,), hang=hang, reach=LOAD_MARGIN, extent=extent, footprint=footprint
     )

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from langgap.policies.oracle import hand
-from langgap.policies.oracle.geometry import Boxes, boxes_hit
+from langgap.policies.oracle.geometry import Boxes, bounds_xy, boxes_hit
 from langgap.policies.oracle.predicates import region_box, region_frame_points
 from langgap.policies.oracle.scene import Scene
 
@@ -107,10 +107,11 @@ def spots_aside(scene: Scene, obj: str, keep_clear: np.ndarray, then: np.ndarray
     everything = scene.obstacles(exclude=(obj,))
     table = min(scene.bbox(e)[2] for e in scene.entities if scene.movable(e))
     here = scene.pos(obj)[:2]
-    box = scene.bbox(obj) + np.array([-ASIDE_MARGIN, -ASIDE_MARGIN, 0.0, ASIDE_MARGIN, ASIDE_MARGIN, 0.0])
+    bounds = scene.bbox(obj)
+    box = bounds + np.array([-ASIDE_MARGIN, -ASIDE_MARGIN, 0.0, ASIDE_MARGIN, ASIDE_MARGIN, 0.0])
     height = float(box[5] - box[2])
     start = np.array([*here, box[5]])
-    extent = scene.bbox(obj)[[0, 1, 3, 4]] - np.tile(here, 2)
+    extent = bounds_xy(bounds, here)
     scored = []
     for distance in ASIDE_DISTANCES:
         for k in range(ASIDE_DIRECTIONS):
