@@ -14,6 +14,8 @@ from langgap.engine.rollout import env_options_for, run_episode
 from langgap.errors import LangGapError
 from langgap.policies import make_policy
 from langgap.policies.base import TaskContext
+from langgap.policies.oracle.geometry import Boxes, depth
+from langgap.policies.oracle.scene import Scene
 from langgap.sim.env import TaskEnv
 
 # One task per suite, dimension and predicate kind (On an object, On a region, In a region, Open,
@@ -103,6 +105,42 @@ def test_a_load_flies_low_past_a_fixture_it_clears(catalog):
     # the bowl and the hand really hang, it passes beside the cabinet.
     (result,) = _episodes(catalog, "spatial/s9/black-bowl-1-on-stove", "oracle", (5,), as_gate=True)
     assert result.success, result.steps
+
+
+def test_a_bowl_the_open_drawer_would_cover_is_dragged_out_of_its_way_first(catalog):
+    # goal/s3, init state 4: the bowl stands in front of the cabinet where the top drawer slides out;
+    # opened first, the drawer covered 7 cm of it, no hand reached it underneath and the episode ran
+    # out of its 300 steps. The fingers hooked inside it drag it clear before the drawer is opened.
+    (result,) = _episodes(catalog, "goal/s3/black-bowl-in-cabinet-top-drawer", "oracle", (4,), as_gate=True)
+    assert result.success, result.steps
+
+
+def test_the_arm_behind_a_handle_grasp_is_kept_off_a_bottle(catalog):
+    # goal/s3, init state 29: the top drawer's handle taken along the bar from its end puts the arm's
+    # last links over the wine bottle; they knocked it over, and it lay where the bowl was to be
+    # picked. The handle is taken from the front instead.
+    (result,) = _episodes(catalog, "goal/s3/black-bowl-in-cabinet-top-drawer", "oracle", (29,), as_gate=True)
+    assert result.success, result.steps
+
+
+def test_the_hand_turns_on_its_way(catalog):
+    # goal/s3, init state 0: turning in place before each flight (to the drawer's handle, then back
+    # to top-down for the bowl) the episode took 253 steps of its 300.
+    (result,) = _episodes(catalog, "goal/s3/black-bowl-in-cabinet-top-drawer", "oracle", (0,), as_gate=True)
+    assert result.success and result.steps < 235, result.steps
+
+
+def test_parts_are_the_geoms_as_turned_boxes(catalog):
+    # A plate's rim is nine slanted slabs: their bounds in the plate's frame fill its middle, the
+    # turned boxes leave it free (where a bowl's or a plate's inside is, for the fingers to hook).
+    task = catalog.get("goal/s5/plate-on-stove-front")
+    with TaskEnv(task, env_options_for(make_policy("oracle", {}))) as env:
+        env.reset(0, render=False)
+        scene = Scene(env.observe().privileged)
+    probe = Boxes.from_local(np.array([[-0.005, -0.005, 0.012, 0.005, 0.005, 0.014]]), np.eye(3), scene.pos("plate_1"))
+    assert depth(probe, scene.boxes("plate_1")) > 0.0
+    assert depth(probe, scene.parts("plate_1")) < 0.0
+    assert len(scene.parts("plate_1")) == len(scene.boxes("plate_1"))
 
 
 def _actions(catalog, task_id: str, init: int, seed: int, noise: float) -> np.ndarray:

@@ -241,7 +241,7 @@ def handle_reach(
         art = scene.articulation(region)
         direction = opening_direction(art)
         _, bar, half_length = drawer_front(art, direction)
-        loose = tuple(e for e in scene.entities if scene.movable(e))
+        loose = scene.loose()
         robot = _Robot(env)
         rng = np.random.default_rng(0)
         seeds = [robot.start.qpos[robot.qpos].copy()] + [

@@ -11,6 +11,9 @@ also be served remotely. Keys (`<e>` = an object or fixture of the scene, `<s>` 
 * `movable/<e>` (1): 1.0 for a loose object, 0.0 for a fixture.
 * `shape/<e>` (n, 6): the entity's collision geoms as boxes (min xyz, max xyz) in its root body's
   frame; for fixtures only the parts no joint moves. Static.
+* `parts/<e>` (n, 15): the same geoms as oriented boxes in that frame: centre (3), half-sizes along
+  the box's own axes (3), rotation into the body's frame (9, row-major). Tighter than `shape` where
+  a geom is turned (a plate's slanted rim, a bowl's wall); static.
 * `contact/<e>` (2): whether the entity touches something other than itself and the robot, and
   whether it touches the gripper (1.0 / 0.0).
 * `site/<s>` (3), `site_mat/<s>` (3, 3), `site_size/<s>` (3): a region site's frame and the
@@ -63,6 +66,7 @@ class _Layout:
     entity_roots: dict[str, int]
     entity_geoms: dict[str, np.ndarray]
     shapes: dict[str, np.ndarray]
+    parts: dict[str, np.ndarray]
     geom_entity: np.ndarray  # geom -> entity index, -1 robot, -2 other (table, walls)
     entity_names: list[str]
     movable: dict[str, np.ndarray]
@@ -157,7 +161,7 @@ def _articulation(model, fixture, joint_name: str, data) -> _Articulation:
         limits=limits,
         body=body,
         geoms=geoms,
-        shape=_local_boxes(data, raw, body, geoms),
+        shape=_local_boxes(_local_parts(data, raw, body, geoms)),
     )
     for key, method in _ARTICULATION_TESTS.items():
         interval = _interval(fixture, method, limits)
@@ -190,7 +194,7 @@ def _layout(env) -> _Layout:
     geom_entity[np.isin(raw.geom_bodyid, robot_bodies)] = -1
     gripper_bodies = [b for b, n in enumerate(body_names) if n.startswith(_GRIPPER_PREFIX)]
     gripper_geom = np.isin(raw.geom_bodyid, gripper_bodies)
-    roots, geoms_of, shapes = {}, {}, {}
+    roots, geoms_of, shapes, parts = {}, {}, {}, {}
     articulations: dict[str, _Articulation] = {}
     for index, (name, obj) in enumerate(entities.items()):
         root = model.body_name2id(obj.root_body)
@@ -206,7 +210,8 @@ def _layout(env) -> _Layout:
             if joint_names:
                 articulations[name] = _articulation(model, obj, joint_names[0], data)
         static = np.array([g for g in geoms if raw.geom_bodyid[g] not in moved], dtype=np.int64)
-        shapes[name] = _local_boxes(data, raw, root, static)
+        parts[name] = _local_parts(data, raw, root, static)
+        shapes[name] = _local_boxes(parts[name])
     sites = {}
     for site_name, site in inner.object_sites_dict.items():
         size = np.asarray(site.size, dtype=np.float64)
@@ -225,6 +230,7 @@ def _layout(env) -> _Layout:
         entity_roots=roots,
         entity_geoms=geoms_of,
         shapes=shapes,
+        parts=parts,
         geom_entity=geom_entity,
         entity_names=names,
         movable={name: np.array([1.0 if name in inner.objects_dict else 0.0]) for name in names},
@@ -249,18 +255,25 @@ def _layout(env) -> _Layout:
     return layout
 
 
-def _local_boxes(data, raw, root: int, geoms: np.ndarray) -> np.ndarray:
-    """Boxes of `geoms` in the frame of body `root` (valid while the body is rigid, i.e. always)."""
+def _local_parts(data, raw, root: int, geoms: np.ndarray) -> np.ndarray:
+    """Oriented boxes of `geoms` in the frame of body `root` (valid while the body is rigid, i.e.
+    always): centre (3), half-sizes along the box's own axes (3), rotation to the body's frame (9)."""
     if geoms.size == 0:
-        return np.zeros((0, 6))
+        return np.zeros((0, 15))
     body_rot = data.xmat[root].reshape(3, 3)
     rot = np.einsum("ji,njk->nik", body_rot, data.geom_xmat[geoms].reshape(-1, 3, 3))
     world_centre = data.geom_xpos[geoms] + np.einsum(
         "nij,nj->ni", data.geom_xmat[geoms].reshape(-1, 3, 3), raw.geom_aabb[geoms, :3]
     )
     centre = (world_centre - data.xpos[root]) @ body_rot
-    half = np.einsum("nij,nj->ni", np.abs(rot), raw.geom_aabb[geoms, 3:])
-    return np.concatenate([centre - half, centre + half], axis=1)
+    return np.concatenate([centre, raw.geom_aabb[geoms, 3:], rot.reshape(-1, 9)], axis=1)
+
+
+def _local_boxes(parts: np.ndarray) -> np.ndarray:
+    """The axis-aligned bounds (min xyz, max xyz) in the body's frame of each oriented box of `parts`."""
+    rot = parts[:, 6:].reshape(-1, 3, 3)
+    half = np.einsum("nij,nj->ni", np.abs(rot), parts[:, 3:6])
+    return np.concatenate([parts[:, :3] - half, parts[:, :3] + half], axis=1)
 
 
 def _contacts(layout: _Layout, data) -> dict[str, np.ndarray]:
@@ -301,6 +314,7 @@ def privileged_state(env) -> dict[str, np.ndarray]:
     for name, root in layout.entity_roots.items():
         out[f"body/{name}"] = np.concatenate([data.xpos[root], data.xquat[root]])
         out[f"shape/{name}"] = layout.shapes[name]
+        out[f"parts/{name}"] = layout.parts[name]
         out[f"movable/{name}"] = layout.movable[name]
     for name, touch in _contacts(layout, data).items():
         out[f"contact/{name}"] = touch

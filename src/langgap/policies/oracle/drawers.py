@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from langgap.policies.oracle import hand
+from langgap.policies.oracle import hand, hooking
 from langgap.policies.oracle.control import CLOSE, OPEN
 from langgap.policies.oracle.geometry import (
     Boxes,
@@ -17,7 +17,7 @@ from langgap.policies.oracle.geometry import (
     top_down,
     wrap_half_turn,
 )
-from langgap.policies.oracle.grasps import PENETRATION_TOLERANCE, REACH_WEIGHT, hand_hits
+from langgap.policies.oracle.grasps import PENETRATION_TOLERANCE, REACH_WEIGHT, hand_hits, plan_grasp
 from langgap.policies.oracle.motion import START_ROT, Agent, Program, actuate, back_off, move, reorient, travel
 from langgap.policies.oracle.placement import flight_path
 from langgap.policies.oracle.scene import Articulation
@@ -31,6 +31,9 @@ LOOSE_WEIGHT = 300.0  # cost per metre the hand would push into a loose object
 LOOSE_ALLOWANCE = 0.006
 PUSH_BESIDE = 0.03  # a drawer is pushed this far beside its handle
 PUSH_LEAN = 0.6  # radians the fingers lean toward a push
+SWEEP_MARGIN = 0.02  # an object is dragged this far clear of where an opening drawer will stand
+SWEEP_DIRECTIONS = 16
+NUDGE_COST = 3.0  # metres of drag worth one metre less of pushing into another loose object
 
 
 def opening_direction(art: Articulation) -> np.ndarray:
@@ -70,7 +73,7 @@ def _handle_grasp(agent: Agent, art: Articulation, direction: np.ndarray) -> tup
         for angle in SIDE_ANGLES:  # turned away from the drawer's face, to keep the hand clear of the cabinet
             options.append((np.cos(angle) * along - np.sin(angle) * direction, grasp))
     fixed = agent.scene.obstacles(fixtures_only=True)
-    loose = Boxes.concat([agent.scene.boxes(e) for e in agent.scene.entities if agent.scene.movable(e)])
+    loose = agent.scene.loose_boxes()
     local = hand.local_boxes(hand.PAD_GAP_OPEN)
     best, best_cost = None, np.inf
     for approach, grasp in options:
@@ -79,13 +82,72 @@ def _handle_grasp(agent: Agent, art: Articulation, direction: np.ndarray) -> tup
         # The hand at the grasp, where it starts sliding onto the bar, and on its way down there.
         poses = [grasp, ready] + [ready + np.array([0.0, 0.0, lift]) for lift in (0.05, 0.1, 0.15)]
         hands = Boxes.concat([Boxes.from_local(local, rot, pose) for pose in poses])
+        arm = Boxes.concat([Boxes.from_local(hand.FOREARM, rot, pose) for pose in poses[1:]])
         cost = REACH_WEIGHT * max(0.0, agent.scene.reach(grasp - approach * WRIST_OFFSET) - WRIST_REACH)
         cost += 10.0 * boxes_hit(hands, fixed, PENETRATION_TOLERANCE)
-        # Brushing a loose object is acceptable; ramming one (a bottle beside the cabinet) is not.
-        cost += LOOSE_WEIGHT * max(0.0, depth(hands, loose) - LOOSE_ALLOWANCE)
+        # Brushing a loose object with the hand is acceptable; ramming one (a bottle beside the cabinet)
+        # is not, and the arm behind the hand knocks over whatever it meets.
+        cost += LOOSE_WEIGHT * max(0.0, depth(hands, loose) - LOOSE_ALLOWANCE, depth(arm, loose))
         if cost < best_cost:
             best, best_cost = (rot, grasp, approach), cost
     return best
+
+
+def opening_travel(art: Articulation) -> np.ndarray:
+    """How far (a world vector) the drawer's front moves when it is pulled open."""
+    return abs(art.target("open") - art.qpos) * opening_direction(art)
+
+
+def opened_bounds(art: Articulation) -> np.ndarray:
+    """The world bounds (lo xyz, hi xyz) the drawer will occupy once pulled open."""
+    bounds = art.boxes.aabb()
+    return np.concatenate([bounds[:, :3].min(axis=0), bounds[:, 3:].max(axis=0)]) + np.tile(opening_travel(art), 2)
+
+
+def _exit_distance(box: np.ndarray, keep_clear: np.ndarray, along: np.ndarray) -> float:
+    """How far the footprint of `box` must move along the horizontal unit vector `along` to leave the
+    rectangle `keep_clear` (x/y lo, x/y hi)."""
+    out = np.inf
+    for axis in (0, 1):
+        if along[axis] > 1e-9:
+            out = min(out, (keep_clear[axis + 2] - box[axis]) / along[axis])
+        elif along[axis] < -1e-9:
+            out = min(out, (box[axis + 3] - keep_clear[axis]) / -along[axis])
+    return float(max(out, 0.0))
+
+
+def clear_sweep(agent: Agent, region: str, objects: tuple[str, ...]) -> Program:
+    """Before a drawer is pulled open, drag each of `objects` that the open drawer would stand over out
+    of its way (a bowl in front of the cabinet: once covered, no hand reaches it under the drawer).
+
+    Each goes the shortest way out of the drawer's footprint (and `SWEEP_MARGIN` beyond) along which
+    the hand can drag it; one that cannot be dragged stays.
+    """
+    scene = agent.scene
+    art = scene.articulation(region)
+    opened = opened_bounds(art)
+    keep_clear = opened[[0, 1, 3, 4]] + np.array([-1.0, -1.0, 1.0, 1.0]) * SWEEP_MARGIN
+    for obj in objects:
+        scene = agent.scene
+        box = scene.bbox(obj)
+        beside = np.any(box[3:5] <= keep_clear[:2]) or np.any(box[:2] >= keep_clear[2:])
+        if not scene.movable(obj) or beside or box[2] >= opened[5]:
+            continue
+        # Under the open drawer but still within reach of a hand coming straight down: leave it.
+        grasp = plan_grasp(scene.with_part_moved(region, opening_travel(art)), obj)
+        if grasp is not None and len(grasp.entry) == 1:
+            continue
+        hooks = []
+        for k in range(SWEEP_DIRECTIONS):
+            angle = 2 * math.pi * k / SWEEP_DIRECTIONS
+            along = np.array([math.cos(angle), math.sin(angle)])
+            distance = _exit_distance(box, keep_clear, along)
+            hook = hooking.plan_hook(scene, obj, along * distance)
+            if hook is not None:
+                hooks.append((distance + NUDGE_COST * hook.nudge, hook))
+        if hooks:
+            yield from hooking.drag(agent, min(hooks, key=lambda item: item[0])[1])
+    return True
 
 
 def pull_open(agent: Agent, region: str) -> Program:
@@ -94,7 +156,7 @@ def pull_open(agent: Agent, region: str) -> Program:
     direction = opening_direction(art)
     rot, grasp, approach = _handle_grasp(agent, art, direction)
     ready = grasp - HANDLE_APPROACH * approach
-    yield from reorient(agent, rot)
+    yield from reorient(agent, rot, toward=ready)
     path = flight_path(agent.scene, agent.scene.eef_pos, ready, hang=hand.PALM_HALF_LENGTH, reach=hand.REACH)
     yield from travel(agent, ready, path=path, rot=rot, grip=OPEN, tol=0.01)
     # Level: sagging on the way, the lower finger catches the front of the drawer below (goal/s3's top drawer).
@@ -166,7 +228,7 @@ def push_closed(agent: Agent, region: str) -> Program:
     # Fingers leaning toward the push keep the wrist and forearm back from the cabinet's front.
     rot = leaning(rot, -direction, PUSH_LEAN)
     yield from actuate(agent, CLOSE, max_steps=8)
-    yield from reorient(agent, rot)
+    yield from reorient(agent, rot, toward=contact)
     above = contact + np.array([0.0, 0.0, 0.05])
     path = flight_path(agent.scene, agent.scene.eef_pos, above, hang=hand.TIP, reach=hand.REACH)
     yield from travel(agent, contact, path=path, rot=rot, grip=CLOSE, tol=0.01)

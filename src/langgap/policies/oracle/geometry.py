@@ -233,3 +233,9 @@ def boxes_hit(boxes: Boxes, others: Boxes, tolerance: float) -> bool:
     """Whether any of `boxes` penetrates any of `others` deeper than `tolerance`."""
     parts = zip(boxes.centre, boxes.half, boxes.rot, strict=True)
     return any(np.any(penetration(centre, half, rot, others) > tolerance) for centre, half, rot in parts)
+
+
+def depth_across(boxes: Boxes, others: Boxes) -> float:
+    """How far `boxes` reach horizontally into `others` (<= 0 when apart), whatever their heights:
+    a flat object's overlap in height says nothing of how far it runs into another."""
+    return depth(Boxes(boxes.centre, boxes.half + np.array([0.0, 0.0, 1.0]), boxes.rot), others)

@@ -203,7 +203,7 @@ def plan_grasp(
     boxes = scene.boxes(obj)
     bounds = boxes.aabb()
     fixed = scene.obstacles(exclude=(obj,), fixtures_only=True)
-    loose = Boxes.concat([scene.boxes(e) for e in scene.entities if e != obj and scene.movable(e)])
+    loose = scene.loose_boxes(exclude=(obj,))
     candidates = sorted(_candidates(scene, boxes, bounds), key=lambda c: c.cost)
     placing = place_shift is not None and place_obstacles is not None
     lowest = {}

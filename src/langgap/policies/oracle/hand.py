@@ -24,6 +24,9 @@ PALM_HALF_DEPTH_HIGH = 0.032
 WRIST_TOP = -0.20  # the wrist (the arm's last links), a narrower block above the palm
 WRIST_HALF_WIDTH = 0.05
 REACH = 0.07  # how far the open fingers reach sideways from the grip site
+# The arm's last links behind a hand pointing sideways (link 6 hangs below them: sliding onto a drawer's
+# handle along the bar, it met a wine bottle's top 5 cm below the grip site, 20 cm behind it).
+FOREARM = np.array([[-0.08, -0.06, -0.30, 0.08, 0.06, -0.10]])
 
 
 def finger_boxes(width: float) -> np.ndarray:

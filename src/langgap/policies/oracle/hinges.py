@@ -29,7 +29,7 @@ def turn(agent: Agent, fixture: str, state: str) -> Program:
     yaw = 0.0 if extent[0] < extent[1] else math.pi / 2
     yaw = wrap_half_turn(yaw, hand_yaw(agent.scene.eef_mat))
     above = grasp_point + np.array([0.0, 0.0, APPROACHES[0]])
-    yield from reorient(agent, top_down(yaw))
+    yield from reorient(agent, top_down(yaw), toward=above)
     path = flight_path(agent.scene, agent.scene.eef_pos, above, hang=hand.TIP, reach=hand.REACH)
     yield from travel(agent, above, path=path, rot=top_down(yaw), grip=OPEN, tol=0.01)
     yield from move(agent, grasp_point, tol=0.004, steps=40, speed=0.4)
@@ -82,7 +82,7 @@ def close_door(agent: Agent, fixture: str) -> Program:
     sweep = (goal - art.qpos) * art.axis[2]
     yaw = sweeping_yaw(math.atan2(tangent[1], tangent[0]) + math.pi / 2, agent.scene.azimuth(start), sweep)
     yield from actuate(agent, CLOSE, max_steps=8)
-    yield from reorient(agent, top_down(yaw))
+    yield from reorient(agent, top_down(yaw), toward=start)
     path = flight_path(agent.scene, agent.scene.eef_pos, start + np.array([0.0, 0.0, 0.05]), hang=hand.TIP, reach=0.05)
     yield from travel(agent, start, path=path, rot=top_down(yaw), grip=CLOSE, tol=0.012)
     for _ in range(100):

@@ -126,29 +126,30 @@ def travel(
 ) -> Program:
     """Go to `pos` through the waypoints `path` (n, 3) without stopping at them, then settle on `pos`.
 
-    `speed` (0..1] caps every step, e.g. to carry a load gently.
+    `speed` (0..1] caps every step, e.g. to carry a load gently. The hand turns to `rot` on its way.
     """
     for waypoint in [] if path is None else path:
         yield from move(agent, waypoint, rot=rot, grip=grip, tol=PASS_TOLERANCE, steps=60, speed=speed, through=True)
     return (yield from move(agent, pos, rot=rot, grip=grip, tol=tol, speed=speed))
 
 
-def reorient(agent: Agent, rot: np.ndarray) -> Program:
-    """Turn the hand to `rot` before a motion, first drawing it nearer the base if the turn is large.
+def reorient(agent: Agent, rot: np.ndarray, toward: np.ndarray | None = None) -> Program:
+    """Start turning the hand to `rot` for a motion toward `toward`; the motion that follows finishes the turn.
 
-    A large turn with the arm stretched out can straighten the elbow against its limit, where the
-    controller no longer moves the hand; near the base the arm has room to turn.
+    The servo commands position and orientation together, so a hand turns on its way. A large turn
+    with the arm stretched out, though, can straighten the elbow against its limit, where the
+    controller no longer moves the hand: such a turn begins while the hand is drawn in to
+    TURNING_REACH from the base (in the direction of `toward`, else of the hand), where the arm has
+    room to turn.
     """
     turn = float(np.linalg.norm(mat_to_axis_angle(rot @ agent.scene.eef_mat.T)))
-    if turn < LARGE_TURN:
-        return True
     here = agent.scene.eef_pos
-    outward = here[:2] - agent.scene.base_pos[:2]
-    distance = float(np.linalg.norm(outward))
-    if distance > TURNING_REACH:
-        staging = np.array([*(agent.scene.base_pos[:2] + outward / distance * TURNING_REACH), here[2] + 0.03])
-        yield from move(agent, staging, rot=agent.scene.eef_mat.copy(), tol=PASS_TOLERANCE, steps=30, through=True)
-    return (yield from move(agent, agent.scene.eef_pos.copy(), rot=rot, tol=0.03, steps=30))
+    if turn < LARGE_TURN or agent.scene.reach(here) <= TURNING_REACH:
+        return True
+    outward = (here if toward is None else np.asarray(toward))[:2] - agent.scene.base_pos[:2]
+    inward = agent.scene.base_pos[:2] + outward / np.linalg.norm(outward) * TURNING_REACH
+    staging = np.array([*inward, here[2] + 0.03])
+    return (yield from move(agent, staging, rot=rot, tol=PASS_TOLERANCE, steps=30, through=True))
 
 
 def back_off(agent: Agent, away: np.ndarray | None = None) -> Program:

@@ -65,7 +65,7 @@ def pick(agent: Agent, obj: str, spots: Sequence[Spot] = ()) -> Program:
         if grasp is None:
             return None
         first = grasp.entry[0]
-        yield from reorient(agent, grasp.rot)
+        yield from reorient(agent, grasp.rot, toward=first)
         path = flight_path(agent.scene, agent.scene.eef_pos, first, hang=hand.TIP, reach=hand.REACH)
         yield from travel(agent, first, path=path, rot=grasp.rot, grip=OPEN, tol=0.01)
         for waypoint in grasp.entry[1:]:

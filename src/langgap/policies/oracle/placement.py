@@ -74,7 +74,7 @@ def spots_in_region(scene: Scene, obj: str, region_name: str, *, inside: bool) -
     """
     region = scene.region(region_name)
     fixed = scene.obstacles(exclude=(obj,), fixtures_only=True)
-    loose = [e for e in scene.entities if e != obj and scene.movable(e)]
+    loose = scene.loose(exclude=(obj,))
     everything = scene.obstacles(exclude=(obj,))
     lo, hi = region_box(region, inside=inside)
     scored = []
@@ -105,7 +105,7 @@ def spots_aside(scene: Scene, obj: str, keep_clear: np.ndarray, then: np.ndarray
     that the grasp can be chosen for a spot where the hand, too, fits (not against a fixture).
     """
     everything = scene.obstacles(exclude=(obj,))
-    table = min(scene.bbox(e)[2] for e in scene.entities if scene.movable(e))
+    table = min(scene.bbox(e)[2] for e in scene.loose())
     here = scene.pos(obj)[:2]
     bounds = scene.bbox(obj)
     box = bounds + np.array([-ASIDE_MARGIN, -ASIDE_MARGIN, 0.0, ASIDE_MARGIN, ASIDE_MARGIN, 0.0])

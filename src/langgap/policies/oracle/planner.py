@@ -79,7 +79,9 @@ def order_goal(scene: Scene, goal: tuple[Predicate, ...]) -> list[Predicate]:
     return first + middle + last
 
 
-def _achieve(agent: Agent, predicate: Predicate) -> Program:
+def _achieve(agent: Agent, predicate: Predicate, later: tuple[Predicate, ...] = ()) -> Program:
+    """Pursue one sub-goal; `later` are the sub-goals pursued after it (a drawer opened first is
+    cleared of what they will pick up from under it)."""
     scene = agent.scene
     name, args = predicate.name, predicate.args
     if name in ("On", "In"):
@@ -110,6 +112,8 @@ def _achieve(agent: Agent, predicate: Predicate) -> Program:
         return (yield from hinges.turn(agent, part, _STATE[name]))
     if art.slide:
         if name == "Open":
+            moved = tuple(dict.fromkeys(p.args[0] for p in later if p.name in ("On", "In")))
+            yield from drawers.clear_sweep(agent, part, moved)
             return (yield from drawers.pull_open(agent, part))
         return (yield from drawers.push_closed(agent, part))
     if name == "Close":
@@ -124,9 +128,9 @@ def _pursue(agent: Agent, atoms: tuple[Predicate, ...]) -> Program:
         pending = [p for p in steps if not holds(agent.scene, p)]
         if not pending:
             return
-        for predicate in pending:
+        for index, predicate in enumerate(pending):
             if not holds(agent.scene, predicate):
-                yield from _achieve(agent, predicate)
+                yield from _achieve(agent, predicate, tuple(pending[index + 1 :]))
 
 
 def _skills(scene: Scene, plan: tuple[tuple[Predicate, ...], ...]) -> int:

@@ -46,7 +46,7 @@ def _push_pose(
     table = float(scene.bbox(obj)[2])
     across = math.atan2(direction[1], direction[0]) + math.pi / 2
     fixed = scene.obstacles(exclude=(obj,), fixtures_only=True)
-    loose = Boxes.concat([scene.boxes(e) for e in scene.entities if e != obj and scene.movable(e)])
+    loose = scene.loose_boxes(exclude=(obj,))
     push = np.array([*direction, 0.0])
     for lean in PUSH_LEANS:
         for turn in PUSH_TURNS:  # a turned hand reaches less far sideways
@@ -145,7 +145,7 @@ def push_to(agent: Agent, obj: str, spot: Spot, *, tolerance: float = 0.01) -> P
             pose = _push_pose(scene, obj, scene.pos(obj)[:2], direction, float(np.linalg.norm(to_go)))
             start, rot = pose if pose is not None else _push_pose_upright(scene, obj, direction)
             yield from actuate(agent, CLOSE, max_steps=8)
-            yield from reorient(agent, rot)
+            yield from reorient(agent, rot, toward=start)
             scene = agent.scene
             path = flight_path(scene, scene.eef_pos, start + np.array([0.0, 0.0, 0.1]), hang=hand.TIP, reach=hand.REACH)
             yield from travel(agent, start, path=path, rot=rot, grip=CLOSE, tol=0.008)

@@ -108,8 +108,17 @@ class Scene:
         return np.asarray(self.raw[f"shape/{name}"], dtype=np.float64).reshape(-1, 6)
 
     def boxes(self, name: str) -> Boxes:
-        """Collision boxes of `name` at its current pose."""
+        """Collision boxes of `name` at its current pose (each geom's bounds in the body's frame:
+        conservative where a geom is turned in it)."""
         return Boxes.from_local(self.shape(name), self.rot(name), self.pos(name))
+
+    def parts(self, name: str) -> Boxes:
+        """The collision geoms of `name` as oriented boxes at its current pose (tight: a plate's slanted
+        rim leaves its middle free, where `boxes` fill it)."""
+        local = np.asarray(self.raw[f"parts/{name}"], dtype=np.float64).reshape(-1, 15)
+        body = self.rot(name)
+        rot = np.einsum("ij,njk->nik", body, local[:, 6:].reshape(-1, 3, 3))
+        return Boxes(local[:, :3] @ body.T + self.pos(name), local[:, 3:6], rot)
 
     def movable(self, name: str) -> bool:
         """A loose object (True) or a fixture (False)."""
@@ -149,6 +158,28 @@ class Scene:
             },
             boxes=Boxes.from_local(shape, quat_to_mat(body[3:7]), np.asarray(body[:3], dtype=np.float64)),
         )
+
+    def with_part_moved(self, name: str, offset: np.ndarray) -> Scene:
+        """The scene as it would be with the moving part of articulation `name` shifted by `offset`
+        (e.g. a drawer pulled open), to ask before acting what the hand could do then."""
+        raw = dict(self.raw)
+        body = self.raw[f"art/{name}/body"]
+        shift = np.asarray(offset, dtype=np.float64)
+        for other in self.articulated:  # the same part is also listed under its fixture's name
+            prefix = f"art/{other}/"
+            if np.array_equal(self.raw[prefix + "body"], body):
+                raw[prefix + "body"] = np.concatenate([body[:3] + shift, body[3:]])
+                raw[prefix + "bbox"] = self.raw[prefix + "bbox"] + np.tile(shift, 2)
+                raw[prefix + "handle"] = self.raw[prefix + "handle"] + shift
+        return Scene(raw)
+
+    def loose(self, exclude: tuple[str, ...] = ()) -> tuple[str, ...]:
+        """The loose (movable) objects, but those of `exclude`."""
+        return tuple(e for e in self.entities if e not in exclude and self.movable(e))
+
+    def loose_boxes(self, exclude: tuple[str, ...] = ()) -> Boxes:
+        """Collision boxes of the loose objects, but those of `exclude`."""
+        return Boxes.concat([self.boxes(e) for e in self.loose(exclude)])
 
     def obstacles(self, exclude: tuple[str, ...] = (), *, fixtures_only: bool = False) -> Boxes:
         """Collision boxes of every entity and moving part except those of `exclude` (names or their parts)."""
