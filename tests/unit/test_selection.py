@@ -88,9 +88,9 @@ def test_ids_globs_and_paper_numbers(catalog):
 
 
 def test_the_default_is_the_tasks_the_gate_did_not_reject(catalog):
-    assert len(INFEASIBLE) == 4
+    assert 0 < len(INFEASIBLE) < len(IDS)
     feasible = [i for i in IDS if i not in INFEASIBLE]
-    assert ids(catalog, "feasible") == feasible and len(feasible) == 95
+    assert ids(catalog, "feasible") == feasible
     assert ids(catalog, None) == ids(catalog, "") == ids(catalog, "  ") == feasible
     assert ids(catalog, "infeasible") == [i for i in IDS if i in INFEASIBLE]
     # an infeasible task is still selectable by id or by a term that does not ask about feasibility
