@@ -9,6 +9,7 @@ import numpy as np
 from langgap.policies.oracle.drawers import _exit_distance
 from langgap.policies.oracle.geometry import Boxes, depth, depth_across, top_down
 from langgap.policies.oracle.motion import TURNING_REACH, Agent, reorient
+from langgap.policies.oracle.placement import flight_path
 from langgap.policies.oracle.scene import Scene
 
 BASE = np.array([-0.66, 0.0, 0.912])
@@ -98,3 +99,17 @@ def test_a_stretched_hand_draws_in_toward_where_it_goes_and_turns_meanwhile():
     expected = staging - scene.eef_pos[:2]
     assert np.dot(move[:2], expected) / (np.linalg.norm(move[:2]) * np.linalg.norm(expected)) > 0.99
     assert abs(turn[2]) > 0.5  # the turn about the vertical starts at once
+
+
+def test_a_load_beside_a_fixture_flies_away_from_it_without_climbing_over_it():
+    # The drawer spans y -0.35..-0.15 up to z 1.03; a bowl-sized load stands 2 cm from its side.
+    scene = _scene(np.array([-0.2, 0.0, 1.2]))
+    start = np.array([0.0, -0.08, 0.95])
+    fly = dict(exclude=("bowl",), hang=0.03, reach=0.03, extent=np.array([-0.05, -0.05, 0.05, 0.05]))
+    away = flight_path(scene, start, np.array([0.0, 0.2, 0.95]), **fly)
+    along = flight_path(scene, start, np.array([0.3, -0.08, 0.95]), **fly)
+    assert away[:, 2].max() == along[:, 2].max() == 0.95
+    # Nearer to it than at the start, or across it, the load is flown over it.
+    toward = flight_path(scene, start, np.array([-0.3, -0.15, 0.95]), **fly)
+    across = flight_path(scene, start, np.array([0.0, -0.45, 0.95]), **fly)
+    assert toward[:, 2].max() > 1.06 and across[:, 2].max() > 1.06

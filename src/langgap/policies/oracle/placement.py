@@ -195,10 +195,17 @@ def flight_path(
 
 
 def _tops_near(obstacles: np.ndarray, samples: np.ndarray, extent: np.ndarray, reach: float) -> np.ndarray:
-    """Per sample (x, y), the highest top of the obstacles within `reach` of the rectangle `extent` around it."""
+    """Per sample (x, y), the highest top of the obstacles within `reach` of the rectangle `extent` around it.
+
+    The samples run along a straight path from the first: an obstacle the rectangle stands beside at the
+    start (near, not over it) is left out where the path is no nearer to it than there, since the load
+    already stands at its height that close (a bowl lifted from beside a cabinet need not fly over it).
+    """
     low, high = samples[:, None, :] + extent[:2], samples[:, None, :] + extent[2:]
-    gap = np.maximum(np.maximum(obstacles[None, :, :2] - high, low - obstacles[None, :, 3:5]), 0.0)
-    near = np.linalg.norm(gap, axis=2) <= reach
+    apart = np.maximum(np.maximum(obstacles[None, :, :2] - high, low - obstacles[None, :, 3:5]), 0.0)
+    gap = np.linalg.norm(apart, axis=2)
+    beside = (gap[0] > 0.0) & (gap >= gap[0])
+    near = (gap <= reach) & ~beside
     return np.where(near, obstacles[None, :, 5], -np.inf).max(axis=1)
 
 
