@@ -168,12 +168,13 @@ def flight_path(
     length = float(np.linalg.norm(end[:2] - start[:2]))
     count = max(2, int(length / PATH_SPACING) + 1)
     samples = start[None, :2] + np.linspace(0.0, 1.0, count)[:, None] * (end[:2] - start[:2])[None, :]
-    own = _tops_near(obstacles, samples, np.zeros(4) if extent is None else extent, reach) + hang + CLEARANCE
-    if extent is not None:
+    loaded = extent is not None
+    own = _tops_near(obstacles, samples, extent if loaded else np.zeros(4), reach, beside_start=loaded)
+    own += hang + CLEARANCE
+    if loaded:
         # The palm and wrist above a load may reach beyond it, but they only need to clear their own height.
-        own = np.maximum(
-            own, _tops_near(obstacles, samples, np.zeros(4), hand.PALM_HALF_LENGTH) + hand.PALM + CLEARANCE
-        )
+        palm = _tops_near(obstacles, samples, np.zeros(4), hand.PALM_HALF_LENGTH, beside_start=True)
+        own = np.maximum(own, palm + hand.PALM + CLEARANCE)
     # Between two samples the load passes near what either sample is near: take the larger need.
     needed = own.copy()
     needed[1:] = np.maximum(needed[1:], own[:-1])
@@ -194,18 +195,23 @@ def flight_path(
     return np.array(([escape] if escape is not None else []) + path)
 
 
-def _tops_near(obstacles: np.ndarray, samples: np.ndarray, extent: np.ndarray, reach: float) -> np.ndarray:
+def _tops_near(
+    obstacles: np.ndarray, samples: np.ndarray, extent: np.ndarray, reach: float, *, beside_start: bool = False
+) -> np.ndarray:
     """Per sample (x, y), the highest top of the obstacles within `reach` of the rectangle `extent` around it.
 
-    The samples run along a straight path from the first: an obstacle the rectangle stands beside at the
-    start (near, not over it) is left out where the path is no nearer to it than there, since the load
-    already stands at its height that close (a bowl lifted from beside a cabinet need not fly over it).
+    With `beside_start` (a load held as it will be carried), the samples run along a straight path
+    from the first: an obstacle the rectangle stands beside at the start (near, not over it) is left out
+    where the path is no nearer to it than there, since the load already stands at its height that
+    close (a bowl lifted from beside a cabinet need not fly over it). An empty hand turns on its way,
+    which sweeps its fingers out of where they stood: not for it.
     """
     low, high = samples[:, None, :] + extent[:2], samples[:, None, :] + extent[2:]
     apart = np.maximum(np.maximum(obstacles[None, :, :2] - high, low - obstacles[None, :, 3:5]), 0.0)
     gap = np.linalg.norm(apart, axis=2)
-    beside = (gap[0] > 0.0) & (gap >= gap[0])
-    near = (gap <= reach) & ~beside
+    near = gap <= reach
+    if beside_start:
+        near &= ~((gap[0] > 0.0) & (gap >= gap[0]))
     return np.where(near, obstacles[None, :, 5], -np.inf).max(axis=1)
 
 
