@@ -109,6 +109,9 @@ def test_a_load_beside_a_fixture_flies_away_from_it_without_climbing_over_it():
     away = flight_path(scene, start, np.array([0.0, 0.2, 0.95]), **fly)
     along = flight_path(scene, start, np.array([0.3, -0.08, 0.95]), **fly)
     assert away[:, 2].max() == along[:, 2].max() == 0.95
+    # An empty hand (no load held as it will be carried) turns on its way: it is flown over.
+    empty = flight_path(scene, start, np.array([0.0, 0.2, 0.95]), exclude=("bowl",), hang=0.03, reach=0.08)
+    assert empty[:, 2].max() > 1.06
     # Nearer to it than at the start, or across it, the load is flown over it.
     toward = flight_path(scene, start, np.array([-0.3, -0.15, 0.95]), **fly)
     across = flight_path(scene, start, np.array([0.0, -0.45, 0.95]), **fly)
