@@ -101,7 +101,7 @@ def _achieve(agent: Agent, predicate: Predicate, later: tuple[Predicate, ...] = 
                 scene = agent.scene
                 spots = spots_in_region(scene, obj, target, inside=False)
         if not has_grasp(scene, obj):
-            return (yield from pushing.push_to(agent, obj, spots[0]))
+            return (yield from pushing.slide_to(agent, obj, spots[0]))
         spot = yield from pick_place.pick(agent, obj, spots)
         if spot is None:
             return False

@@ -1,4 +1,5 @@
-"""Sliding an object over the table with the closed fingers (for what no grasp fits, e.g. a plate)."""
+"""Sliding an object over the table with the closed fingers (for what no grasp fits, e.g. a plate):
+dragged by the fingers pressed inside it when it has a hollow, else pushed from behind."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ import math
 
 import numpy as np
 
-from langgap.policies.oracle import hand
+from langgap.policies.oracle import hand, hooking
 from langgap.policies.oracle.control import CLOSE
 from langgap.policies.oracle.geometry import (
     Boxes,
@@ -31,6 +32,7 @@ PUSH_GAP = 0.005  # between the fingers and the object before a stroke
 PUSH_HEIGHT = 0.004  # of the hand's lowest point above the table
 PUSH_DETOURS = (0.08, 0.14)  # how far a first stroke may take an object before it is pushed toward its goal
 STROKE_COST = 0.05  # metres of detour worth saving a stroke
+SLIDE_DRAGS = 3  # pressed drags toward the spot, each from where the last one left the object
 
 
 def _push_pose(
@@ -128,6 +130,21 @@ def _push_plan(scene: Scene, obj: str, goal: np.ndarray) -> list[np.ndarray]:
         if total < best_cost:
             best, best_cost = plan, total
     return best
+
+
+def slide_to(agent: Agent, obj: str, spot: Spot, *, tolerance: float = 0.01) -> Program:
+    """Slide `obj` over the table until its origin is within `tolerance` of `spot`: pressed drags
+    (`hooking`) while a hook fits it, then pushes from behind (`push_to`)."""
+    for _ in range(SLIDE_DRAGS):
+        scene = agent.scene
+        shift = spot.xy - scene.pos(obj)[:2]
+        if np.linalg.norm(shift) < tolerance:
+            return True
+        hook = hooking.plan_hook(scene, obj, shift, pressed=True)
+        if hook is None:
+            return (yield from push_to(agent, obj, spot, tolerance=tolerance))
+        yield from hooking.drag(agent, hook)
+    return bool(np.linalg.norm(spot.xy - agent.scene.pos(obj)[:2]) < tolerance)
 
 
 def push_to(agent: Agent, obj: str, spot: Spot, *, tolerance: float = 0.01) -> Program:
