@@ -138,6 +138,24 @@ def test_a_bowl_lifted_from_beside_a_cabinet_flies_away_from_it_not_over_it(cata
     assert result.success and result.steps < 180, result.steps
 
 
+def test_a_plate_held_down_pushes_the_cream_cheese_ahead_instead_of_riding_onto_it(catalog):
+    # goal/s5, init state 4: the cream cheese lies between the plate and the front of the stove. Pushed
+    # from behind, the plate's shallow rim rode onto the box, every later stroke stopped at once and the
+    # 300 steps ran out. Dragged by the fingers pressed inside it, the plate stays on the table and
+    # shoves the box ahead of it.
+    task = catalog.get("goal/s5/plate-on-stove-front")
+    policy = make_policy("oracle", {})
+    context = task_context(task, catalog, init_index=4, seed=episode_seed(0, 4))
+    with TaskEnv(task, env_options_for(policy)) as env:
+        env.reset(4, seed=context.seed, render=False)
+        env.settle()
+        before = Scene(env.observe().privileged).pos("cream_cheese_1")
+        result = run_episode(env, policy, context)
+        after = Scene(env.observe().privileged).pos("cream_cheese_1")
+    assert result.success and result.steps < 260, result.steps
+    assert np.linalg.norm(after[:2] - before[:2]) > 0.03, (before, after)
+
+
 def test_parts_are_the_geoms_as_turned_boxes(catalog):
     # A plate's rim is nine slanted slabs: their bounds in the plate's frame fill its middle, the
     # turned boxes leave it free (where a bowl's or a plate's inside is, for the fingers to hook).

@@ -6,8 +6,10 @@ import math
 
 import numpy as np
 
+from langgap.policies.oracle import hand
 from langgap.policies.oracle.drawers import _exit_distance
 from langgap.policies.oracle.geometry import Boxes, depth, depth_across, top_down
+from langgap.policies.oracle.hooking import PRESSED_DEPTHS, plan_hook
 from langgap.policies.oracle.motion import TURNING_REACH, Agent, reorient
 from langgap.policies.oracle.placement import flight_path
 from langgap.policies.oracle.scene import Scene
@@ -116,3 +118,52 @@ def test_a_load_beside_a_fixture_flies_away_from_it_without_climbing_over_it():
     toward = flight_path(scene, start, np.array([-0.3, -0.15, 0.95]), **fly)
     across = flight_path(scene, start, np.array([0.0, -0.45, 0.95]), **fly)
     assert toward[:, 2].max() > 1.06 and across[:, 2].max() > 1.06
+
+
+def _plate_scene(cheese_at: np.ndarray) -> Scene:
+    """A plate 14 cm across at the origin of the table (its floor 6 mm thick, walls 16 mm high) and a
+    1.8 cm box: the plate's hollow is too shallow for the fingers' usual depths."""
+    walls = [
+        (0.065, 0.0, 0.005, 0.07),
+        (-0.065, 0.0, 0.005, 0.07),
+        (0.0, 0.065, 0.07, 0.005),
+        (0.0, -0.065, 0.07, 0.005),
+    ]
+    floor = [0.0, 0.0, 0.003, 0.07, 0.07, 0.003]
+    parts = [floor, *([x, y, 0.008, hx, hy, 0.008] for x, y, hx, hy in walls)]
+    identity = np.eye(3).ravel()
+    return Scene(
+        {
+            "eef_pos": np.array([-0.2, 0.0, 1.1]),
+            "eef_mat": top_down(0.0),
+            "gripper_qpos": np.array([0.0, 0.0]),
+            "base_pos": BASE,
+            "body/plate": np.concatenate([[0.0, 0.0, 0.9], IDENTITY_POSE[3:]]),
+            "shape/plate": np.array(
+                [
+                    [c - h for c, h in zip(p[:3], p[3:], strict=True)]
+                    + [c + h for c, h in zip(p[:3], p[3:], strict=True)]
+                    for p in parts
+                ]
+            ),
+            "parts/plate": np.concatenate([np.concatenate([p, identity]) for p in parts]),
+            "movable/plate": np.array([1.0]),
+            "body/cheese": np.concatenate([[*cheese_at, 0.9], IDENTITY_POSE[3:]]),
+            "shape/cheese": np.array([[-0.02, -0.03, 0.0, 0.02, 0.03, 0.018]]),
+            "movable/cheese": np.array([1.0]),
+        }
+    )
+
+
+def test_a_plate_is_hooked_only_by_a_pressed_drag_which_pushes_what_is_in_its_way_ahead():
+    shift = np.array([0.0, 0.2])
+    clear = _plate_scene(cheese_at=np.array([0.4, 0.4]))
+    # The usual depths put the fingertips into the plate's floor: no hook for a plain drag.
+    assert plan_hook(clear, "plate", shift) is None
+    hook = plan_hook(clear, "plate", shift, pressed=True)
+    assert hook is not None and hook.pressed
+    assert math.isclose(hook.start[2] - hand.TIP, 0.916 - PRESSED_DEPTHS[-1])  # 1 cm into the hollow
+    assert hook.end[1] - hook.start[1] > shift[1]  # to the wall, then the whole way
+    # Held down, the plate shoves a box in its way ahead: the drag is planned as if it were not there.
+    blocked = plan_hook(_plate_scene(cheese_at=np.array([0.0, 0.12])), "plate", shift, pressed=True)
+    assert blocked is not None and np.allclose(blocked.end, hook.end)
