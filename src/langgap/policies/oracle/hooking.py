@@ -18,7 +18,7 @@ from langgap.policies.oracle import hand
 from langgap.policies.oracle.control import CLOSE
 from langgap.policies.oracle.geometry import Boxes, depth, depth_across, hand_yaw, top_down, wrist_yaw
 from langgap.policies.oracle.grasps import APPROACHES, PENETRATION_TOLERANCE, hand_boxes
-from langgap.policies.oracle.motion import RETREAT, Agent, Program, move, reorient, travel
+from langgap.policies.oracle.motion import RETREAT, Agent, Program, move, reorient, stalled, travel
 from langgap.policies.oracle.placement import flight_path
 from langgap.policies.oracle.scene import Scene
 
@@ -31,7 +31,7 @@ WALL_SEARCH = 0.08
 DRAG_OVERSHOOT = 0.01  # dragged this much further than asked: the fingers sit a little loose in the object
 DRAG_SPEED = 0.6
 DRAG_STEP = 0.03  # metres per step a pressed drag is aimed ahead of the hand
-STALL_STEPS, STALL_PROGRESS = 8, 0.004  # a pressed drag that gains less than this over these steps stops
+DRAG_STALL_STEPS, DRAG_STALL_PROGRESS = 8, 0.004  # a pressed drag that gains less over these steps stops
 PATH_SAMPLES = (0.25, 0.5, 0.75, 1.0)
 LOOSE_ALLOWANCE = 0.018  # how far the dragged object may run into another loose object (nudging it)
 
@@ -135,7 +135,7 @@ def _pressed_drag(agent: Agent, hook: Hook, *, tol: float = 0.006, steps: int = 
         if distance < tol:
             return True
         history.append(distance)
-        if len(history) > STALL_STEPS and history[-STALL_STEPS - 1] - history[-1] < STALL_PROGRESS:
+        if stalled(history, DRAG_STALL_STEPS, DRAG_STALL_PROGRESS):
             return False
         ahead = agent.scene.eef_pos[:2] + error * min(1.0, DRAG_STEP / distance)
         yield agent.command(np.array([*ahead, low]), speed=DRAG_SPEED)

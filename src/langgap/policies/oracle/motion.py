@@ -54,6 +54,12 @@ class Agent:
         return float(np.linalg.norm(mat_to_axis_angle(self.rot @ self.scene.eef_mat.T)))
 
 
+def stalled(history: list[float], steps: int = STALL_STEPS, progress: float = STALL_PROGRESS) -> bool:
+    """Whether a distance still to go, logged once a step, shrank by less than `progress` over the
+    last `steps` steps."""
+    return len(history) > steps and history[-steps - 1] - history[-1] < progress
+
+
 def move(
     agent: Agent,
     pos: np.ndarray,
@@ -86,7 +92,7 @@ def move(
         if distance < tol and (through or agent.rotation_error() < ROTATION_TOLERANCE):
             return True
         history.append(distance + agent.rotation_error() * 0.05)
-        if len(history) > STALL_STEPS and history[-STALL_STEPS - 1] - history[-1] < STALL_PROGRESS:
+        if stalled(history):
             return False  # blocked (an obstacle, the arm's reach): let the caller decide
         if through:
             # Aimed far enough that the largest component saturates: full speed along the line.

@@ -15,7 +15,17 @@ from langgap.policies.oracle.carry import release_route
 from langgap.policies.oracle.control import CLOSE, OPEN
 from langgap.policies.oracle.geometry import bounds_corners_xy, bounds_xy
 from langgap.policies.oracle.grasps import APPROACHES, plan_grasp
-from langgap.policies.oracle.motion import PASS_TOLERANCE, Agent, Program, actuate, back_off, move, reorient, travel
+from langgap.policies.oracle.motion import (
+    PASS_TOLERANCE,
+    Agent,
+    Program,
+    actuate,
+    back_off,
+    move,
+    reorient,
+    stalled,
+    travel,
+)
 from langgap.policies.oracle.placement import HAND_HALF_WIDTH, LOAD_MARGIN, Spot, flight_path, footprint_at
 
 LIFT = 0.08  # lift after grasping before flying
@@ -117,7 +127,7 @@ def place(agent: Agent, obj: str, spot: Spot) -> Program:
         if scene.eef_pos[2] <= floor + 0.002 or (scene.touches_other(obj) and scene.eef_pos[2] < above_z - 0.01):
             break
         heights.append(float(scene.eef_pos[2]))
-        if len(heights) > PLACE_STALL and heights[-PLACE_STALL - 1] - heights[-1] < 0.002:
+        if stalled(heights, PLACE_STALL, 0.002):
             break  # the hand rests on something (a basket's rim): release from here
         correction = spot.xy - scene.pos(obj)[:2]
         target = np.array([*(scene.eef_pos[:2] + correction), floor - 0.01])
