@@ -136,15 +136,17 @@ def slide_to(agent: Agent, obj: str, spot: Spot, *, tolerance: float = 0.01) -> 
     """Slide `obj` over the table until its origin is within `tolerance` of `spot`: pressed drags
     (`hooking`) while a hook fits it, then pushes from behind (`push_to`)."""
     for _ in range(SLIDE_DRAGS):
-        scene = agent.scene
-        shift = spot.xy - scene.pos(obj)[:2]
-        if np.linalg.norm(shift) < tolerance:
+        if _arrived(agent.scene, obj, spot, tolerance):
             return True
-        hook = hooking.plan_hook(scene, obj, shift, pressed=True)
+        hook = hooking.plan_hook(agent.scene, obj, spot.xy - agent.scene.pos(obj)[:2], pressed=True)
         if hook is None:
             return (yield from push_to(agent, obj, spot, tolerance=tolerance))
         yield from hooking.drag(agent, hook)
-    return bool(np.linalg.norm(spot.xy - agent.scene.pos(obj)[:2]) < tolerance)
+    return _arrived(agent.scene, obj, spot, tolerance)
+
+
+def _arrived(scene: Scene, obj: str, spot: Spot, tolerance: float) -> bool:
+    return bool(np.linalg.norm(spot.xy - scene.pos(obj)[:2]) < tolerance)
 
 
 def push_to(agent: Agent, obj: str, spot: Spot, *, tolerance: float = 0.01) -> Program:
@@ -179,7 +181,7 @@ def push_to(agent: Agent, obj: str, spot: Spot, *, tolerance: float = 0.01) -> P
                 # Aimed a little into the table: the hand presses down instead of riding up over the object.
                 yield agent.command(np.array([*(scene.eef_pos[:2] + step), start[2] - PRESS]), speed=0.5)
             yield from move(agent, agent.scene.eef_pos + np.array([0.0, 0.0, 0.06]), tol=0.02, steps=15)
-    return bool(np.linalg.norm(spot.xy - agent.scene.pos(obj)[:2]) < tolerance)
+    return _arrived(agent.scene, obj, spot, tolerance)
 
 
 def _push_pose_upright(scene: Scene, obj: str, direction: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
