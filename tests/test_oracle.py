@@ -14,6 +14,7 @@ from langgap.engine.rollout import env_options_for, run_episode
 from langgap.errors import LangGapError
 from langgap.policies import make_policy
 from langgap.policies.base import TaskContext
+from langgap.policies.oracle import drawers
 from langgap.policies.oracle.geometry import Boxes, depth
 from langgap.policies.oracle.scene import Scene
 from langgap.sim.env import TaskEnv
@@ -158,6 +159,37 @@ def test_a_plate_held_down_pushes_the_cream_cheese_ahead_instead_of_riding_onto_
     before, after = cheese
     assert result.success and result.steps < 260, result.steps
     assert np.linalg.norm(after[:2] - before[:2]) > 0.03, (before, after)
+
+
+def test_a_bottom_drawer_opens_by_a_pressed_drag(catalog):
+    # goal/s0's bottom drawer: its handle bar has 61 mm of room under the middle drawer's handle, too
+    # little for a hand closing across it (the oracle failed all 50 init states by grasping). The closed
+    # fingers slide in over the bar, press down behind it and pull: about 90 of the 300 steps.
+    results = _episodes(catalog, "goal/s0/open-cabinet-bottom-drawer", "oracle", (0, 1), as_gate=True)
+    assert all(r.success and r.steps < 130 for r in results), [(r.success, r.steps) for r in results]
+
+
+@pytest.mark.parametrize(
+    ("task_id", "region", "pressed"),
+    [
+        ("goal/s0/open-cabinet-bottom-drawer", "wooden_cabinet_1_bottom_region", True),
+        ("goal/s0/open-cabinet-middle-drawer", "wooden_cabinet_1_middle_region", False),
+        ("spatial/s2/open-cabinet-bottom-drawer", "wooden_cabinet_1_bottom_region", True),  # the cabinet turned
+        ("spatial/s1/open-cabinet-middle-drawer", "wooden_cabinet_1_middle_region", False),
+        ("spatial/s0/open-cabinet-top-drawer", "wooden_cabinet_1_top_region", False),
+        # the white cabinet's middle drawer faces the other way: nothing above its bottom handle
+        (
+            "libero10/s3/close-cabinet-bottom-drawer+black-bowl-in-cabinet-bottom-drawer",
+            "white_cabinet_1_bottom_region",
+            False,
+        ),
+    ],
+)
+def test_a_drawer_is_pressed_open_only_where_a_handle_above_leaves_no_room_to_grasp(catalog, task_id, region, pressed):
+    task = catalog.get(task_id)
+    with TaskEnv(task, env_options_for(make_policy("oracle", {}))) as env:
+        scene = Scene(env.reset(0, seed=0, render=False).privileged)
+    assert (drawers.room_above_handle(scene, region) < drawers.GRASP_SPAN) == pressed
 
 
 def test_parts_are_the_geoms_as_turned_boxes(catalog):

@@ -114,7 +114,7 @@ def _achieve(agent: Agent, predicate: Predicate, later: tuple[Predicate, ...] = 
         if name == "Open":
             moved = tuple(dict.fromkeys(p.args[0] for p in later if p.name in ("On", "In")))
             yield from drawers.clear_sweep(agent, part, moved)
-            return (yield from drawers.pull_open(agent, part))
+            return (yield from drawers.open_drawer(agent, part))
         return (yield from drawers.push_closed(agent, part))
     if name == "Close":
         return (yield from hinges.close_door(agent, part))
