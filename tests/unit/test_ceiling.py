@@ -3,14 +3,19 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 
+import pytest
+
+from langgap.catalog.catalog import registry_path
 from langgap.catalog.task import GateResult
-from langgap.catalog.verdicts import read_verdicts, record_verdicts
+from langgap.catalog.verdicts import read_verdicts, record_verdicts, verdicts_path
+from langgap.errors import CatalogError
 from langgap.report import load_runs, summarize
 from langgap.report.formats import FORMATS
 from tests.unit.reports import episode, write_run
 
-DRAWER = "spatial/s2/open-cabinet-bottom-drawer"  # rejected by the gate: the oracle never opened it
+DRAWER = "spatial/s2/open-cabinet-bottom-drawer"
 BOWL = "spatial/s2/black-bowl-1-on-plate"
 
 
@@ -22,50 +27,89 @@ def test_the_oracle_on_exactly_the_init_states_a_run_used():
     older = GateResult(episodes=10, successes=9, feasible=True)  # recorded without per-init results
     assert older.oracle_on(range(3)) == (9, 10)
     assert gate.capped and not GateResult(20, 20, True).capped
-    assert GateResult(20, 20, True, certificate="no grasp reachable").capped
+    assert GateResult(20, 20, False, proof="out of reach").capped
 
 
-def test_re_gating_keeps_a_certificate(tmp_path):
+def test_a_certificate_written_by_an_older_langgap_is_dropped_on_reading(tmp_path):
     registry = tmp_path / "mine.yaml"
-    record_verdicts(registry, {DRAWER: GateResult(10, 0, False, certificate="unreachable handle")}, {})
-    record_verdicts(registry, {DRAWER: GateResult(50, 0, False, inits=50, failed_inits=range(50))}, {})
+    record_verdicts(registry, {DRAWER: GateResult(10, 0, False, inits=10, failed_inits=range(10))}, {})
+    path = verdicts_path(registry)
+    data = json.loads(path.read_text())
+    data["tasks"][DRAWER]["certificate"] = "Reachability on init state 0: of 930 gripper poses ..."
+    path.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
     (verdict,) = read_verdicts(registry).values()
-    assert (verdict.episodes, verdict.certificate, len(verdict.failed_inits)) == (50, "unreachable handle", 50)
+    assert (verdict.episodes, verdict.proof, verdict.feasible) == (10, "", False)  # no proof: still unproven
+    assert "certificate" not in {f.name for f in dataclasses.fields(GateResult)}
+    record_verdicts(registry, {BOWL: GateResult(5, 5, True)}, {})  # rewriting the file leaves it out
+    assert "certificate" not in json.loads(path.read_text())["tasks"][DRAWER]
 
 
-def _run(tmp_path, name: str, successes: dict[str, int]):
+def test_a_verdict_is_not_both_feasible_and_proven_impossible():
+    with pytest.raises(CatalogError, match="proof"):
+        GateResult(5, 5, True, proof="out of reach")
+
+
+def _run(tmp_path, name: str, successes: dict[str, int], verdicts: dict[str, GateResult]):
+    """A run of 4 init states per task, on a copy of langgap99 whose gate recorded `verdicts`."""
+    registry = tmp_path / "langgap99.yaml"
+    if not registry.exists():
+        registry.write_text(registry_path("langgap99").read_text())
+    record_verdicts(registry, verdicts, {})
     records = []
     for task, wins in successes.items():
         for init in range(4):
             record = episode("spatial/s0/ramekin-on-plate", init, success=init < wins)
             records.append(dataclasses.replace(record, task_id=task, suite="libero_spatial", catalog="langgap99"))
-    return write_run(tmp_path / name, name, records, catalog="langgap99")
+    return write_run(tmp_path / name, name, records, catalog=str(registry))
 
 
-def test_reports_show_the_ceiling_and_mark_tasks_that_cap_it(tmp_path):
-    (run,) = summarize(load_runs([_run(tmp_path, "vla", {DRAWER: 0, BOWL: 2})])).runs
+UNPROVEN = GateResult(50, 17, False, reason="oracle 17/50", inits=50, failed_inits=[i for i in range(50) if i % 3])
+ACCEPTED = GateResult(50, 50, True, inits=50, failed_inits=[], made_by="oracle, langgap 0.1.0, exact stepping")
+
+
+def test_reports_show_the_ceiling_and_mark_a_task_the_oracle_fails_as_unproven(tmp_path):
+    (run,) = summarize(
+        load_runs([_run(tmp_path, "vla", {DRAWER: 0, BOWL: 2}, {DRAWER: UNPROVEN, BOWL: ACCEPTED})])
+    ).runs
     rates = {t.rate.group: t.rate for t in run.tasks}
     assert (rates[BOWL].oracle_rate, rates[BOWL].relative) == (1.0, 0.5)
-    assert rates[DRAWER].oracle_rate == 0.0 and rates[DRAWER].relative is None
-    assert run.capped == {DRAWER: "certified infeasible"}  # langgap certify recorded its certificate
+    assert rates[DRAWER].oracle_rate == 0.5 and rates[DRAWER].relative == 0.0  # init states 0 and 3 of 0-3
+    assert run.capped == {DRAWER: "unproven: the oracle does not do it (2/4); no proof that a policy cannot"}
     # both tasks are extended; the oracle on the run's init states 0-3 of each (the gate kept per-init results)
     extended = run.source("extended")
-    assert (extended.oracle_successes, extended.oracle_episodes) == (4, 8)
+    assert (extended.oracle_successes, extended.oracle_episodes) == (6, 8)
     markdown = FORMATS["md"](summarize(load_runs([tmp_path / "vla"])), None)
-    assert f"| {DRAWER} ⚠ |" in markdown and f"⚠ {DRAWER} (certified infeasible)" in markdown
+    assert f"| {DRAWER} ⚠ |" in markdown and f"⚠ {DRAWER} (unproven: the oracle does not do it (2/4);" in markdown
     assert f"| {BOWL} |" in markdown
+    # the oracle failing a task shows nothing about other policies: neither the header nor the notes say so
+    assert "infeasible (proof)" not in markdown and "certified" not in markdown
+    assert "caps what any policy can show" not in markdown
+    assert "⚠ marks a task the oracle does not do at 95 % on these init states (unproven" in markdown
 
 
-def test_a_task_is_capped_by_a_low_oracle_or_a_certificate():
+def test_reports_mark_a_task_with_a_proof_infeasible(tmp_path):
+    proven = GateResult(50, 0, False, reason="oracle 0/50", inits=50, failed_inits=range(50), proof="Out of reach")
+    runs = load_runs([_run(tmp_path, "vla", {DRAWER: 0, BOWL: 2}, {DRAWER: proven, BOWL: ACCEPTED})])
+    (run,) = summarize(runs).runs
+    assert run.capped == {DRAWER: "infeasible (proof)"}
+    markdown = FORMATS["md"](summarize(runs), None)
+    assert f"⚠ {DRAWER} (infeasible (proof))" in markdown and "unproven: the oracle" not in markdown
+
+
+def test_a_task_is_marked_by_a_low_oracle_as_unproven_or_by_a_proof_as_infeasible():
     from langgap.report.stats import Rate
     from langgap.report.summary import capped_because
 
     low = Rate("t", 20, 5, 0, 1, oracle_successes=18, oracle_episodes=20)
-    assert capped_because(low, GateResult(20, 18, True)) == "oracle 18/20"
+    unproven = capped_because(low, GateResult(20, 18, True))
+    assert unproven == "unproven: the oracle does not do it (18/20); no proof that a policy cannot"
+    assert "infeasible" not in unproven and "certified" not in unproven
     fine = Rate("t", 20, 5, 0, 1, oracle_successes=19, oracle_episodes=20)
     assert capped_because(fine, GateResult(20, 19, True)) is None
-    assert capped_because(fine, GateResult(20, 19, True, certificate="…")) == "certified infeasible"
+    assert capped_because(fine, GateResult(20, 19, False, proof="…")) == "infeasible (proof)"
     assert capped_because(fine, None) is None
+    searched = GateResult(20, 3, True, demonstration="demos/drawer.npz")
+    assert "unproven" not in capped_because(Rate("t", 20, 5, 0, 1, oracle_successes=3, oracle_episodes=20), searched)
 
 
 def _record_many(registry: str, worker: int) -> None:

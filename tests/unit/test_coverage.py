@@ -11,11 +11,11 @@ from langgap.catalog.task import GateResult
 from langgap.cli.main import main
 
 
-def test_verdicts_are_counted_as_accepted_certified_open_or_not_gated():
+def test_verdicts_are_counted_as_accepted_infeasible_by_proof_unproven_or_not_gated():
     tasks = load_catalog("langgap99").select("spatial/s0/*,object/s0/*")
     verdicts = [
         GateResult(5, 5, True),
-        GateResult(5, 0, False, certificate="no handle grasp is reachable"),
+        GateResult(5, 0, False, proof="out of reach: the target is 2.1 m from the shoulder"),
         GateResult(5, 3, False),
         None,
     ]
@@ -25,15 +25,15 @@ def test_verdicts_are_counted_as_accepted_certified_open_or_not_gated():
     assert (total.suite, total.dimension, total.tasks) == ("total", "all", len(tasks))
     assert total.gated == sum(t.gate is not None for t in tasks)
     assert total.accepted == sum(t.gate is not None and t.gate.feasible for t in tasks)
-    assert total.certified == sum(t.gate is not None and bool(t.gate.certificate) for t in tasks)
-    assert total.open == total.rejected - total.certified == sum(t.gate == verdicts[2] for t in tasks)
+    assert total.infeasible == sum(t.gate == verdicts[1] for t in tasks) > 0  # by a proof only
+    assert total.unproven == total.rejected - total.infeasible == sum(t.gate == verdicts[2] for t in tasks) > 0
     assert (total.successes, total.episodes) == (
         sum(t.gate.successes for t in tasks if t.gate),
         sum(t.gate.episodes for t in tasks if t.gate),
     )
     per_suite = [c for c in counts if c.suite != "total"]
     assert {c.suite for c in per_suite} == {"libero_spatial", "libero_object"}
-    for field in ("tasks", "gated", "accepted", "certified", "episodes"):
+    for field in ("tasks", "gated", "accepted", "infeasible", "unproven", "episodes"):
         assert sum(getattr(c, field) for c in per_suite) == getattr(total, field)
         by_dimension = [c for c in counts if c.suite == "total" and c.dimension != "all"]
         assert sum(getattr(c, field) for c in by_dimension) == getattr(total, field)
@@ -42,13 +42,16 @@ def test_verdicts_are_counted_as_accepted_certified_open_or_not_gated():
 def test_tasks_gate_prints_the_recorded_verdicts(capsys):
     recorded = json.loads(registry_path("langgap99").with_suffix(".gate.json").read_text())["tasks"]
     accepted = sum(v["feasible"] for v in recorded.values())
-    certified = sum(not v["feasible"] and bool(v.get("certificate")) for v in recorded.values())
+    proven = sum(not v["feasible"] and bool(v.get("proof")) for v in recorded.values())
     episodes = sum(v["episodes"] for v in recorded.values())
     successes = sum(v["successes"] for v in recorded.values())
     assert main(["tasks", "gate", "--markdown"]) == 0
-    last = capsys.readouterr().out.strip().splitlines()[-1]
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert lines[0] == (
+        "| suite | dimension | tasks | gated | accepted | rejected | infeasible (proof) | unproven | oracle |"
+    )
     rejected = len(recorded) - accepted
-    assert last == (
-        f"| total | all | 99 | {len(recorded)} | {accepted} | {rejected} | {certified} | {rejected - certified} "
+    assert lines[-1] == (
+        f"| total | all | 99 | {len(recorded)} | {accepted} | {rejected} | {proven} | {rejected - proven} "
         f"| {successes}/{episodes} |"
     )

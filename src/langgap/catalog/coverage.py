@@ -1,8 +1,9 @@
 """How much of a catalog the feasibility gate has proven: its verdicts counted per suite and dimension.
 
-A task is *gated* when a verdict is recorded for it, *accepted* when the oracle met the gate's rate,
-*certified* when it was rejected and carries an infeasibility certificate (`langgap certify`), and
-*open* when it was rejected without one: a task nobody has yet shown to be doable or impossible.
+A task is *gated* when a verdict is recorded for it, *accepted* when the gate kept it (the oracle met
+the gate's rate, or a searched demonstration did it), *infeasible (proof)* when it was rejected with a
+proof that no policy can do it (`langgap.proofs`), and *unproven* when it was rejected without one: a
+task nobody has yet shown to be doable or impossible.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ class GateCount:
     tasks: int
     gated: int
     accepted: int
-    certified: int
+    infeasible: int  # rejected with a proof of impossibility
     episodes: int  # the oracle's, over the gated tasks
     successes: int
 
@@ -34,9 +35,9 @@ class GateCount:
         return self.gated - self.accepted
 
     @property
-    def open(self) -> int:
-        """Rejected tasks with no certificate."""
-        return self.rejected - self.certified
+    def unproven(self) -> int:
+        """Rejected tasks with no proof of impossibility."""
+        return self.rejected - self.infeasible
 
 
 def _count(suite: str, dimension: str, tasks: list[Task]) -> GateCount:
@@ -47,7 +48,7 @@ def _count(suite: str, dimension: str, tasks: list[Task]) -> GateCount:
         tasks=len(tasks),
         gated=len(gated),
         accepted=sum(g.feasible for g in gated),
-        certified=sum(not g.feasible and bool(g.certificate) for g in gated),
+        infeasible=sum(not g.feasible and bool(g.proof) for g in gated),
         episodes=sum(g.episodes for g in gated),
         successes=sum(g.successes for g in gated),
     )
@@ -70,12 +71,12 @@ def gate_counts(tasks: list[Task]) -> list[GateCount]:
     return counts
 
 
-HEADER = ("suite", "dimension", "tasks", "gated", "accepted", "rejected", "certified", "open", "oracle")
+HEADER = ("suite", "dimension", "tasks", "gated", "accepted", "rejected", "infeasible (proof)", "unproven", "oracle")
 
 
 def _cells(count: GateCount) -> tuple[str, ...]:
     oracle = f"{count.successes}/{count.episodes}" if count.episodes else "-"
-    numbers = (count.tasks, count.gated, count.accepted, count.rejected, count.certified, count.open)
+    numbers = (count.tasks, count.gated, count.accepted, count.rejected, count.infeasible, count.unproven)
     return (count.suite, count.dimension, *map(str, numbers), oracle)
 
 

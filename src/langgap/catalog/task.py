@@ -18,8 +18,15 @@ INSTRUCTION_STYLES = ("libero", "paper")
 DEFAULT_STYLE = "libero"
 
 
-# An oracle below this rate on a task's init states marks the task's results as capped by the task.
+# An oracle below this rate on a task's init states marks the task ⚠ beside a policy's results (unproven,
+# unless a proof shows it infeasible).
 CEILING_TARGET = 0.95
+INFEASIBLE = "infeasible (proof)"  # how a task with a proof of impossibility reads wherever it is shown
+
+
+def unproven(successes: int, episodes: int) -> str:
+    """How a task the oracle fails, with no proof that a policy cannot do it, reads wherever it is shown."""
+    return f"unproven: the oracle does not do it ({successes}/{episodes}); no proof that a policy cannot"
 
 
 @dataclass(frozen=True)
@@ -28,10 +35,15 @@ class GateResult:
 
     The gate runs init states 0..`inits`-1; `failed_inits` lists those the oracle failed (None in
     verdicts recorded before per-init results were kept), so the oracle's ceiling can be given for
-    exactly the init states a run used. `certificate` is the evidence, from the simulator, that a
-    task no robot can do within its step limit (empty when none was made). `made_by` says which
-    policy, code version and stepping ran the gate for this verdict (a file mixes verdicts of several
-    recordings when tasks are re-validated one by one; empty in verdicts recorded before it was kept).
+    exactly the init states a run used. `made_by` says which policy, code version and stepping ran the
+    gate for this verdict (a file mixes verdicts of several recordings when tasks are re-validated one
+    by one; empty in verdicts recorded before it was kept).
+
+    What a verdict shows: a task is doable when a demonstration did it — the oracle, at the gate's
+    rate, or `demonstration`, a stored replayable episode (a path relative to the registry's directory)
+    that does a task the oracle fails; it is impossible only by `proof`, an argument that holds for
+    every policy, printed with its assumptions (`langgap.proofs`). A task the oracle fails without
+    either is *unproven*: nobody has shown it doable or impossible.
     """
 
     episodes: int
@@ -40,14 +52,17 @@ class GateResult:
     reason: str = ""
     inits: int = 0
     failed_inits: tuple[int, ...] | None = None
-    certificate: str = ""
     made_by: str = ""
+    proof: str = ""
+    demonstration: str = ""
 
     def __post_init__(self) -> None:
         if not 0 <= self.successes <= self.episodes:
             raise CatalogError(f"gate result: {self.successes} successes in {self.episodes} episodes")
         if self.failed_inits is not None:
             object.__setattr__(self, "failed_inits", tuple(self.failed_inits))  # JSON gives a list
+        if self.proof and self.feasible:
+            raise CatalogError("gate result: feasible, yet with a proof that the task is impossible")
 
     @property
     def rate(self) -> float:
@@ -64,17 +79,41 @@ class GateResult:
         return sum(i not in failed for i in covered), len(covered)
 
     def capped_because(self, successes: int, episodes: int) -> str | None:
-        """Why the task caps what a policy can show on it, given the oracle's `successes` in `episodes` on
-        the init states in question: certified infeasible, or an oracle below `CEILING_TARGET` (None: it does not)."""
-        if self.certificate:
-            return "certified infeasible"
+        """Why the task is marked ⚠ beside a policy's results, given the oracle's `successes` in `episodes`
+        on the init states in question (None: it is not): proven infeasible, or an oracle below
+        `CEILING_TARGET` — which shows only that the oracle does not do it, not that no policy can."""
+        if self.proof:
+            return INFEASIBLE
         if episodes and successes / episodes < CEILING_TARGET:
-            return f"oracle {successes}/{episodes}"
+            if self.demonstrated:
+                return f"the oracle does not do it ({successes}/{episodes}); doable: a searched demonstration"
+            return unproven(successes, episodes)
         return None
 
     @property
+    def demonstrated(self) -> bool:
+        """True when a stored demonstration, not the oracle's rate, is what makes the task doable."""
+        return self.feasible and bool(self.demonstration)
+
+    @property
+    def evidence(self) -> str:
+        """How the verdict is shown: by the oracle's episodes, a searched demonstration, a proof of
+        impossibility, or not at all (unproven)."""
+        if self.proof:
+            return f"proof of impossibility: {self.proof}"
+        if self.demonstrated:
+            return f"searched demonstration: {self.demonstration}"
+        if self.feasible:
+            made_by = f"made by {self.made_by}" if self.made_by else "recorded before who made it was kept"
+            return f"oracle {self.successes}/{self.episodes} init states ({made_by})"
+        text = unproven(self.successes, self.episodes)
+        if self.reason and self.reason != f"oracle {self.successes}/{self.episodes}":
+            text += f"; the gate's reason: {self.reason}"
+        return text
+
+    @property
     def capped(self) -> bool:
-        """True when the task caps what a policy can show on the init states the gate ran."""
+        """True when the task is marked ⚠ on the init states the gate ran (`capped_because`)."""
         return self.capped_because(self.successes, self.episodes) is not None
 
 
@@ -133,6 +172,11 @@ class Task:
         return self.gate is None or self.gate.feasible
 
     @property
+    def evidence(self) -> str:
+        """How the task is shown doable or impossible (`GateResult.evidence`; "not gated" without a verdict)."""
+        return "not gated" if self.gate is None else self.gate.evidence
+
+    @property
     def goal_strings(self) -> list[str]:
         """The goal as the registry writes it (a list of expressions, read as their conjunction)."""
         return goal_strings(self.goal)
@@ -166,5 +210,6 @@ class Task:
             "in_langgap99": self.in_langgap99,
             "validated": self.gate is not None,
             "feasible": self.feasible,
+            "evidence": self.evidence,
             "gate": None if self.gate is None else {**asdict(self.gate), "rate": self.gate.rate},
         }

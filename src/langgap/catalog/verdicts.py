@@ -13,7 +13,7 @@ import json
 import os
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import asdict, replace
+from dataclasses import asdict
 from pathlib import Path
 
 from langgap.atomic import write_text_atomically
@@ -33,9 +33,18 @@ def read_verdicts(registry: str | Path) -> dict[str, GateResult]:
         return {}
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
-        return {task_id: GateResult(**fields) for task_id, fields in data["tasks"].items()}
+        return {task_id: _verdict(fields) for task_id, fields in data["tasks"].items()}
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise CatalogError(f"cannot read feasibility verdicts {path}: {exc}") from None
+
+
+def _verdict(fields: dict) -> GateResult:
+    # A file written by an older LangGap keeps a `certificate` per verdict (`langgap certify`): an
+    # enumeration of 930 grasp poses that found none clear, which called two bottom drawers infeasible
+    # until a pressed drag opened them. An enumeration of strategies is not a proof that no policy can
+    # do a task, so the key is dropped on reading and never shown.
+    fields = {k: v for k, v in fields.items() if k != "certificate"}
+    return GateResult(**fields)
 
 
 @contextmanager
@@ -52,15 +61,10 @@ def _exclusive(directory: Path) -> Iterator[None]:
 
 def record_verdicts(registry: str | Path, verdicts: dict[str, GateResult], about: dict | None) -> Path:
     """Merge `verdicts` into the registry's verdict file (atomically); `about` describes how they were made
-    (None keeps the file's: a certificate added to a verdict does not change how the gate ran)."""
+    (None keeps the file's)."""
     path = verdicts_path(registry)
     with _exclusive(path.parent):  # read, merge and write as one step: a concurrent recording is not lost
-        old = read_verdicts(registry)
-        # A certificate is evidence made once, apart from the gate: re-running the gate keeps it.
-        merged = old | {
-            k: v if v.certificate or k not in old else replace(v, certificate=old[k].certificate)
-            for k, v in verdicts.items()
-        }
+        merged = read_verdicts(registry) | verdicts
         if about is None:
             about = json.loads(path.read_text(encoding="utf-8")).get("about", {}) if path.is_file() else {}
         data = {"about": about, "tasks": {k: asdict(merged[k]) for k in sorted(merged)}}

@@ -7,7 +7,6 @@ import sys
 
 from langgap.cli import (
     bddl_cmd,
-    certify_cmd,
     collect_cmd,
     doctor_cmd,
     eval_cmd,
@@ -29,7 +28,6 @@ VERBS = (
     serve_cmd,
     report_cmd,
     validate_cmd,
-    certify_cmd,
     generate_cmd,
     doctor_cmd,
     bddl_cmd,

@@ -6,7 +6,7 @@ import json
 from collections import Counter
 
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
-from langgap.catalog.task import DEFAULT_STYLE, DIMENSIONS, INSTRUCTION_STYLES, KINDS, SPLITS, Task
+from langgap.catalog.task import DEFAULT_STYLE, DIMENSIONS, INFEASIBLE, INSTRUCTION_STYLES, KINDS, SPLITS, Task
 from langgap.stack import SUITES
 
 
@@ -86,7 +86,8 @@ def run_list(args) -> int:
     print(
         f"\n{len(tasks)} tasks: {by_kind['original']} original, {by_kind['extended']} extended"
         + (" (" + ", ".join(f"{d} {n}" for d, n in sorted(by_dim.items())) + ")" if by_dim else "")
-        + f"; {sum(not t.feasible for t in tasks)} rejected by the feasibility gate (gate: no)"
+        + f"; {sum(not t.feasible for t in tasks)} rejected by the feasibility gate (gate: no): "
+        + f"{sum(bool(t.gate and t.gate.proof) for t in tasks)} {INFEASIBLE}, the others unproven"
     )
     return 0
 
@@ -124,6 +125,7 @@ def run_show(args) -> int:
         print(f"{'':<12} {sibling}")
     for line in _gate_lines(task.gate):
         print(f"{'gate':<12} {line}")
+    print(f"{'evidence:':<12} {task.evidence}")
     for note in task.notes:
         print(f"{'note':<12} {note}")
     return 0
@@ -137,17 +139,19 @@ def run_gate(args) -> int:
 
 
 def _gate_lines(gate) -> list[str]:
-    """The feasibility verdict of a task as `tasks show` prints it (its certificate in full)."""
+    """The feasibility verdict of a task as `tasks show` prints it (its evidence follows on a line of its own)."""
     if gate is None:
         return ["not validated (langgap validate --record)"]
     where = f" on init states 0–{gate.inits - 1}" if gate.inits else ""
-    lines = [f"oracle {gate.successes}/{gate.episodes}{where}: {'accepted' if gate.feasible else 'rejected'}"]
+    if gate.feasible:
+        verdict = "accepted by a searched demonstration" if gate.demonstrated else "accepted"
+    else:
+        verdict = f"rejected, {INFEASIBLE}" if gate.proof else "rejected, unproven"
+    lines = [f"oracle {gate.successes}/{gate.episodes}{where}: {verdict}"]
     if gate.reason:
         lines.append(f"why: {gate.reason}")
     if gate.failed_inits:
         lines.append(f"oracle failed on init states {', '.join(map(str, gate.failed_inits))}")
-    if gate.certificate:
-        lines.append(f"certified infeasible: {gate.certificate}")
     if gate.made_by:
         lines.append(f"made by: {gate.made_by}")
     return lines

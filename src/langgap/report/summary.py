@@ -241,8 +241,8 @@ def confusion(records: list[EpisodeRecord]) -> dict[str, dict[str, dict[str, int
 
 
 def capped_because(task_rate: Rate, gate: GateResult | None) -> str | None:
-    """Why a task caps what a policy can show on it (None: it does not): certified infeasible, or an
-    oracle below `CEILING_TARGET` on the run's init states."""
+    """Why a task is marked ⚠ (None: it is not): proven infeasible, or an oracle below `CEILING_TARGET` on
+    the run's init states (unproven: the oracle does not do it, no proof that a policy cannot)."""
     return None if gate is None else gate.capped_because(task_rate.oracle_successes, task_rate.oracle_episodes)
 
 
@@ -268,7 +268,7 @@ class RunResults:
     card: dict[str, str]  # the protocol card (`CARD_ITEMS`)
     spread: list[SpreadRow]  # between-seed spread (runs with --repeats)
     clips: list[Clip]  # filmed episodes (`--video`)
-    capped: dict[str, str]  # task -> why its results are capped by the task (oracle below target, certificate)
+    capped: dict[str, str]  # task -> why it is marked ⚠ (unproven: oracle below target; or infeasible (proof))
 
     @property
     def label(self) -> str:

@@ -33,8 +33,9 @@ CEILING_NOTE = (
 )
 SELECTION_NOTE = (
     "Tasks: `--tasks feasible` (the default) runs the tasks the feasibility gate accepted; `--tasks all` adds "
-    "those it rejected. Either way, ⚠ marks a task that caps what any policy can show on it (oracle below "
-    "95 % on these init states, or certified infeasible: `langgap tasks show ID`)."
+    "those it rejected. Either way, ⚠ marks a task the oracle does not do at 95 % on these init states "
+    "(unproven: no proof that a policy cannot) or one proven infeasible (its proof and assumptions: "
+    "`langgap tasks show ID`)."
 )
 
 
@@ -266,7 +267,8 @@ CAPPED_MARK = "⚠"
 
 
 def task_label(run: RunResults, task_id: str) -> str:
-    """A task's id, marked when the task itself caps what a policy can show on it."""
+    """A task's id, marked ⚠ when the oracle does not do it at the target rate (unproven) or it is proven
+    infeasible (`GateResult.capped_because`)."""
     return f"{task_id} {CAPPED_MARK}" if task_id in run.capped else task_id
 
 
