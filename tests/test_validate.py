@@ -106,7 +106,10 @@ def test_cli_validate_writes_report_and_records_verdicts(probe_registry, tmp_pat
         "--record",
         "--no-progress",
     )
-    assert result.returncode == 1, result.stderr  # exit 1: a task is infeasible
+    assert result.returncode == 1, result.stderr  # exit 1: a task is rejected
+    # the provers read the task's simulator and find no proof: rejected, yet unproven (not infeasible)
+    unproven = "unproven: the oracle does not do it (0/1); no proof that a policy cannot"
+    assert f"spatial/s0/ramekin-on-plate: {unproven}" in result.stdout
     report = json.loads(out.read_text())
     rows = report["tasks"]
     assert [r["id"] for r in rows] == ["spatial/s0/ramekin-on-plate"]
@@ -116,8 +119,10 @@ def test_cli_validate_writes_report_and_records_verdicts(probe_registry, tmp_pat
     gate = catalog.get("spatial/s0/ramekin-on-plate").gate
     assert gate is not None and gate.made_by == f"noop, langgap {code_version()}, exact stepping"
     assert catalog.get("spatial/s0/black-bowl-1-on-plate").gate is None
+    assert gate.proof == "" and not gate.feasible
     shown = run_cli("tasks", "show", "spatial/s0/ramekin-on-plate", "--catalog", str(probe_registry))
     assert f"made by: {gate.made_by}" in shown.stdout
+    assert f"evidence:    {unproven}" in shown.stdout and "infeasible" not in shown.stdout
 
 
 def test_claims_only_resets_every_task_without_a_policy(probe_registry, tmp_path):

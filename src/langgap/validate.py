@@ -3,7 +3,8 @@
 `validate` runs the oracle (rendering off) on the first K fixed init states of each task through the
 ordinary evaluation harness, then checks per task:
 
-* success rate — below `FEASIBLE_RATE` the task is flagged infeasible;
+* success rate — below `FEASIBLE_RATE` the task is rejected (unproven: the oracle does not do it; only
+  a proof from `langgap.proofs`, recorded with `--record`, makes it infeasible);
 * the goal is false at t0 (after settling) in every episode;
 * for an extended task whose goal excludes its source's goal (the same object placed elsewhere), the
   source goal is false at the end of every successful episode;
@@ -20,6 +21,7 @@ extended task whose goal differs. A claim that fails is a release blocker.
 from __future__ import annotations
 
 import tempfile
+import warnings
 from collections import Counter
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -66,8 +68,9 @@ class TaskValidation:
     checks: dict[str, bool] = field(default_factory=dict)
     failed_inits: list[int] = field(default_factory=list)  # judged episodes the oracle failed
 
-    def verdict(self, inits: int, made_by: str = "") -> GateResult:
-        """The verdict to record, for a gate that ran init states 0..`inits`-1 as `made_by` says."""
+    def verdict(self, inits: int, made_by: str = "", proof: str = "") -> GateResult:
+        """The verdict to record, for a gate that ran init states 0..`inits`-1 as `made_by` says (with `proof`,
+        the text of a proof that no policy can do the task, `langgap.proofs`)."""
         return GateResult(
             episodes=self.episodes,
             successes=self.successes,
@@ -76,6 +79,7 @@ class TaskValidation:
             inits=inits,
             failed_inits=tuple(self.failed_inits),
             made_by=made_by,
+            proof=proof,
         )
 
 
@@ -321,6 +325,24 @@ def validate(
     return Validation(rows, benchmark_claims(catalog, records, blind_records))
 
 
+def prove_rejected(catalog_name: str, rows: list[TaskValidation], inits: int) -> dict[str, str]:
+    """Proofs of impossibility (`langgap.proofs`) for the tasks the oracle did below the gate's rate, read
+    from each task's simulator on init states 0..`inits`-1: task id -> the proof's text, for those that
+    have one. A task with none stays unproven: the oracle failing it shows nothing about other policies."""
+    from langgap.proofs import prove_tasks
+
+    catalog = load_catalog(catalog_name)
+    below = {r.id: r for r in rows if r.episodes and r.rate < FEASIBLE_RATE}
+    found = {}
+    for task_id, proof in prove_tasks([catalog.get(i) for i in below], inits).items():
+        if below[task_id].successes:  # an episode refutes it: the prover is wrong, not the episodes
+            warnings.warn(f"{task_id}: a proof of impossibility, yet the gate did it {below[task_id].successes} "
+                          f"time(s); not recorded: {proof.text()}", stacklevel=2)  # fmt: skip
+        else:
+            found[task_id] = proof.text()
+    return found
+
+
 def record(
     catalog_name: str,
     rows: list[TaskValidation],
@@ -328,8 +350,10 @@ def record(
     inits: int,
     policy: str = "oracle",
     stepping: str = DEFAULT_STEPPING,
+    proofs: dict[str, str] | None = None,
 ) -> Path:
-    """Record the rows' verdicts beside the catalog's registry file."""
+    """Record the rows' verdicts beside the catalog's registry file, with the proofs of impossibility
+    `proofs` gives (None: those `prove_rejected` finds)."""
     about = {
         "policy": policy,
         "inits": inits,
@@ -338,7 +362,10 @@ def record(
         "code_version": code_version(),
     }
     made_by = f"{policy}, langgap {about['code_version']}, {stepping} stepping"
-    return record_verdicts(registry_path(catalog_name), {r.id: r.verdict(inits, made_by) for r in rows}, about)
+    if proofs is None:
+        proofs = prove_rejected(catalog_name, rows, inits)
+    verdicts = {r.id: r.verdict(inits, made_by, proofs.get(r.id, "")) for r in rows}
+    return record_verdicts(registry_path(catalog_name), verdicts, about)
 
 
 def report(found: Validation) -> dict:
@@ -351,7 +378,7 @@ def table_text(rows: list[TaskValidation]) -> str:
     width = max((len(r.id) for r in rows), default=4)
     lines = [f"{'task':<{width}}  {'oracle':>9}  {'rate':>6}  {'steps':>11}  verdict"]
     for r in rows:
-        verdict = "ok" if r.feasible else f"INFEASIBLE ({r.reason})"
+        verdict = "ok" if r.feasible else f"REJECTED ({r.reason})"
         if r.feasible and r.rate < TARGET_RATE:
             verdict = f"ok, below the {TARGET_RATE:.0%} target"
         lines.append(
@@ -363,7 +390,7 @@ def table_text(rows: list[TaskValidation]) -> str:
     below = [r.id for r in rows if r.rate < TARGET_RATE]
     lines.append(
         f"{len(rows)} tasks, {successes}/{episodes} oracle successes "
-        f"({100 * successes / max(1, episodes):.1f}%); {sum(not r.feasible for r in rows)} infeasible; "
+        f"({100 * successes / max(1, episodes):.1f}%); {sum(not r.feasible for r in rows)} rejected; "
         f"{len(below)} below {TARGET_RATE:.0%}"
     )
     return "\n".join(lines)

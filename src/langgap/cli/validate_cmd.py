@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from langgap.catalog.task import INFEASIBLE, unproven
 from langgap.cli.eval_cmd import add_stepping_option
 from langgap.cli.tasks_cmd import add_catalog_option
 from langgap.errors import LangGapError
@@ -45,7 +46,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument(
         "--record",
         action="store_true",
-        help="record the verdicts beside the catalog's registry (infeasible tasks leave the default selection)",
+        help="record the verdicts beside the catalog's registry (rejected tasks leave the default selection)",
     )
     add_gate_options(parser)
     parser.set_defaults(handler=run)
@@ -70,7 +71,7 @@ def run_gate(args, catalog: str, selection: str, inits: int, policy: str = "orac
 
 
 def run(args) -> int:
-    from langgap.validate import record, table_text
+    from langgap.validate import prove_rejected, record, table_text
 
     if args.claims_only:
         return _claims_only(args)
@@ -78,7 +79,14 @@ def run(args) -> int:
     print(table_text(found.rows))
     _print_claims(found, args.out)
     if args.record:
-        path = record(args.catalog, found.rows, inits=args.inits, policy=args.policy, stepping=args.stepping)
+        proofs = prove_rejected(args.catalog, found.rows, args.inits)
+        for row in found.rows:
+            if row.id in proofs:
+                print(f"{row.id}: {INFEASIBLE}: {proofs[row.id]}")
+            elif row.episodes and row.rate < FEASIBLE_RATE:
+                print(f"{row.id}: {unproven(row.successes, row.episodes)}")
+        options = dict(inits=args.inits, policy=args.policy, stepping=args.stepping, proofs=proofs)
+        path = record(args.catalog, found.rows, **options)
         print(f"recorded verdicts in {path}")
     return 0 if found.passed else 1
 
