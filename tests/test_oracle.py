@@ -161,12 +161,14 @@ def test_a_plate_held_down_pushes_the_cream_cheese_ahead_instead_of_riding_onto_
     assert np.linalg.norm(after[:2] - before[:2]) > 0.03, (before, after)
 
 
-def test_a_bottom_drawer_opens_by_a_pressed_drag(catalog):
-    # goal/s0's bottom drawer: its handle bar has 61 mm of room under the middle drawer's handle, too
-    # little for a hand closing across it (the oracle failed all 50 init states by grasping). The closed
-    # fingers slide in over the bar, press down behind it and pull: about 90 of the 300 steps.
-    results = _episodes(catalog, "goal/s0/open-cabinet-bottom-drawer", "oracle", (0, 1), as_gate=True)
-    assert all(r.success and r.steps < 130 for r in results), [(r.success, r.steps) for r in results]
+@pytest.mark.parametrize(("task_id", "most_steps"), [("goal/s0", 130), ("spatial/s2", 160)])
+def test_a_bottom_drawer_opens_by_a_pressed_drag(catalog, task_id, most_steps):
+    # The bottom drawer's handle bar has 61 mm of room under the middle drawer's handle, too little for
+    # a hand closing across it (the oracle failed all 50 init states of both by grasping). The closed
+    # fingers slide in over the bar, press down behind it and pull: about 95 of goal/s0's 300 steps; in
+    # spatial/s2 (the cabinet turned away, the arm stretched) about 120 of 220.
+    results = _episodes(catalog, f"{task_id}/open-cabinet-bottom-drawer", "oracle", (0, 2), as_gate=True)
+    assert all(r.success and r.steps < most_steps for r in results), [(r.success, r.steps) for r in results]
 
 
 @pytest.mark.parametrize(

@@ -155,7 +155,7 @@ def test_a_spec_resolves_its_selection_and_records_what_determines_results():
     assert spec.physics == stack.physics_stack() and "mujoco" in spec.physics
     default = RunSpec.create("noop", episodes=1)
     feasible = {task.id for task in load_catalog("langgap99") if task.feasible}  # the recorded verdicts
-    assert default.selection is None and set(default.tasks) == feasible and len(feasible) < 99
+    assert default.selection is None and set(default.tasks) == feasible  # all 99 since the bottom drawers open
 
 
 @pytest.mark.parametrize(

@@ -16,9 +16,15 @@ from langgap.errors import LangGapError
 REGISTRY = Path(__file__).parents[2] / "src/langgap/catalog/registry/langgap99.yaml"
 ENTRIES = yaml.safe_load(REGISTRY.read_text())["tasks"]
 IDS = [e["id"] for e in ENTRIES]
-# The recorded feasibility verdicts, read directly (the catalog reads them through `read_verdicts`).
+# The recorded feasibility verdicts, read directly (the catalog reads them through `read_verdicts`): every
+# langgap99 task passes its gate, so rejection is checked on the `full` catalog's.
 VERDICTS = json.loads(REGISTRY.with_suffix(".gate.json").read_text())["tasks"]
-INFEASIBLE = {i for i, v in VERDICTS.items() if not v["feasible"]}
+REJECTED = {i for i, v in VERDICTS.items() if not v["feasible"]}
+FULL = REGISTRY.with_name("full.yaml")
+FULL_IDS = [e["id"] for e in yaml.safe_load(FULL.read_text())["tasks"]]
+FULL_REJECTED = {
+    i for i, v in json.loads(FULL.with_suffix(".gate.json").read_text())["tasks"].items() if not v["feasible"]
+}
 SHORT = {"libero_spatial": "spatial", "libero_object": "object", "libero_goal": "goal", "libero_10": "libero10"}
 
 
@@ -88,14 +94,18 @@ def test_ids_globs_and_paper_numbers(catalog):
 
 
 def test_the_default_is_the_tasks_the_gate_did_not_reject(catalog):
-    assert 0 < len(INFEASIBLE) < len(IDS)
-    feasible = [i for i in IDS if i not in INFEASIBLE]
-    assert ids(catalog, "feasible") == feasible
-    assert ids(catalog, None) == ids(catalog, "") == ids(catalog, "  ") == feasible
-    assert ids(catalog, "infeasible") == [i for i in IDS if i in INFEASIBLE]
-    # an infeasible task is still selectable by id or by a term that does not ask about feasibility
-    chosen = sorted(INFEASIBLE)[0]
-    assert ids(catalog, chosen) == [chosen] and chosen in ids(catalog, "all")
+    assert not REJECTED and ids(catalog, None) == ids(catalog, "feasible") == IDS  # every langgap99 task passed
+    with pytest.raises(LangGapError, match="selection 'rejected' matches no task"):
+        ids(catalog, "rejected")
+    full = load_catalog("full")
+    assert 0 < len(FULL_REJECTED) < len(FULL_IDS)
+    feasible = [i for i in FULL_IDS if i not in FULL_REJECTED]
+    assert ids(full, "feasible") == feasible
+    assert ids(full, None) == ids(full, "") == ids(full, "  ") == feasible
+    assert ids(full, "rejected") == [i for i in FULL_IDS if i in FULL_REJECTED]
+    # a rejected task is still selectable by id or by a term that does not ask about feasibility
+    chosen = sorted(FULL_REJECTED)[0]
+    assert ids(full, chosen) == [chosen] and chosen in ids(full, "all")
 
 
 def test_union_intersection_and_exclusion(catalog):
@@ -120,7 +130,7 @@ def test_combined_terms_against_the_registry(catalog):
         i for i in where(kind="original") if not fnmatch.fnmatchcase(i, "spatial/s0/*")
     ]
     assert ids(catalog, "!original&!heldout") == where(split="train")  # two exclusions from all tasks
-    assert ids(catalog, "feasible&!infeasible") == ids(catalog, "feasible")
+    assert ids(catalog, "feasible&!rejected") == ids(catalog, "feasible")
     # spaces around terms and operators are ignored, an empty union member is skipped
     assert ids(catalog, " spatial & heldout , , libero10 ") == [
         i for i in IDS if i in set(where(suite="libero_spatial", split="heldout")) | set(where(suite="libero_10"))
@@ -136,7 +146,8 @@ def test_results_keep_catalog_order_without_duplicates(catalog):
     both = [e["id"] for e in ENTRIES if e["suite"] in ("libero_goal", "libero_10")]  # interleaved in the file
     assert ids(catalog, "libero10,goal") == ids(catalog, "goal,libero10") == both
     assert both != where(suite="libero_goal") + where(suite="libero_10")
-    assert set(ids(catalog, "feasible")) | set(ids(catalog, "infeasible")) == set(IDS)
+    full = load_catalog("full")
+    assert set(ids(full, "feasible")) | set(ids(full, "rejected")) == set(FULL_IDS)
 
 
 @pytest.mark.parametrize(
@@ -161,5 +172,5 @@ def test_a_term_that_matches_nothing_is_one_clear_error(catalog, expression, mes
 def test_a_near_miss_id_gets_suggestions(catalog):
     with pytest.raises(LangGapError, match="did you mean spatial/s0/ramekin-on-plate"):
         catalog.select("spatial/s0/ramekin-on-plat")
-    with pytest.raises(LangGapError, match="all, feasible, infeasible, langgap99"):  # the keywords are listed
+    with pytest.raises(LangGapError, match="all, feasible, rejected, langgap99"):  # the keywords are listed
         catalog.select("spatial/s9/*-on-moon")

@@ -25,7 +25,7 @@ from langgap.goals import goal_from_strings
 
 DEFAULT_CATALOG = "langgap99"
 _KEYWORDS_HELP = (
-    "an id, a glob (spatial/*), paper:N, all, feasible, infeasible, langgap99, a suite, kind, dimension or split; "
+    "an id, a glob (spatial/*), paper:N, all, feasible, rejected, langgap99, a suite, kind, dimension or split; "
     "'&' intersects, '!' excludes"
 )
 
@@ -79,7 +79,8 @@ class Catalog:
         """Tasks matching a selection expression, in catalog order.
 
         The expression is a comma-separated union of terms; a term is an id, a glob over ids,
-        `paper:N`, `all`, `feasible` / `infeasible` (a feasibility gate's verdict), `langgap99`
+        `paper:N`, `all`, `feasible` / `rejected` (a feasibility gate's verdict: rejected tasks are
+        unproven or proven infeasible), `langgap99`
         (the paper's tasks), a suite (`libero_spatial` or `spatial`), a kind, a dimension or a
         split. Terms joined with `&` intersect (`spatial&heldout`); `!` before a term excludes its
         tasks (`original&!spatial/s0/*`; alone, from all tasks). A term matching nothing is an
@@ -111,8 +112,9 @@ class Catalog:
             return {term}
         if term == "all":
             return set(self._by_id)
-        if term in ("feasible", "infeasible"):
-            return {t.id for t in self.tasks if t.feasible == (term == "feasible")} or self._no_match(term)
+        if term in ("feasible", "rejected"):
+            # may be empty (a catalog whose every task passed): `feasible&!rejected` still means something
+            return {t.id for t in self.tasks if t.feasible == (term == "feasible")}
         if term == "langgap99":
             return {t.id for t in self.tasks if t.in_langgap99} or self._no_match(term)
         if term.startswith("paper:"):

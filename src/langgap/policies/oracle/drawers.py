@@ -46,8 +46,8 @@ PUSH_LEAN = 0.6  # radians the fingers lean toward a push
 SWEEP_MARGIN = 0.02  # an object is dragged this far clear of where an opening drawer will stand
 SWEEP_DIRECTIONS = 16
 # The room a hand closing across a handle bar needs above the bar's middle: half the open pads' gap, a
-# finger, and the 8 mm the real fingers' meshes reach beyond their boxes (a certificate's 930 poses
-# measured the Panda's meshes 12 mm into the handle above a bar with 61 mm of room).
+# finger, and 8 mm for the real fingers' meshes, which reach beyond their boxes (the hand closing on
+# goal/s0's bottom bar, 61 mm under the next handle, never held it on 50 init states).
 GRASP_SPAN = hand.PAD_GAP_OPEN / 2 + hand.FINGER_THICKNESS + 0.008
 NUDGE_COST = 3.0  # metres of drag worth one metre less of pushing into another loose object
 
@@ -290,13 +290,15 @@ def push_closed(agent: Agent, region: str) -> Program:
 
 TIP_BEHIND = 0.008  # a pressed drag puts the fingertips this far behind the handle bar
 SLOT_CLEARANCE = 0.004  # the fingers slide in this far above the bar's top
-PRESS_DEPTH = 0.015  # then the hand is aimed this far below where it went in
+PRESS_DEPTH = 0.025  # then the hand is aimed this far below where it went in
 PRESS_TILTS = tuple(math.radians(a) for a in (45, 55, 35))  # the fingers pointing down toward the bar
 PRESS_TURNS = tuple(math.radians(a) for a in (0, 20, -20))  # the approach turned about the vertical
 PRESS_TRIES = 3
 PRESS_REACH = 0.75  # horizontal distance from the base beyond which the wrist, pulling, nears the arm's reach
 TURN_COST = 0.5  # per radian the approach is turned from the drawer's axis
 PULL_STEP = 0.03
+PULL_SPEED = 0.6
+PRESS_PROGRESS = 0.01  # a pull that moved the drawer less than this did not hold it
 
 
 @dataclass(frozen=True)
@@ -322,11 +324,13 @@ def _pressing(approach: np.ndarray, axis: np.ndarray, tilt: float, turn: float) 
     return min(candidates, key=lambda rot: np.linalg.norm(rot - START_ROT))
 
 
-def plan_presses(agent: Agent, art: Articulation, direction: np.ndarray) -> list[Press]:
+def plan_presses(agent: Agent, region: str) -> list[Press]:
     """The pressed drags to try, best first: the fingers' deepest point ends `TIP_BEHIND` behind the
-    handle bar at its middle, their lowest point `SLOT_CLEARANCE` above its top. Those whose fingers would meet
-    something there are left out; a straight pull is preferred unless it stretches the arm (the hand
-    follows the drawer out), and of the tilts the first listed."""
+    handle bar at its middle, their lowest point `SLOT_CLEARANCE` above its top. Those whose fingers would
+    meet something there are left out; a straight pull is preferred unless it stretches the arm (the
+    hand follows the drawer out); among equals, the first tilt listed."""
+    art = agent.scene.articulation(region)
+    direction = opening_direction(art)
     face, axis, _ = drawer_front(art, direction)
     _, bar = handle_parts(art, direction)
     top = float(art.boxes.select(bar).aabb()[:, 5].max())
@@ -353,13 +357,14 @@ def press_open(agent: Agent, region: str) -> Program:
     """Open a drawer no grasp can hold: the closed fingers slide in over its handle bar, press down
     behind it and pull the drawer out along its axis (a hook where the tips drop behind the bar, a
     pressed friction drag on its top where they cannot)."""
-    for attempt in range(PRESS_TRIES):
+    way = 0
+    for _ in range(PRESS_TRIES):
         art = agent.scene.articulation(region)
         direction = opening_direction(art)
-        presses = plan_presses(agent, art, direction)
-        if attempt >= len(presses):
+        presses = plan_presses(agent, region)
+        if way >= len(presses):
             break
-        press = presses[attempt]  # each try another way in, from where the drawer now stands
+        press, start = presses[way], art.qpos
         yield from actuate(agent, CLOSE, max_steps=8)
         yield from reorient(agent, press.rot, toward=press.entry)
         path = flight_path(agent.scene, agent.scene.eef_pos, press.entry, hang=hand.TIP, reach=hand.REACH)
@@ -376,9 +381,14 @@ def press_open(agent: Agent, region: str) -> Program:
                 break
             target = agent.scene.eef_pos + direction * PULL_STEP
             target[2] = pressed[2]
-            speed = float(np.clip(abs(goal - art.qpos) / 0.03, 0.15, 0.6))
-            yield agent.command(target, speed=speed)
+            # At full speed to the end: the open state reaches the joint's limit, and a drawer let slide
+            # on covers the last millimetres a stretched arm cannot.
+            yield agent.command(target, speed=PULL_SPEED)
         yield from move(agent, agent.scene.eef_pos + np.array([0.0, 0.0, 0.03]) + 0.03 * direction, tol=0.01, steps=15)
         if agent.scene.articulation(region).holds("open"):
             return True
+        if room_above_handle(agent.scene, region) >= GRASP_SPAN:
+            return (yield from pull_open(agent, region))  # drawn out from under the handle above: grasp it
+        if abs(agent.scene.articulation(region).qpos - start) < PRESS_PROGRESS:
+            way += 1  # that way in did not take the drawer along: try the next, from where the drawer stands
     return False
