@@ -17,14 +17,25 @@ MADE_BY = "oracle, langgap 0.1.0+abc, exact stepping"
 ORACLE = GateResult(50, 50, True, inits=50, failed_inits=[], made_by=MADE_BY)
 UNPROVEN = GateResult(50, 17, False, reason="oracle 17/50", inits=50, made_by=MADE_BY)
 PROVEN = GateResult(50, 0, False, reason="oracle 0/50", inits=50, proof="Out of reach, on init state 0: …")
-SEARCHED = GateResult(50, 17, True, inits=50, made_by=MADE_BY, demonstration="demos/spatial-s2-drawer.hdf5")
+SEARCHED = GateResult(
+    50,
+    46,
+    True,
+    inits=50,
+    made_by=MADE_BY,
+    demonstration="demonstrations/langgap99/spatial/s2/x",
+    demonstrated_inits=(3, 7),
+)
 
 
 def test_each_verdict_says_what_shows_it():
     assert ORACLE.evidence == f"oracle 50/50 init states (made by {MADE_BY})"
     assert UNPROVEN.evidence == "unproven: the oracle does not do it (17/50); no proof that a policy cannot"
     assert PROVEN.evidence == "proof of impossibility: Out of reach, on init state 0: …"
-    assert SEARCHED.evidence == "searched demonstration: demos/spatial-s2-drawer.hdf5"
+    assert SEARCHED.evidence == (
+        f"oracle 46/50 init states (made by {MADE_BY}); "
+        "searched demonstration on init state(s) 3, 7: demonstrations/langgap99/spatial/s2/x"
+    )
     # a demonstration shows nothing unless the verdict it belongs to is feasible
     assert dataclasses.replace(UNPROVEN, demonstration="demos/x.hdf5").evidence == UNPROVEN.evidence
     rejected = GateResult(5, 5, False, reason="goal false at t0")

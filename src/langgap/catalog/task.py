@@ -55,12 +55,14 @@ class GateResult:
     made_by: str = ""
     proof: str = ""
     demonstration: str = ""
+    demonstrated_inits: tuple[int, ...] = ()  # init states the oracle failed that a searched episode did
 
     def __post_init__(self) -> None:
         if not 0 <= self.successes <= self.episodes:
             raise CatalogError(f"gate result: {self.successes} successes in {self.episodes} episodes")
         if self.failed_inits is not None:
             object.__setattr__(self, "failed_inits", tuple(self.failed_inits))  # JSON gives a list
+        object.__setattr__(self, "demonstrated_inits", tuple(self.demonstrated_inits))
         if self.proof and self.feasible:
             raise CatalogError("gate result: feasible, yet with a proof that the task is impossible")
 
@@ -101,11 +103,13 @@ class GateResult:
         impossibility, or not at all (unproven)."""
         if self.proof:
             return f"proof of impossibility: {self.proof}"
-        if self.demonstrated:
-            return f"searched demonstration: {self.demonstration}"
         if self.feasible:
             made_by = f"made by {self.made_by}" if self.made_by else "recorded before who made it was kept"
-            return f"oracle {self.successes}/{self.episodes} init states ({made_by})"
+            text = f"oracle {self.successes}/{self.episodes} init states ({made_by})"
+            if self.demonstrated:
+                shown = ", ".join(map(str, self.demonstrated_inits)) or "?"
+                text += f"; searched demonstration on init state(s) {shown}: {self.demonstration}"
+            return text
         text = unproven(self.successes, self.episodes)
         if self.reason and self.reason != f"oracle {self.successes}/{self.episodes}":
             text += f"; the gate's reason: {self.reason}"

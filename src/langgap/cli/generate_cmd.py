@@ -99,7 +99,7 @@ def run(args) -> int:
     if args.gate_inits:
         from langgap.validate import gate_summary, record
 
-        rows = run_gate(args, str(path), "all", args.gate_inits).rows
+        rows = run_gate(args, str(path), "all", args.gate_inits, recording=True).rows
         print(gate_summary(rows))
         print(f"recorded verdicts in {record(str(path), rows, inits=args.gate_inits, stepping=args.stepping)}")
     return 0

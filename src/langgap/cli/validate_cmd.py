@@ -9,6 +9,7 @@ from langgap.catalog.task import INFEASIBLE, unproven
 from langgap.cli.eval_cmd import add_stepping_option
 from langgap.cli.tasks_cmd import add_catalog_option
 from langgap.errors import LangGapError
+from langgap.search import BUDGET
 from langgap.validate import FEASIBLE_RATE, FULL_INITS
 
 
@@ -18,6 +19,14 @@ def add_gate_options(parser) -> None:
     parser.add_argument("--run", metavar="DIR", help="keep the oracle's episodes in this run directory (resumable)")
     parser.add_argument("--resume", action="store_true", help="continue an interrupted validation in --run")
     parser.add_argument("--no-progress", action="store_true")
+    parser.add_argument(
+        "--search-budget",
+        type=int,
+        default=BUDGET,
+        metavar="N",
+        help="candidate episodes searched for a demonstration on each init state the oracle fails; those "
+        "found are stored, replayed and counted (0: no search; default: %(default)s)",
+    )
     add_stepping_option(parser)
 
 
@@ -52,9 +61,16 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(handler=run)
 
 
-def run_gate(args, catalog: str, selection: str, inits: int, policy: str = "oracle", blind: bool = False):
-    """Run the feasibility gate with the options of `add_gate_options`; returns its `Validation`."""
-    from langgap.validate import validate
+def run_gate(
+    args, catalog: str, selection: str, inits: int, policy: str = "oracle", blind: bool = False, recording: bool = False
+):
+    """Run the feasibility gate with the options of `add_gate_options`; returns its `Validation`. Searched
+    demonstrations go beside the catalog's registry when `recording` (the verdicts will name them)."""
+    if args.search_budget < 0:
+        raise LangGapError(f"--search-budget must be >= 0, got {args.search_budget}")
+    if args.search_budget and policy != "oracle":
+        raise LangGapError(f"--search-budget varies the oracle's plan; with --policy {policy} pass --search-budget 0")
+    from langgap.validate import demonstrations_dir, validate
 
     return validate(
         catalog,
@@ -67,6 +83,8 @@ def run_gate(args, catalog: str, selection: str, inits: int, policy: str = "orac
         progress=not args.no_progress,
         blind=blind,
         stepping=args.stepping,
+        search_budget=args.search_budget,
+        demonstrations=demonstrations_dir(catalog) if recording else None,
     )
 
 
@@ -75,7 +93,7 @@ def run(args) -> int:
 
     if args.claims_only:
         return _claims_only(args)
-    found = run_gate(args, args.catalog, args.tasks, args.inits, args.policy, blind=args.blind)
+    found = run_gate(args, args.catalog, args.tasks, args.inits, args.policy, blind=args.blind, recording=args.record)
     print(table_text(found.rows))
     _print_claims(found, args.out)
     if args.record:

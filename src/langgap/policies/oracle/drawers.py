@@ -170,7 +170,8 @@ def open_drawer(agent: Agent, region: str) -> Program:
     """Open a drawer: by its handle where a grasp of the bar fits (`pull_open`), else by a pressed drag
     (`press_open`: a bottom drawer's bar sits too low over the table and too close under the next
     handle for the fingers to close around it)."""
-    if room_above_handle(agent.scene, region) >= GRASP_SPAN:
+    mode = agent.drawer.mode
+    if mode == "grasp" or (mode == "auto" and room_above_handle(agent.scene, region) >= GRASP_SPAN):
         return (yield from pull_open(agent, region))
     return (yield from press_open(agent, region))
 
@@ -328,7 +329,8 @@ def plan_presses(agent: Agent, region: str) -> list[Press]:
     """The pressed drags to try, best first: the fingers' deepest point ends `TIP_BEHIND` behind the
     handle bar at its middle, their lowest point `SLOT_CLEARANCE` above its top. Those whose fingers would
     meet something there are left out; a straight pull is preferred unless it stretches the arm (the
-    hand follows the drawer out); among equals, the first tilt listed."""
+    hand follows the drawer out); among equals, the first tilt listed. The agent's drawer skill may fix the
+    tilt and the turn."""
     art = agent.scene.articulation(region)
     direction = opening_direction(art)
     face, axis, _ = drawer_front(art, direction)
@@ -336,9 +338,10 @@ def plan_presses(agent: Agent, region: str) -> list[Press]:
     top = float(art.boxes.select(bar).aabb()[:, 5].max())
     up = np.array([0.0, 0.0, 1.0])
     obstacles = agent.scene.obstacles()
+    skill = agent.drawer
     presses = []
-    for tilt in PRESS_TILTS:
-        for turn in PRESS_TURNS:
+    for tilt in PRESS_TILTS if skill.tilt is None else (skill.tilt,):
+        for turn in PRESS_TURNS if skill.turn is None else (skill.turn,):
             rot = _pressing(-direction, axis, tilt, turn)
             # Placed by the fingers' deepest point along the drawer's axis and their lowest point.
             fingers = Boxes.from_local(hand.finger_boxes(0.0), rot, art.handle)
@@ -370,7 +373,7 @@ def press_open(agent: Agent, region: str) -> Program:
         path = flight_path(agent.scene, agent.scene.eef_pos, press.entry, hang=hand.TIP, reach=hand.REACH)
         yield from travel(agent, press.entry, path=path, rot=press.rot, grip=CLOSE, tol=0.008)
         yield from move(agent, press.grip, tol=0.005, steps=40, speed=0.5, level=True)
-        pressed = press.grip - np.array([0.0, 0.0, PRESS_DEPTH])
+        pressed = press.grip - np.array([0.0, 0.0, agent.drawer.depth or PRESS_DEPTH])
         yield from move(agent, pressed, tol=0.003, steps=8, speed=0.5)
         goal = art.target("open")
         history: list[float] = []

@@ -13,6 +13,7 @@ import numpy as np
 from langgap.policies.oracle.control import OPEN, servo
 from langgap.policies.oracle.geometry import START_YAW, mat_to_axis_angle, top_down
 from langgap.policies.oracle.scene import Scene
+from langgap.policies.oracle.skills import DrawerSkill
 
 Program = Generator[np.ndarray, None, bool]
 
@@ -34,9 +35,11 @@ START_ROT = top_down(START_YAW)  # the hand's orientation when an episode starts
 
 
 class Agent:
-    """What a running program shares: the newest scene and the commanded orientation and gripper."""
+    """What a running program shares: the newest scene, the commanded orientation and gripper, and the
+    way it opens drawers."""
 
-    def __init__(self) -> None:
+    def __init__(self, drawer: DrawerSkill | None = None) -> None:
+        self.drawer = drawer or DrawerSkill()
         self.scene: Scene | None = None
         self.rot = START_ROT
         self.grip = OPEN
