@@ -151,9 +151,10 @@ def demonstrate(
     oracle_args: dict[str, str] | None = None,
 ) -> dict[str, list[int]]:
     """Search a demonstration for each (init state, seed) of `failures` (task id -> the plan entries the
-    oracle failed); each one found is stored in `directory`/<task id>/, read back, replayed on a fresh
-    environment and kept only if it does the task at its recorded step. Returns task id -> the init
-    states now shown doable."""
+    oracle failed, in order); each one found is stored in `directory`/<task id>/, read back, replayed on
+    a fresh environment and kept only if it does the task at its recorded step. A task's search stops at
+    its first init state without one (which bounds a task no candidate does to one budget). Returns task
+    id -> the init states now shown doable."""
     shown: dict[str, list[int]] = {}
     for task_id, entries in failures.items():
         task = catalog.get(task_id)
@@ -161,7 +162,7 @@ def demonstrate(
             entry = dict(init_index=init_index, seed=seed, stepping=stepping, budget=budget, oracle_args=oracle_args)
             found = search(task, catalog, **entry).found
             if found is None:
-                continue
+                break  # the task stays short of a demonstration there: its other init states would not decide it
             stored = Demonstration.load(found.save(demonstration_path(directory / task_id, init_index)))
             with replay_env(task, stepping) as env:
                 verify(env, stored, catalog)
