@@ -14,7 +14,7 @@ from langgap.engine.rollout import env_options_for, run_episode
 from langgap.errors import LangGapError
 from langgap.policies import make_policy
 from langgap.policies.base import TaskContext
-from langgap.policies.oracle import drawers
+from langgap.policies.oracle import drawer_press
 from langgap.policies.oracle.geometry import Boxes, depth
 from langgap.policies.oracle.scene import Scene
 from langgap.sim.env import TaskEnv
@@ -191,7 +191,7 @@ def test_a_drawer_is_pressed_open_only_where_a_handle_above_leaves_no_room_to_gr
     task = catalog.get(task_id)
     with TaskEnv(task, env_options_for(make_policy("oracle", {}))) as env:
         scene = Scene(env.reset(0, seed=0, render=False).privileged)
-    assert (drawers.room_above_handle(scene, region) < drawers.GRASP_SPAN) == pressed
+    assert (drawer_press.room_above_handle(scene, region) < drawer_press.GRASP_SPAN) == pressed
 
 
 def test_parts_are_the_geoms_as_turned_boxes(catalog):

@@ -18,7 +18,7 @@ import numpy as np
 from langgap import goals
 from langgap.bddl import Predicate
 from langgap.errors import LangGapError
-from langgap.policies.oracle import drawers, hinges, pick_place, pushing
+from langgap.policies.oracle import drawer_press, drawers, hinges, pick_place, pushing
 from langgap.policies.oracle.grasps import has_grasp
 from langgap.policies.oracle.motion import Agent, Program, hold
 from langgap.policies.oracle.placement import spot_on_object, spots_aside, spots_in_region
@@ -114,7 +114,7 @@ def _achieve(agent: Agent, predicate: Predicate, later: tuple[Predicate, ...] = 
         if name == "Open":
             moved = tuple(dict.fromkeys(p.args[0] for p in later if p.name in ("On", "In")))
             yield from drawers.clear_sweep(agent, part, moved)
-            return (yield from drawers.open_drawer(agent, part))
+            return (yield from drawer_press.open_drawer(agent, part))
         return (yield from drawers.push_closed(agent, part))
     if name == "Close":
         return (yield from hinges.close_door(agent, part))
