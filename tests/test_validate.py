@@ -136,3 +136,15 @@ def test_claims_only_resets_every_task_without_a_policy(probe_registry, tmp_path
     assert nothing_at_t0["violations"][0].endswith("init 0: spatial/s0/plate-on-plate-spot")
     refused = run_cli(*args, "--record")
     assert refused.returncode == 2 and refused.stderr.startswith("error: --claims-only runs no policy")
+
+
+@pytest.mark.parametrize(
+    ("flags", "message"),
+    [
+        (["--search-budget", "-1"], "error: --search-budget must be >= 0, got -1"),
+        (["--search-budget", "3", "--policy", "noop"], "error: --search-budget varies the oracle's plan"),
+    ],
+)
+def test_a_search_budget_that_cannot_take_effect_is_refused(probe_registry, flags, message):
+    result = run_cli("validate", "spatial/s0/ramekin-on-plate", "--catalog", str(probe_registry), *flags)
+    assert result.returncode == 2 and result.stderr.startswith(message), result.stderr

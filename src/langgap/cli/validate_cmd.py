@@ -22,10 +22,9 @@ def add_gate_options(parser) -> None:
     parser.add_argument(
         "--search-budget",
         type=int,
-        default=BUDGET,
         metavar="N",
         help="candidate episodes searched for a demonstration on each init state the oracle fails; those "
-        "found are stored, replayed and counted (0: no search; default: %(default)s)",
+        f"found are stored, replayed and counted (0: no search; default: {BUDGET} for the oracle's gate)",
     )
     add_stepping_option(parser)
 
@@ -66,10 +65,13 @@ def run_gate(
 ):
     """Run the feasibility gate with the options of `add_gate_options`; returns its `Validation`. Searched
     demonstrations go beside the catalog's registry when `recording` (the verdicts will name them)."""
-    if args.search_budget < 0:
-        raise LangGapError(f"--search-budget must be >= 0, got {args.search_budget}")
-    if args.search_budget and policy != "oracle":
-        raise LangGapError(f"--search-budget varies the oracle's plan; with --policy {policy} pass --search-budget 0")
+    budget = args.search_budget
+    if budget is not None and budget < 0:
+        raise LangGapError(f"--search-budget must be >= 0, got {budget}")
+    if budget and policy != "oracle":
+        raise LangGapError(f"--search-budget varies the oracle's plan; --policy {policy} has none to vary")
+    if budget is None:
+        budget = BUDGET if policy == "oracle" else 0
     from langgap.validate import demonstrations_dir, validate
 
     return validate(
@@ -83,7 +85,7 @@ def run_gate(
         progress=not args.no_progress,
         blind=blind,
         stepping=args.stepping,
-        search_budget=args.search_budget,
+        search_budget=budget,
         demonstrations=demonstrations_dir(catalog) if recording else None,
     )
 
