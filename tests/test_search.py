@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 
 import pytest
 
+import langgap
+from langgap.catalog.catalog import load_catalog, registry_path
 from langgap.demos.searched import Demonstration, DemonstrationError, replay_env, verify
 from langgap.engine.plan import episode_seed
 from langgap.search import demonstrate, search
@@ -46,3 +49,18 @@ def test_the_gate_keeps_only_what_replays_from_the_file(catalog, tmp_path):
     shown = demonstrate(catalog, {DRAWER: [(0, episode_seed(0, 0))]}, tmp_path, stepping="exact", budget=6,
                         oracle_args=WITHOUT_THE_PRESSED_DRAG)  # fmt: skip
     assert shown == {DRAWER: [0]} and (tmp_path / DRAWER / "init-00.npz").is_file()
+
+
+SHIPPED = sorted((Path(langgap.__file__).parent / "catalog" / "registry" / "demonstrations").rglob("init-*.npz"))
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=[p.parent.name + "/" + p.stem for p in SHIPPED])
+def test_every_shipped_demonstration_replays_to_its_goal(path):
+    # A verdict accepted on a searched demonstration rests on this file alone.
+    demo = Demonstration.load(path)
+    catalog = load_catalog(demo.catalog)
+    gate = catalog.get(demo.task_id).gate
+    assert gate is not None and demo.init_index in gate.demonstrated_inits
+    assert path.parent == registry_path(demo.catalog).parent / gate.demonstration
+    with replay_env(catalog.get(demo.task_id), demo.stepping) as env:
+        verify(env, demo, catalog)

@@ -71,6 +71,11 @@ class TaskValidation:
     demonstrated_inits: list[int] = field(default_factory=list)  # of those, shown doable by a searched episode
     demonstration: str = ""  # where those demonstrations lie, relative to the registry's directory
 
+    @property
+    def short(self) -> bool:
+        """Whether the oracle's successes and the searched demonstrations together stay below the gate's rate."""
+        return bool(self.episodes) and (self.successes + len(self.demonstrated_inits)) / self.episodes < FEASIBLE_RATE
+
     def verdict(self, inits: int, made_by: str = "", proof: str = "") -> GateResult:
         """The verdict to record, for a gate that ran init states 0..`inits`-1 as `made_by` says (with `proof`,
         the text of a proof that no policy can do the task, `langgap.proofs`)."""
@@ -374,7 +379,7 @@ def prove_rejected(catalog_name: str, rows: list[TaskValidation], inits: int) ->
     from langgap.proofs import prove_tasks
 
     catalog = load_catalog(catalog_name)
-    below = {r.id: r for r in rows if r.episodes and r.rate < FEASIBLE_RATE}
+    below = {r.id: r for r in rows if r.short}
     found = {}
     for task_id, proof in prove_tasks([catalog.get(i) for i in below], inits).items():
         if below[task_id].successes:  # an episode refutes it: the prover is wrong, not the episodes
@@ -423,6 +428,8 @@ def table_text(rows: list[TaskValidation]) -> str:
         verdict = "ok" if r.feasible else f"REJECTED ({r.reason})"
         if r.feasible and r.rate < TARGET_RATE:
             verdict = f"ok, below the {TARGET_RATE:.0%} target"
+        if r.demonstrated_inits:
+            verdict += f"; searched demonstrations on init state(s) {', '.join(map(str, r.demonstrated_inits))}"
         lines.append(
             f"{r.id:<{width}}  {r.successes:>4}/{r.episodes:<4}  {100 * r.rate:>5.1f}%  "
             f"{r.mean_steps:>5.0f}/{r.max_steps:<5}  {verdict}"

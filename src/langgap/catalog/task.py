@@ -111,6 +111,9 @@ class GateResult:
                 text += f"; searched demonstration on init state(s) {shown}: {self.demonstration}"
             return text
         text = unproven(self.successes, self.episodes)
+        if self.demonstration and self.demonstrated_inits:
+            shown = ", ".join(map(str, self.demonstrated_inits))
+            text += f"; a searched demonstration does init state(s) {shown}: {self.demonstration}"
         if self.reason and self.reason != f"oracle {self.successes}/{self.episodes}":
             text += f"; the gate's reason: {self.reason}"
         return text

@@ -103,7 +103,7 @@ def run(args) -> int:
         for row in found.rows:
             if row.id in proofs:
                 print(f"{row.id}: {INFEASIBLE}: {proofs[row.id]}")
-            elif row.episodes and row.rate < FEASIBLE_RATE:
+            elif row.short:
                 print(f"{row.id}: {unproven(row.successes, row.episodes)}")
         options = dict(inits=args.inits, policy=args.policy, stepping=args.stepping, proofs=proofs)
         path = record(args.catalog, found.rows, **options)
