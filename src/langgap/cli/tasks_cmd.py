@@ -144,7 +144,10 @@ def _gate_lines(gate) -> list[str]:
         return ["not validated (langgap validate --record)"]
     where = f" on init states 0–{gate.inits - 1}" if gate.inits else ""
     if gate.feasible:
-        verdict = "accepted by a searched demonstration" if gate.demonstrated else "accepted"
+        verdict = "accepted"
+        if gate.demonstrated:
+            shown = ", ".join(map(str, gate.demonstrated_inits))
+            verdict += f" (searched demonstrations do init state(s) {shown}, which the oracle failed)"
     else:
         verdict = f"rejected, {INFEASIBLE}" if gate.proof else "rejected, unproven"
     lines = [f"oracle {gate.successes}/{gate.episodes}{where}: {verdict}"]
