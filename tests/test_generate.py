@@ -240,7 +240,7 @@ def test_recorded_verdicts_flag_rejected_tasks_and_survive_regeneration(tmp_path
     assert catalog.get("object/s0/milk-in-basket").gate == GateResult(4, 0, False, "oracle 0/4")
     assert catalog.get("object/s0/butter-in-basket").gate.rate == 0.75
     assert {t.id for t in catalog.select(None)} == {t.id for t in catalog} - milk
-    assert {t.id for t in catalog.select("infeasible")} == milk
+    assert {t.id for t in catalog.select("rejected")} == milk
 
 
 def test_cli_generate_writes_a_loadable_registry_and_prints_counts(tmp_path, capsys):

@@ -6,10 +6,12 @@ oracle's own closed-loop plan, so every candidate starts from what the oracle al
 
 * Contact primitives for what moves a drawer: the drawer opened by a grasp of its handle, or by a
   pressed drag with the hand's tilt (0-60 degrees down), its turn about the vertical (+-40 degrees)
-  and how hard it presses (a target 5-50 mm below the bar) drawn at random; the approach, the contact
-  and the pull follow from those (`policies.oracle.drawers`).
-* Waypoints: Gaussian noise on every motion command (a standard deviation drawn up to
-  `MAX_NOISE`, each candidate its own draw), which moves every waypoint the plan reaches.
+  and how hard it presses (a target 5-50 mm below the bar); the approach, the contact and the pull
+  follow from those (`policies.oracle.drawers`, `drawer_press`). The first candidates draw them over
+  those whole ranges; later ones around the pressed drag that took the drawer furthest toward its goal
+  (`Sampler`: a cross-entropy search on how far the drawer moved).
+* Waypoints: Gaussian noise on every motion command (each candidate its own draw and size), which
+  moves every waypoint the plan reaches.
 
 Each candidate is one episode; the first that reaches the goal is kept as a `Demonstration`, which the
 gate stores, replays from the file and verifies before it counts (`langgap.validate`). The search is
@@ -38,6 +40,11 @@ from langgap.version import code_version
 
 BUDGET = 16  # candidate episodes per init state the oracle fails
 MAX_NOISE = 0.15  # action units
+PRIMITIVE_NOISE = 0.05
+EXPLORE = 6  # candidates drawn over the primitives' whole ranges before the search centres on the best
+GRASP_SHARE = 0.25  # of those, the share that grasp the handle instead of pressing it
+SPREAD = (10.0, 10.0, 0.008)  # tilt, turn (degrees), depth (metres) around the best so far
+SHRINK = 0.85  # the spread's factor per candidate after the first `EXPLORE`
 TILT_DEG = (0.0, 60.0)
 TURN_DEG = (-40.0, 40.0)
 PRESS_DEPTH_M = (0.005, 0.05)
@@ -67,29 +74,84 @@ class SearchResult:
         return sum(success for _, success, _ in self.tried)
 
 
-def candidates(moves_drawer: bool, budget: int, rng: np.random.Generator) -> list[Candidate]:
-    """`budget` variations of the oracle's plan: where the goal moves a drawer, every other one draws its
-    contact primitive (grasp, or a pressed drag with random tilt, turn and depth); every one draws its
-    action noise."""
-    found = []
-    for k in range(budget):
-        args = {"noise": f"{rng.uniform(0.0, MAX_NOISE):.3f}", "noise_seed": str(k + 1)}
-        if moves_drawer and k % 2 == 0:
-            if rng.random() < 0.5:
-                args["drawer"] = "grasp"
-            else:
-                tilt, turn, depth = rng.uniform(*TILT_DEG), rng.uniform(*TURN_DEG), rng.uniform(*PRESS_DEPTH_M)
-                args["drawer"] = f"press:{tilt:.1f}:{turn:.1f}:{depth:.3f}"
-        found.append(Candidate(args))
-    return found
+@dataclass(frozen=True)
+class Press:
+    """A pressed drag's parameters: tilt and turn (degrees), press depth (metres)."""
+
+    tilt: float
+    turn: float
+    depth: float
+
+    def clipped(self) -> Press:
+        return Press(float(np.clip(self.tilt, *TILT_DEG)), float(np.clip(self.turn, *TURN_DEG)),
+                     float(np.clip(self.depth, *PRESS_DEPTH_M)))  # fmt: skip
+
+    def __str__(self) -> str:
+        return f"press:{self.tilt:.1f}:{self.turn:.1f}:{self.depth:.3f}"
+
+
+class Sampler:
+    """Draws the candidates one at a time, learning from how far each got (a cross-entropy search).
+
+    Where the goal moves a drawer, every candidate draws its contact primitive: the first `EXPLORE`
+    a grasp or a pressed drag with tilt, turn and depth drawn over their whole ranges; after them, the
+    pressed drag that moved the drawer furthest toward its goal so far is the centre, and new ones are
+    drawn around it, the spread shrinking each time. Every candidate draws its action noise (a small one
+    with a primitive, up to `MAX_NOISE` without). Where no drawer moves, the noise is all there is.
+    """
+
+    def __init__(self, moves_drawer: bool, rng: np.random.Generator):
+        self.moves_drawer = moves_drawer
+        self.rng = rng
+        self.best: tuple[float, Press] | None = None
+        self.drawn = 0
+
+    def draw(self) -> Candidate:
+        rng, k = self.rng, self.drawn
+        self.drawn += 1
+        if not self.moves_drawer:
+            return Candidate({"noise": f"{rng.uniform(0.0, MAX_NOISE):.3f}", "noise_seed": str(k + 1)})
+        args = {"noise": f"{rng.uniform(0.0, PRIMITIVE_NOISE):.3f}", "noise_seed": str(k + 1)}
+        if k < EXPLORE or self.best is None:
+            if rng.random() < GRASP_SHARE:
+                return Candidate(args | {"drawer": "grasp"})
+            press = Press(rng.uniform(*TILT_DEG), rng.uniform(*TURN_DEG), rng.uniform(*PRESS_DEPTH_M))
+        else:
+            spread = SHRINK ** (k - EXPLORE)
+            centre = self.best[1]
+            press = Press(rng.normal(centre.tilt, SPREAD[0] * spread), rng.normal(centre.turn, SPREAD[1] * spread),
+                          rng.normal(centre.depth, SPREAD[2] * spread)).clipped()  # fmt: skip
+        return Candidate(args | {"drawer": str(press)})
+
+    def tell(self, candidate: Candidate, progress: float) -> None:
+        """How far `candidate` got (0: the drawer never moved toward its goal; 1: it got there)."""
+        drawer = candidate.policy_args.get("drawer", "")
+        if drawer.startswith("press:") and progress > 0 and (self.best is None or progress > self.best[0]):
+            tilt, turn, depth = (float(x) for x in drawer.split(":")[1:])
+            self.best = (progress, Press(tilt, turn, depth))
+
+
+def drawer_progress(start: Scene, end: Scene, task: Task) -> float:
+    """How far the sliding parts the goal moves went toward their goal states, the least of them (0..1)."""
+    fractions = []
+    for p in order_goal(start, tuple(atoms(task.goal))):
+        if p.name not in ("Open", "Close") or not _slides(start, p.args[0]):
+            continue
+        before, after = start.articulation(p.args[0]), end.articulation(p.args[0])
+        goal = before.target("open" if p.name == "Open" else "close")
+        way = goal - before.qpos
+        fractions.append(float(np.clip((after.qpos - before.qpos) / way, 0.0, 1.0)) if abs(way) > 1e-9 else 1.0)
+    return min(fractions, default=0.0)
+
+
+def _slides(scene: Scene, name: str) -> bool:
+    return name in scene.articulated and scene.articulation(name).slide
 
 
 def moves_a_drawer(scene: Scene, task: Task) -> bool:
     """Whether meeting the task's goal opens or closes a sliding part (drawers the goal puts things in included)."""
-    steps = order_goal(scene, tuple(atoms(task.goal)))
     return any(
-        p.name in ("Open", "Close") and p.args[0] in scene.articulated and scene.articulation(p.args[0]).slide
-        for p in steps
+        p.name in ("Open", "Close") and _slides(scene, p.args[0]) for p in order_goal(scene, tuple(atoms(task.goal)))
     )
 
 
@@ -113,8 +175,10 @@ def search(
     context = task_context(task, catalog, init_index=init_index, seed=seed)
     probe = make_policy("oracle", oracle_args)
     with TaskEnv(task, env_options_for(probe, stepping=stepping)) as env:
-        scene = Scene(env.reset(init_index, seed=seed, render=False).privileged)
-        for candidate in candidates(moves_a_drawer(scene, task), budget, rng):
+        start = Scene(env.reset(init_index, seed=seed, render=False).privileged)
+        sampler = Sampler(moves_a_drawer(start, task), rng)
+        for _ in range(budget):
+            candidate = sampler.draw()
             policy = make_policy("oracle", (oracle_args or {}) | candidate.policy_args)
             actions: list[np.ndarray] = []
 
@@ -123,6 +187,7 @@ def search(
 
             outcome = run_episode(env, policy, context, on_step=keep)
             result.tried.append((candidate, outcome.success, outcome.steps))
+            sampler.tell(candidate, drawer_progress(start, Scene(env.observe(()).privileged), task))
             if outcome.success and result.found is None:
                 result.found = Demonstration(
                     task_id=task.id,
