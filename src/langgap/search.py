@@ -131,12 +131,17 @@ class Sampler:
             self.best = (progress, Press(tilt, turn, depth))
 
 
+def _drawer_steps(scene: Scene, task: Task) -> list:
+    """The sub-goals that open or close a sliding part (drawers the goal puts things in included)."""
+    steps = order_goal(scene, tuple(atoms(task.goal)))
+    return [p for p in steps if p.name in ("Open", "Close") and p.args[0] in scene.articulated
+            and scene.articulation(p.args[0]).slide]  # fmt: skip
+
+
 def drawer_progress(start: Scene, end: Scene, task: Task) -> float:
     """How far the sliding parts the goal moves went toward their goal states, the least of them (0..1)."""
     fractions = []
-    for p in order_goal(start, tuple(atoms(task.goal))):
-        if p.name not in ("Open", "Close") or not _slides(start, p.args[0]):
-            continue
+    for p in _drawer_steps(start, task):
         before, after = start.articulation(p.args[0]), end.articulation(p.args[0])
         goal = before.target("open" if p.name == "Open" else "close")
         way = goal - before.qpos
@@ -144,15 +149,9 @@ def drawer_progress(start: Scene, end: Scene, task: Task) -> float:
     return min(fractions, default=0.0)
 
 
-def _slides(scene: Scene, name: str) -> bool:
-    return name in scene.articulated and scene.articulation(name).slide
-
-
 def moves_a_drawer(scene: Scene, task: Task) -> bool:
     """Whether meeting the task's goal opens or closes a sliding part (drawers the goal puts things in included)."""
-    return any(
-        p.name in ("Open", "Close") and _slides(scene, p.args[0]) for p in order_goal(scene, tuple(atoms(task.goal)))
-    )
+    return bool(_drawer_steps(scene, task))
 
 
 def search(

@@ -31,6 +31,7 @@ import numpy as np
 from langgap.catalog.catalog import Catalog, load_catalog, registry_path
 from langgap.catalog.task import GateResult, Task
 from langgap.catalog.verdicts import record_verdicts
+from langgap.demos.searched import stored_demonstrations
 from langgap.engine.evaluate import evaluate
 from langgap.engine.spec import ExecutionOptions, RunSpec
 from langgap.goals import Goal, plain_atoms
@@ -46,6 +47,11 @@ FULL_INITS = 50
 SETTLE_INITS = 2
 SETTLE_IDLE_STEPS = 20
 SETTLE_TOLERANCE_M = 0.002
+
+
+def _shown_doable(successes: int, demonstrated: int, episodes: int) -> bool:
+    """Whether the oracle's successes and the searched demonstrations reach the gate's rate."""
+    return bool(episodes) and (successes + demonstrated) / episodes >= FEASIBLE_RATE
 
 
 @dataclass
@@ -74,7 +80,7 @@ class TaskValidation:
     @property
     def short(self) -> bool:
         """Whether the oracle's successes and the searched demonstrations together stay below the gate's rate."""
-        return bool(self.episodes) and (self.successes + len(self.demonstrated_inits)) / self.episodes < FEASIBLE_RATE
+        return bool(self.episodes) and not _shown_doable(self.successes, len(self.demonstrated_inits), self.episodes)
 
     def verdict(self, inits: int, made_by: str = "", proof: str = "") -> GateResult:
         """The verdict to record, for a gate that ran init states 0..`inits`-1 as `made_by` says (with `proof`,
@@ -264,9 +270,8 @@ def _row(
     t0 = sum(task.id in r.goals_at_start for r in done)
     source_at_end = sum(source.id in r.goals_at_end for r in wins) if exclusive else 0
     rate = len(wins) / len(done) if done else 0.0
-    shown = (len(wins) + len(demonstrated)) / len(done) if done else 0.0
     checks = {
-        f"success >= {FEASIBLE_RATE:.0%}": shown >= FEASIBLE_RATE,
+        f"success >= {FEASIBLE_RATE:.0%}": _shown_doable(len(wins), len(demonstrated), len(done)),
         "goal false at t0": t0 == 0,
         "source goal false at end": source_at_end == 0,
         "env builds": len(done) > 0 and len(done) == len(records),
@@ -335,12 +340,12 @@ def validate(
         records = episodes(policy, directory)
         blind_records = episodes("blind", directory.with_name(directory.name + "-blind")) if blind else None
         demonstrated: dict[str, list[int]] = {}
+        where = Path(demonstrations) if demonstrations is not None else directory / "demonstrations"
         if search_budget > 0 and policy == "oracle":
             failures: dict[str, list[tuple[int, int]]] = {}
             for r in records:
                 if r.judged and not r.success:
                     failures.setdefault(r.task_id, []).append((r.init_index, r.seed))
-            where = Path(demonstrations) if demonstrations is not None else directory / "demonstrations"
             demonstrated = demonstrate(catalog, failures, where, stepping=stepping, budget=search_budget)
     by_task: dict[str, list[EpisodeRecord]] = {}
     for record in records:
@@ -352,6 +357,9 @@ def validate(
         if scene not in drift_by_scene:
             drift_by_scene[scene] = settle_drift(task)
         row = _row(task, catalog, by_task.get(task.id, []), drift_by_scene[scene], demonstrated.get(task.id, []))
+        for init_index, path in stored_demonstrations(where / task.id).items():
+            if init_index not in row.demonstrated_inits:
+                path.unlink()  # an earlier gate's: this verdict does not rest on it
         if row.demonstrated_inits:
             row.demonstration = _beside_registry(where / task.id, catalog_name)
         rows.append(row)
@@ -369,7 +377,8 @@ def _beside_registry(path: Path, catalog_name: str) -> str:
 
 def demonstrations_dir(catalog_name: str) -> Path:
     """Where `validate --record` stores a catalog's searched demonstrations: beside its registry file."""
-    return registry_path(catalog_name).parent / "demonstrations" / Path(registry_path(catalog_name)).stem
+    registry = registry_path(catalog_name)
+    return registry.parent / "demonstrations" / registry.stem
 
 
 def prove_rejected(catalog_name: str, rows: list[TaskValidation], inits: int) -> dict[str, str]:

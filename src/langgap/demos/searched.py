@@ -112,7 +112,7 @@ def replay(env: TaskEnv, demo: Demonstration, catalog: Catalog) -> RolloutResult
                                  f"({env.options.stepping})")  # fmt: skip
     context = task_context(env.task, catalog, init_index=demo.init_index, seed=demo.seed)
     policy = ReplayPolicy(demo.actions)
-    # The step limit stops an episode, so a demonstration that never reaches its goal cannot run dry.
+    # Its actions run out before the step limit only if the goal never held: `ReplayPolicy` then raises.
     return run_episode(env, policy, context)
 
 
