@@ -1,8 +1,14 @@
 #!/usr/bin/env bash
 # Run the test suite: the main environment, then the LeRobot environment's tests (if ./setup.sh made it).
-# Extra arguments go to the first pytest run (e.g. ./test.sh -m slow, ./test.sh tests/test_eval.py).
+#   ./test.sh            everything CI runs (tests marked slow are left out: ./test.sh -m slow runs them)
+#   ./test.sh --fast     the unit layer only (tests/unit: no simulator, under a minute)
+# Other arguments go to the first pytest run (e.g. ./test.sh -m slow, ./test.sh tests/test_eval.py).
 set -euo pipefail
 cd "$(dirname "$0")"
+if [ "${1:-}" = "--fast" ]; then
+    shift
+    exec .venv/bin/python -m pytest -q tests/unit "$@"
+fi
 .venv/bin/python -m pytest "$@"
 if [ -x .venv-lerobot/bin/python ] && [ $# -eq 0 ]; then
     # LeRobot, torch and lerobot-eval live in the second environment; these tests skip in .venv.

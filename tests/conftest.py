@@ -7,14 +7,11 @@ run without MuJoCo.
 from __future__ import annotations
 
 import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-REPO = Path(__file__).resolve().parents[1]
-SHORT_STEPS = 15
+from tests.support.harness import REPO, SHORT_STEPS, in_ci, tiny_config
 
 
 @pytest.fixture(scope="session")
@@ -28,25 +25,6 @@ def catalog():
 def _isolated_cache(tmp_path_factory):
     """Generated BDDL goes to a per-session cache, never the user's."""
     os.environ["LANGGAP_CACHE"] = str(tmp_path_factory.mktemp("langgap-cache"))
-
-
-def store_rows(run: Path) -> list[dict]:
-    """Every episode row of a run store, as plain dicts, in key order."""
-    import sqlite3
-
-    db = sqlite3.connect(Path(run) / "episodes.sqlite")
-    db.row_factory = sqlite3.Row
-    rows = [dict(r) for r in db.execute("SELECT * FROM episodes ORDER BY task_id, init_index, condition")]
-    db.close()
-    return rows
-
-
-def run_cli(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
-    """Run `langgap ARGS` in a fresh interpreter, as a user would."""
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO / "src"), str(REPO)])}
-    return subprocess.run(
-        [sys.executable, "-m", "langgap.cli.main", *args], capture_output=True, text=True, timeout=timeout, env=env
-    )
 
 
 @pytest.fixture(scope="session")
@@ -70,16 +48,6 @@ def short_catalog(tmp_path_factory):
     return str(path)
 
 
-TINY_TASK = "spatial/s0/black-bowl-1-on-plate"
-
-
-def tiny_config():
-    """The collection settings of `tiny_collection` (two noisy oracle demonstrations of TINY_TASK)."""
-    from langgap.demos.collect import CollectConfig
-
-    return CollectConfig(catalog="langgap99", tasks=(TINY_TASK,), demos=2, seed=7, noise=0.2)
-
-
 @pytest.fixture(scope="session")
 def tiny_collection(tmp_path_factory) -> Path:
     """Two oracle demonstrations of one spatial task (compact form, with execution noise), collected once."""
@@ -88,3 +56,15 @@ def tiny_collection(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("demos") / "tiny"
     collect(tiny_config(), out, workers=0, progress=False)
     return out
+
+
+def pytest_runtest_setup(item):
+    """`@pytest.mark.requires(available, what)`: skip when `what` is missing, but fail under CI (CI=true),
+    where every tool the tests need must be installed (a skipped browser test would pass unnoticed)."""
+    for mark in item.iter_markers("requires"):
+        available, what = mark.args
+        if not available:
+            message = f"needs {what}"
+            if in_ci():
+                pytest.fail(f"{message} (CI=true: a missing tool fails instead of skipping)", pytrace=False)
+            pytest.skip(message)

@@ -8,7 +8,7 @@ import re
 import subprocess
 import sys
 
-from tests.conftest import REPO
+from tests.support.harness import REPO
 
 
 def _python(code: str, cwd=None) -> subprocess.CompletedProcess:

@@ -7,7 +7,7 @@ import pytest
 from langgap.bddl import Predicate, parse_bddl, rewrite_task_sections, strip_task_sections
 from langgap.catalog import files
 from langgap.errors import BddlError
-from tests.conftest import run_cli
+from tests.support.harness import run_cli
 
 
 def test_every_extended_bddl_differs_from_its_source_only_in_task_sections(catalog):

@@ -137,7 +137,7 @@ def _run(policy: str, tasks: str, path) -> dict:
 def test_an_ordered_goal_reached_in_the_wrong_order_fails_as_wrong_order(tmp_path):
     # A policy blind to order (the oracle given the atoms only: fixtures first) meets one order and
     # breaks the other: the outcome tells them apart.
-    records = _run("tests.policies:OrderBlindOracle", f"{IN_ORDER},{OUT_OF_ORDER}", tmp_path / "order-blind")
+    records = _run("tests.support.policies:OrderBlindOracle", f"{IN_ORDER},{OUT_OF_ORDER}", tmp_path / "order-blind")
     assert records[IN_ORDER].success and records[IN_ORDER].outcome == "success"
     wrong = records[OUT_OF_ORDER]
     assert not wrong.success and wrong.outcome == "wrong_order"

@@ -13,7 +13,7 @@ from langgap.catalog.catalog import catalog_from_data, load_catalog
 from langgap.catalog.phrasing import instruction
 from langgap.errors import CatalogError, UnknownTaskError
 from langgap.stack import libero_root
-from tests.conftest import run_cli
+from tests.support.harness import run_cli
 
 ID_FORMAT = re.compile(r"^(spatial|object|goal|libero10)/s\d/[a-z0-9+-]+$")
 

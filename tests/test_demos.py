@@ -10,7 +10,7 @@ from langgap.demos.collect import collect
 from langgap.demos.compact import demo_files, load_demo, read_manifest, save_demo
 from langgap.demos.record import SAME_STATE_TOLERANCE
 from langgap.sim.env import TaskEnv
-from tests.conftest import TINY_TASK, run_cli, tiny_config
+from tests.support.harness import TINY_TASK, run_cli, tiny_config
 
 
 def test_sampled_start_is_none_of_the_fixed_init_states_and_only_the_seed_decides_it(catalog):

@@ -18,7 +18,7 @@ from langgap.engine.plan import build_plan, condition_instruction, episode_seed
 from langgap.engine.spec import ExecutionOptions, RunSpec, SpecError
 from langgap.store import RunStore, StoreError
 from langgap.video import FRAME_EVERY
-from tests.conftest import REPO, SHORT_STEPS, run_cli, store_rows
+from tests.support.harness import REPO, SHORT_STEPS, run_cli, store_rows
 
 
 def _spec(short_catalog, policy="noop", episodes=2, **kw) -> RunSpec:
@@ -31,7 +31,7 @@ def _eval(short_catalog, run, policy="noop", episodes=2, workers=0, options=None
 
 
 def test_episode_rows_carry_full_provenance(short_catalog, tmp_path):
-    summary = _eval(short_catalog, tmp_path / "run", policy="tests.policies:ChunkPolicy")
+    summary = _eval(short_catalog, tmp_path / "run", policy="tests.support.policies:ChunkPolicy")
     assert (summary.planned, summary.ran, summary.gaps) == (6, 6, 0)
     rows = store_rows(tmp_path / "run")
     assert len(rows) == 6
@@ -42,14 +42,14 @@ def test_episode_rows_carry_full_provenance(short_catalog, tmp_path):
     assert len(row["instruction_sha256"]) == 64 and len(row["t0_hash"]) == 64
     assert json.loads(row["physics"])["mujoco"] == "3.2.3"
     assert row["seed"] == episode_seed(0, row["init_index"])
-    assert row["policy"] == "tests.policies:ChunkPolicy" and len(row["policy_config_hash"]) == 16
+    assert row["policy"] == "tests.support.policies:ChunkPolicy" and len(row["policy_config_hash"]) == 16
     assert row["code_version"].startswith("0.1.0")
     # Siblings start from the identical scene: same init index -> same t0 hash in every task.
     by_init = {}
     for r in rows:
         assert by_init.setdefault(r["init_index"], r["t0_hash"]) == r["t0_hash"]
     with RunStore.open(tmp_path / "run") as store:
-        assert store.meta("spec") == _spec(short_catalog, "tests.policies:ChunkPolicy").to_dict()
+        assert store.meta("spec") == _spec(short_catalog, "tests.support.policies:ChunkPolicy").to_dict()
 
 
 def test_resume_skips_done_and_extend_grows_the_run(short_catalog, tmp_path):
@@ -73,7 +73,7 @@ def test_resume_skips_done_and_extend_grows_the_run(short_catalog, tmp_path):
 def test_policy_output_errors_are_policy_failures(short_catalog, tmp_path):
     for name, message in (("NanPolicy", "non-finite"), ("WrongShapePolicy", "shape")):
         run = tmp_path / name
-        _eval(short_catalog, run, policy=f"tests.policies:{name}", episodes=1)
+        _eval(short_catalog, run, policy=f"tests.support.policies:{name}", episodes=1)
         rows = store_rows(run)
         assert all(r["status"] == "done" and r["outcome"] == "policy_error" for r in rows)
         assert all(r["failure_kind"] == "policy" and message in r["error"] for r in rows)
@@ -82,7 +82,7 @@ def test_policy_output_errors_are_policy_failures(short_catalog, tmp_path):
 def test_exceptions_are_retried_then_recorded_as_gaps(short_catalog, tmp_path):
     run = tmp_path / "raise"
     options = ExecutionOptions(workers=0, max_attempts=2, max_failure_streak=10, progress=False)
-    summary = _eval(short_catalog, run, policy="tests.policies:RaisingPolicy", episodes=1, options=options)
+    summary = _eval(short_catalog, run, policy="tests.support.policies:RaisingPolicy", episodes=1, options=options)
     rows = store_rows(run)
     assert summary.gaps == 3
     assert all(r["status"] == "gap" and r["failure_kind"] == "infra" and r["attempts"] == 2 for r in rows)
@@ -92,7 +92,9 @@ def test_exceptions_are_retried_then_recorded_as_gaps(short_catalog, tmp_path):
 def test_a_flaky_policy_succeeds_on_retry_in_worker_processes(short_catalog, tmp_path):
     markers = tmp_path / "markers"
     markers.mkdir()
-    spec = _spec(short_catalog, "tests.policies:FlakyPolicy", episodes=1, policy_args={"marker_dir": str(markers)})
+    spec = _spec(
+        short_catalog, "tests.support.policies:FlakyPolicy", episodes=1, policy_args={"marker_dir": str(markers)}
+    )
     # Every episode fails once with the same cause: without a higher streak limit that stops the run.
     options = ExecutionOptions(workers=2, max_failure_streak=10, progress=False)
     summary = evaluate(spec, tmp_path / "run", options)
@@ -103,14 +105,14 @@ def test_a_flaky_policy_succeeds_on_retry_in_worker_processes(short_catalog, tmp
 
 def test_hanging_and_crashing_workers_become_gaps_and_the_run_completes(short_catalog, tmp_path):
     hang = evaluate(
-        _spec(short_catalog, "tests.policies:HangingPolicy", episodes=1, tasks="spatial/s0/open*"),
+        _spec(short_catalog, "tests.support.policies:HangingPolicy", episodes=1, tasks="spatial/s0/open*"),
         tmp_path / "hang",
         ExecutionOptions(workers=1, timeout_s=8, max_attempts=2, progress=False),
     )
     rows = store_rows(tmp_path / "hang")
     assert hang.gaps == 1 and rows[0]["status"] == "gap" and "timed out" in rows[0]["error"]
     crash = evaluate(
-        _spec(short_catalog, "tests.policies:CrashingPolicy", episodes=1),
+        _spec(short_catalog, "tests.support.policies:CrashingPolicy", episodes=1),
         tmp_path / "crash",
         ExecutionOptions(workers=2, max_attempts=2, max_failure_streak=10, progress=False),
     )
@@ -193,7 +195,7 @@ def test_videos_of_the_first_episodes_are_written(short_catalog, tmp_path):
 
 def test_per_outcome_videos_replay_the_chosen_episodes(short_catalog, tmp_path):
     # Init states 2 and 3 end in a policy error, 0 and 1 in no goal: one clip per outcome is of 0 and 2.
-    policy, task = "tests.policies:ErrsOnInitsPolicy", "spatial/s0/black-bowl-1-on-plate"
+    policy, task = "tests.support.policies:ErrsOnInitsPolicy", "spatial/s0/black-bowl-1-on-plate"
     spec = _spec(short_catalog, policy, 4, tasks=task, policy_args={"inits": "2,3"})
     evaluate(spec, tmp_path / "run", ExecutionOptions(workers=0, progress=False))
     before = store_rows(tmp_path / "run")
@@ -215,7 +217,7 @@ def test_per_outcome_videos_replay_the_chosen_episodes(short_catalog, tmp_path):
 def test_a_replay_that_ends_otherwise_gets_no_clip(short_catalog, tmp_path):
     # The policy errs on init state 1 only the first time it runs it: its replay ends otherwise.
     policy_args = {"inits": "1", "once_dir": str(tmp_path)}
-    spec = _spec(short_catalog, "tests.policies:ErrsOnInitsPolicy", 2, tasks="spatial/s0/black-bowl-1-on-plate",
+    spec = _spec(short_catalog, "tests.support.policies:ErrsOnInitsPolicy", 2, tasks="spatial/s0/black-bowl-1-on-plate",
                  policy_args=policy_args)  # fmt: skip
     options = ExecutionOptions(workers=0, video="per-outcome:1", progress=False)
     summary = evaluate(spec, tmp_path / "run", options)
@@ -239,7 +241,7 @@ def test_a_replay_that_ends_otherwise_gets_no_clip(short_catalog, tmp_path):
         (["--policy", "noop", "--shared-policy", "--workers", "0"], "--shared-policy needs worker processes"),
         (["--policy", "noop", "--shared-policy", "--policy-gpus", "1"], "--policy-gpus needs --backend ray"),
         (
-            ["--policy", "tests.policies:UnbuildablePolicy", "--shared-policy", "--workers", "2"],
+            ["--policy", "tests.support.policies:UnbuildablePolicy", "--shared-policy", "--workers", "2"],
             "the shared policy process could not start: FileNotFoundError: no checkpoint at /nowhere",
         ),
     ],
@@ -338,7 +340,7 @@ def _cli_eval(short_catalog, run, policy, *extra):
 
 def test_a_dead_policy_server_stops_the_run_and_resume_continues(short_catalog, tmp_path):
     run, switch = tmp_path / "run", tmp_path / "server-down"
-    outage = ["tests.outage_policy:OutagePolicy", "--policy-arg", f"switch={switch}"]
+    outage = ["tests.support.outage_policy:OutagePolicy", "--policy-arg", f"switch={switch}"]
     assert _cli_eval(short_catalog, run, *outage, "--episodes", "1").returncode == 0
     before = store_rows(run)
     switch.touch()
@@ -379,7 +381,7 @@ def test_a_run_that_ends_with_gaps_exits_3(short_catalog, tmp_path):
     result = _cli_eval(
         short_catalog,
         tmp_path / "run",
-        "tests.policies:RaisingPolicy",
+        "tests.support.policies:RaisingPolicy",
         "--episodes",
         "1",
         "--max-attempts",

@@ -7,7 +7,7 @@ import pytest
 from langgap.catalog.catalog import load_catalog
 from langgap.errors import LangGapError
 from langgap.training.lerobot_train import EXPERIMENTS, load_experiment, train_command
-from tests.conftest import run_cli
+from tests.support.harness import run_cli
 
 # Table III of the paper: tasks, demos, LoRA rank, steps, eval tasks, episodes.
 TABLE_III = {

@@ -18,7 +18,7 @@ from langgap.demos.record import Demo, start_episode
 from langgap.demos.verify import replay_demo
 from langgap.sim.env import CAMERAS, EnvOptions, TaskEnv
 from langgap.version import code_version
-from tests.conftest import TINY_TASK, run_cli
+from tests.support.harness import TINY_TASK, run_cli
 
 STOVE_TASK = "spatial/s0/black-bowl-1-on-stove"  # same scene as TINY_TASK, another goal
 

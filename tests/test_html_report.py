@@ -13,11 +13,11 @@ from langgap.report import load_runs, summarize
 from langgap.report.published import load_published
 from langgap.report.tables import full_report
 from langgap.video import VIDEO_FPS, write_video
-from tests.browser import CHROMIUM, chromium
-from tests.conftest import run_cli
-from tests.unit.reports import SOURCE, memoriser, reader, write_run
+from tests.support.browser import CHROMIUM, chromium
+from tests.support.harness import run_cli
+from tests.support.reports import SOURCE, memoriser, reader, write_run
 
-pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="needs Debian's chromium (./setup.sh installs it)")
+pytestmark = pytest.mark.requires(CHROMIUM is not None, "Debian's chromium (./setup.sh installs it)")
 
 # The page's section whose heading starts with a title.
 _SECTION = """const section = title => [...document.querySelectorAll("section")]

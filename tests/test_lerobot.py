@@ -29,8 +29,8 @@ from langgap.policies import make_policy  # noqa: E402
 from langgap.policies.lerobot import CheckpointError  # noqa: E402
 from langgap.policies.openpi import OpenpiPolicy  # noqa: E402
 from langgap.sim.env import EnvOptions, TaskEnv  # noqa: E402
-from tests.lerobot_checkpoints import IMAGE_SIZE, N_ACTION_STEPS, diffusion_checkpoint, lora_adapter  # noqa: E402
-from tests.servers import free_port, langgap_serve, running, subprocess_env  # noqa: E402
+from tests.support.lerobot_checkpoints import IMAGE_SIZE, N_ACTION_STEPS, diffusion_checkpoint, lora_adapter  # noqa: E402
+from tests.support.servers import free_port, langgap_serve, running, subprocess_env  # noqa: E402
 
 TASK_ID = "spatial/s0/black-bowl-1-on-plate"
 SIBLING_ID = "spatial/s0/black-bowl-2-on-plate"

@@ -17,7 +17,7 @@ from langgap.demos.export import CAMERA_FEATURES, write_lerobot_dataset  # noqa:
 from langgap.demos.record import start_episode  # noqa: E402
 from langgap.sim.env import CAMERAS, EnvOptions, TaskEnv  # noqa: E402
 from langgap.training.lerobot_train import EXPERIMENTS, load_experiment, train_command  # noqa: E402
-from tests.conftest import TINY_TASK  # noqa: E402
+from tests.support.harness import TINY_TASK  # noqa: E402
 from tests.test_lerobot import lerobot_libero_batch  # noqa: E402
 
 

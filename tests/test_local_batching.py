@@ -12,7 +12,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from tests.conftest import REPO, run_cli, store_rows
+from tests.support.harness import REPO, run_cli, store_rows
 from tests.test_ray import KEEP
 
 SUMMARY = re.compile(r"shared policy: (\d+) queries in (\d+) batched calls")
@@ -31,7 +31,7 @@ def _episodes(run: Path) -> list[dict]:
 
 def test_two_workers_sharing_one_batching_policy_give_the_episodes_of_unshared_workers(short_catalog, tmp_path):
     def recorder(log: str) -> list[str]:
-        return ["--policy", "tests.policies:BatchRecorder", "--policy-arg", f"path={tmp_path / log}"]
+        return ["--policy", "tests.support.policies:BatchRecorder", "--policy-arg", f"path={tmp_path / log}"]
 
     two_tasks = ["--tasks", "spatial/s0/black-bowl-*"]
     own = _eval(short_catalog, tmp_path / "own", *recorder("own.log"), *two_tasks)
@@ -139,7 +139,7 @@ def test_the_policy_process_listens_on_no_network_and_ends_with_the_run_even_a_k
 
 def test_a_crashed_policy_process_stops_the_run_with_no_verdict_and_resume_continues(short_catalog, tmp_path):
     run = tmp_path / "run"
-    crash_once = ["--policy", "tests.policies:CrashOncePolicy", "--policy-arg", f"marker_dir={tmp_path}"]
+    crash_once = ["--policy", "tests.support.policies:CrashOncePolicy", "--policy-arg", f"marker_dir={tmp_path}"]
     stopped = _eval(short_catalog, run, *crash_once, "--shared-policy")
     assert stopped.returncode == 4, stopped.stderr
     assert (

@@ -17,7 +17,7 @@ from langgap.policies import make_policy, protocol
 from langgap.policies.base import PolicyOutputError
 from langgap.policies.openpi import OpenpiPolicy
 from langgap.sim.env import Observation, TaskEnv
-from tests.servers import free_port, helper_server, langgap_serve, running, subprocess_env
+from tests.support.servers import free_port, helper_server, langgap_serve, running, subprocess_env
 
 TASK_ID = "spatial/s0/black-bowl-1-on-plate"
 STEPS = 12  # short episodes: the plumbing, not the policy, is under test
@@ -125,12 +125,14 @@ def test_openpi_server_package_hosts_langgap_policy(catalog, name, pairs):
 
 def test_langgap_serve_matches_in_process_with_images_and_privileged_state(catalog):
     port = free_port()
-    with running(langgap_serve(port, "tests.probe_policy:ProbePolicy"), port):
+    with running(langgap_serve(port, "tests.support.probe_policy:ProbePolicy"), port):
         remote = OpenpiPolicy(port=port)
         assert remote.spec.cameras and remote.spec.privileged and remote.spec.image_size == 64
         remote_outcomes = episodes(remote, catalog, PLAN)
         remote.close()
-    assert_same_episodes(remote_outcomes, episodes(make_policy("tests.probe_policy:ProbePolicy"), catalog, PLAN))
+    assert_same_episodes(
+        remote_outcomes, episodes(make_policy("tests.support.probe_policy:ProbePolicy"), catalog, PLAN)
+    )
 
 
 def test_langgap_serve_gives_each_connection_its_own_policy(catalog):
@@ -186,7 +188,7 @@ def test_server_killed_mid_episode(catalog):
 
 def test_server_that_never_answers_times_out(catalog):
     port = free_port()
-    with running(langgap_serve(port, "tests.policies:HangingPolicy"), port):
+    with running(langgap_serve(port, "tests.support.policies:HangingPolicy"), port):
         policy, observation = _started_episode(catalog, port, timeout=1.0)
         start = time.monotonic()
         with pytest.raises(PolicyServerError, match="sent no reply within 1 s"):
@@ -211,18 +213,18 @@ def test_malformed_reply_raises(catalog, mode, message):
 
 def test_nan_from_a_served_policy_is_a_policy_failure_as_in_process(catalog):
     port = free_port()
-    with running(langgap_serve(port, "tests.policies:NanPolicy"), port):
+    with running(langgap_serve(port, "tests.support.policies:NanPolicy"), port):
         remote = OpenpiPolicy(port=port, timeout=5.0)
         with pytest.raises(PolicyOutputError, match="non-finite"):
             episodes(remote, catalog, [(0, 0)])
         remote.close()
     with pytest.raises(PolicyOutputError, match="non-finite"):
-        episodes(make_policy("tests.policies:NanPolicy"), catalog, [(0, 0)])
+        episodes(make_policy("tests.support.policies:NanPolicy"), catalog, [(0, 0)])
 
 
 def test_policy_error_on_server_is_reported_in_one_line(catalog):
     port = free_port()
-    with running(langgap_serve(port, "tests.policies:RaisingPolicy"), port):
+    with running(langgap_serve(port, "tests.support.policies:RaisingPolicy"), port):
         policy, observation = _started_episode(catalog, port, timeout=5.0)
         with pytest.raises(PolicyServerError, match="failed: RuntimeError: model exploded") as raised:
             policy.act(observation)

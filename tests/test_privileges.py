@@ -15,8 +15,8 @@ from langgap.engine.context import task_context
 from langgap.policies import protocol
 from langgap.policies.openpi import OpenpiPolicy
 from langgap.sim.env import Observation
-from tests.conftest import run_cli, store_rows
-from tests.servers import free_port, helper_server, langgap_serve, running, subprocess_env
+from tests.support.harness import run_cli, store_rows
+from tests.support.servers import free_port, helper_server, langgap_serve, running, subprocess_env
 from tests.test_openpi import PLAN, TASK_ID, episodes
 
 TASK = "spatial/s0/black-bowl-2-on-plate"
@@ -31,7 +31,8 @@ def test_only_a_privileged_policy_is_told_the_goal_or_shown_the_simulator_state(
     for policy, workers in (("ContextRecorder", "2"), ("PrivilegedContextRecorder", "2" if shared else "0")):
         log, run = tmp_path / f"{policy}.jsonl", tmp_path / policy
         result = run_cli(
-            "eval", "--policy", f"tests.policies:{policy}", "--policy-arg", f"path={log}", "--catalog", short_catalog,
+            "eval", "--policy", f"tests.support.policies:{policy}", "--policy-arg", f"path={log}",
+            "--catalog", short_catalog,
             "--tasks", TASK, "--episodes", "2", "--condition", "given", "--condition", "shuffled", "--run", str(run),
             "--workers", workers, "--no-progress", "--quiet", *(["--shared-policy"] if shared else []),
         )  # fmt: skip
@@ -94,7 +95,7 @@ def test_langgap_serve_drops_the_privileged_part_a_client_sends_to_a_policy_that
         protocol.STATE_KEY: np.zeros(8, dtype=np.float32),
         protocol.PRIVILEGED_KEY: {"body/plate_1": np.zeros(7)},
     }
-    server = running(langgap_serve(port, f"tests.policies:{policy}", f"path={log}"), port)
+    server = running(langgap_serve(port, f"tests.support.policies:{policy}", f"path={log}"), port)
     with server, connect(f"ws://127.0.0.1:{port}", proxy=None) as ws:
         ws.recv(timeout=5)  # the metadata
         ws.send(protocol.pack(request))

@@ -12,9 +12,9 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import REPO, run_cli, store_rows
+from tests.support.harness import REPO, run_cli, store_rows
 
-pytestmark = pytest.mark.skipif(shutil.which("unshare") is None, reason="needs unshare (util-linux) for a netns")
+pytestmark = pytest.mark.requires(shutil.which("unshare") is not None, "unshare (util-linux) for a network namespace")
 
 KEEP = ("task_id", "init_index", "seed", "condition", "success", "steps", "t0_hash", "reached", "goals_at_end")
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from langgap.policies.small_bc.text import Vocabulary, words
-from tests.conftest import TINY_TASK, run_cli, store_rows
+from tests.support.harness import TINY_TASK, run_cli, store_rows
 
 torch = pytest.importorskip("torch", reason="small-bc needs PyTorch (pip install 'langgap[train]')")
 

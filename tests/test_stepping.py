@@ -12,7 +12,7 @@ from langgap.engine.context import task_context
 from langgap.engine.rollout import env_options_for, run_episode
 from langgap.policies import make_policy
 from langgap.sim.env import TaskEnv
-from tests.conftest import run_cli, store_rows
+from tests.support.harness import run_cli, store_rows
 
 
 def _states(catalog, task_id: str, fast: bool, hard_reset: bool = False) -> np.ndarray:

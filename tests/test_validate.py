@@ -12,7 +12,7 @@ from langgap.catalog.catalog import load_catalog_file
 from langgap.goals import conjunction
 from langgap.validate import goals_exclude, validate
 from langgap.version import code_version
-from tests.conftest import REPO, run_cli
+from tests.support.harness import REPO, run_cli
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,7 @@ from langgap.records import Outcome, classify
 from langgap.report.load import load_runs
 from langgap.report.summary import summarize
 from langgap.report.tables import beyond_table, diagnosis, outcome_table, wording_table
-from tests.unit.reports import SOURCE, episode, memoriser, write_run
+from tests.support.reports import SOURCE, episode, memoriser, write_run
 
 ORDERED = "spatial/s0/first-open-drawer-then-bowl-on-plate"
 NEGATED = "spatial/s0/bowl-on-plate~not-where"

@@ -13,7 +13,7 @@ from langgap.catalog.verdicts import read_verdicts, record_verdicts, verdicts_pa
 from langgap.errors import CatalogError
 from langgap.report import load_runs, summarize
 from langgap.report.formats import FORMATS
-from tests.unit.reports import episode, write_run
+from tests.support.reports import episode, write_run
 
 DRAWER = "spatial/s2/open-cabinet-bottom-drawer"
 BOWL = "spatial/s2/black-bowl-1-on-plate"

@@ -8,7 +8,7 @@ import pytest
 
 from langgap.catalog.catalog import load_catalog
 from langgap.validate import benchmark_claims
-from tests.unit.reports import episode
+from tests.support.reports import episode
 
 ORIGINAL, RAMEKIN = "spatial/s0/black-bowl-1-on-plate", "spatial/s0/ramekin-on-plate"
 

@@ -9,7 +9,7 @@ import pytest
 from langgap.engine.filming import VideoSelection, replay_matches
 from langgap.errors import LangGapError
 from langgap.records import Outcome
-from tests.unit.reports import SOURCE, episode
+from tests.support.reports import SOURCE, episode
 
 TASKS = ("spatial/s0/ramekin-on-plate", "spatial/s0/bowl-on-stove")
 _ENDS = {  # outcome -> how an episode of an extended task ends in it

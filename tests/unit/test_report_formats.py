@@ -9,8 +9,8 @@ import json
 import pytest
 
 from langgap.report import FORMATS, load_runs, render, summarize
-from tests.conftest import run_cli
-from tests.unit.reports import memoriser, reader, write_run
+from tests.support.harness import run_cli
+from tests.support.reports import memoriser, reader, write_run
 
 
 @pytest.fixture

@@ -1,5 +1,5 @@
 """The shared policy's server (batching, privileges) and the local pool's policy process: a real spawned
-process and real Unix-socket clients, with the test policies of `tests/policies.py` (no simulator)."""
+process and real Unix-socket clients, with the test policies of `tests/support/policies.py` (no simulator)."""
 
 from __future__ import annotations
 
@@ -59,7 +59,7 @@ def test_the_shared_policy_server_waits_max_wait_ms_for_a_batch():
 def test_the_server_gives_the_goal_and_the_simulator_state_to_privileged_policies_only(policy, tmp_path):
     """Whatever a client sends (here: everything), as `langgap serve` does over the wire."""
     log = tmp_path / "told.jsonl"
-    server = PolicyServer(f"tests.policies:{policy}", {"path": str(log)}, max_batch=1, max_wait_ms=0)
+    server = PolicyServer(f"tests.support.policies:{policy}", {"path": str(log)}, max_batch=1, max_wait_ms=0)
 
     async def episode() -> None:
         await server.reset(0, CONTEXT)
@@ -77,7 +77,7 @@ def policy_process(tmp_path):
     """A `BatchRecorder` (random actions, batched calls logged to a file) in its own process, at most
     two queries per call, each waiting up to 2 s for the other."""
     process = PolicyProcess(
-        "tests.policies:BatchRecorder", {"path": str(tmp_path / "batches")}, max_batch=2, max_wait_ms=2000
+        "tests.support.policies:BatchRecorder", {"path": str(tmp_path / "batches")}, max_batch=2, max_wait_ms=2000
     )
     yield process
     process.close()
@@ -115,7 +115,7 @@ def test_the_policy_process_batches_its_clients_queries_and_reports_its_counters
 
 
 def test_a_policy_error_is_an_error_of_the_query_and_the_process_serves_on(tmp_path):
-    process = PolicyProcess("tests.policies:RaisingPolicy", {}, max_batch=4, max_wait_ms=0)
+    process = PolicyProcess("tests.support.policies:RaisingPolicy", {}, max_batch=4, max_wait_ms=0)
     try:
         client = process.address.connect(0)
         client.reset(CONTEXT)
@@ -148,5 +148,5 @@ def test_a_killed_policy_process_is_one_cause_for_every_client(policy_process):
 )
 def test_a_policy_that_cannot_be_built_is_one_error_line(policy, why):
     with pytest.raises(LangGapError) as error:
-        PolicyProcess(f"tests.policies:{policy}", {}, max_batch=2, max_wait_ms=5)
+        PolicyProcess(f"tests.support.policies:{policy}", {}, max_batch=2, max_wait_ms=5)
     assert str(error.value) == f"the shared policy process could not start: {why}"

@@ -7,7 +7,7 @@ import dataclasses
 import pytest
 
 from langgap.report import load_runs, summarize
-from tests.unit.reports import SOURCE, memoriser, reader, write_run
+from tests.support.reports import SOURCE, memoriser, reader, write_run
 
 
 @pytest.fixture

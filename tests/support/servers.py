@@ -14,7 +14,7 @@ from pathlib import Path
 import langgap
 from langgap.policies.openpi import wait_for_health
 
-TESTS = Path(__file__).resolve().parent
+TESTS = Path(__file__).resolve().parents[1]
 REPO = TESTS.parent
 SRC = Path(langgap.__file__).resolve().parents[1]
 
@@ -62,5 +62,5 @@ def langgap_serve(port: int, policy: str, *pairs: str) -> list[str]:
 
 
 def helper_server(mode: str, port: int, *rest: str) -> list[str]:
-    """The command line of a test server from `tests/openpi_servers.py`."""
-    return [sys.executable, "-m", "tests.openpi_servers", mode, str(port), *rest]
+    """The command line of a test server from `tests/support/openpi_servers.py`."""
+    return [sys.executable, "-m", "tests.support.openpi_servers", mode, str(port), *rest]

@@ -1,4 +1,4 @@
-"""Misbehaving policies for the harness's tests (loaded by workers as `tests.policies:Name`)."""
+"""Misbehaving policies for the harness's tests (loaded by workers as `tests.support.policies:Name`)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Servers for tests, run as `python -m tests.openpi_servers MODE PORT [POLICY [KEY=VALUE ...]]`.
+"""Servers for tests, run as `python -m tests.support.openpi_servers MODE PORT [POLICY [KEY=VALUE ...]]`.
 
 Modes:
   openpi-langgap  openpi's own `WebsocketPolicyServer` (PyPI `openpi-server`) hosting a LangGap policy

@@ -1,4 +1,4 @@
-"""A policy whose actions depend on everything it observes (served by tests as `tests.probe_policy:ProbePolicy`)."""
+"""A policy whose actions depend on everything it observes (served as `tests.support.probe_policy:ProbePolicy`)."""
 
 from __future__ import annotations
 
