@@ -19,7 +19,7 @@ import yaml
 
 from langgap.catalog.naming import SUITE_SHORT
 from langgap.catalog.task import DIMENSIONS, KINDS, SPLITS, GateResult, Task
-from langgap.catalog.verdicts import read_verdicts
+from langgap.catalog.verdicts import read_verdicts, snapshot_verdicts
 from langgap.errors import BddlError, CatalogError, UnknownTaskError
 from langgap.goals import goal_from_strings
 
@@ -219,6 +219,12 @@ def catalog_hash(name: str) -> str:
         return hashlib.sha256(path.read_bytes()).hexdigest()
     except OSError as exc:
         raise CatalogError(f"cannot read catalog {path}: {exc}") from None
+
+
+def gate_snapshot(name: str, task_ids: Iterable[str], previous: dict | None = None) -> dict:
+    """The gate verdicts of `task_ids` in catalog `name` with their file's SHA-256, as a run stores them
+    (`snapshot_verdicts`; `previous` keeps a run's earlier snapshot and adds only tasks it lacks)."""
+    return snapshot_verdicts(registry_path(name), task_ids, previous)
 
 
 @functools.cache

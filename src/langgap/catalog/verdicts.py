@@ -9,9 +9,10 @@ definitions. A verdict names the task id it belongs to; one for an id the regist
 from __future__ import annotations
 
 import fcntl
+import hashlib
 import json
 import os
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import asdict
 from pathlib import Path
@@ -31,10 +32,21 @@ def read_verdicts(registry: str | Path) -> dict[str, GateResult]:
     path = verdicts_path(registry)
     if not path.is_file():
         return {}
+    return _parse(path, _read_bytes(path))
+
+
+def _read_bytes(path: Path) -> bytes:
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        return path.read_bytes()
+    except OSError as exc:
+        raise CatalogError(f"cannot read feasibility verdicts {path}: {exc}") from None
+
+
+def _parse(path: Path, content: bytes) -> dict[str, GateResult]:
+    try:
+        data = json.loads(content.decode("utf-8"))
         return {task_id: _verdict(fields) for task_id, fields in data["tasks"].items()}
-    except (OSError, ValueError, KeyError, TypeError) as exc:
+    except (ValueError, KeyError, TypeError) as exc:
         raise CatalogError(f"cannot read feasibility verdicts {path}: {exc}") from None
 
 
@@ -70,3 +82,25 @@ def record_verdicts(registry: str | Path, verdicts: dict[str, GateResult], about
         data = {"about": about, "tasks": {k: asdict(merged[k]) for k in sorted(merged)}}
         write_text_atomically(path, json.dumps(data, indent=1, sort_keys=True) + "\n")
     return path
+
+
+def snapshot_verdicts(registry: str | Path, task_ids: Iterable[str], previous: dict | None = None) -> dict:
+    """What a run relies on from the gate, stored with it so that a re-gate never changes its report: the
+    verdicts of `task_ids` (each whole, with its per-init results) and the SHA-256 of the verdict file they
+    were read from (none: the catalog has no verdict file). `previous`, a run's earlier snapshot, is kept as it is:
+    only tasks it lacks (a run grown with `--extend`) get verdicts, and their file's hash is added."""
+    path = verdicts_path(registry)
+    content = _read_bytes(path) if path.is_file() else None
+    verdicts = _parse(path, content) if content is not None else {}
+    digest = hashlib.sha256(content).hexdigest() if content is not None else None
+    snapshot = previous or {"file": path.name, "sha256": [], "tasks": {}}
+    added = {t: asdict(verdicts[t]) for t in task_ids if t in verdicts and t not in snapshot["tasks"]}
+    hashes = list(snapshot["sha256"])
+    if digest is not None and digest not in hashes and (added or previous is None):
+        hashes.append(digest)
+    return {**snapshot, "sha256": hashes, "tasks": {**snapshot["tasks"], **added}}
+
+
+def snapshot_gates(snapshot: dict) -> dict[str, GateResult]:
+    """The verdicts a run's snapshot (`snapshot_verdicts`) holds."""
+    return {task_id: _verdict(fields) for task_id, fields in snapshot["tasks"].items()}

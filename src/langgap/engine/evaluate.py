@@ -9,7 +9,7 @@ from dataclasses import asdict, dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
 
-from langgap.catalog.catalog import load_catalog
+from langgap.catalog.catalog import gate_snapshot, load_catalog
 from langgap.engine.episode import gap_record
 from langgap.engine.filming import VideoSelection, replay_matches
 from langgap.engine.plan import PlannedEpisode, build_plan
@@ -61,7 +61,10 @@ def _open_store(spec: RunSpec, options: ExecutionOptions, run: Path, *, resume: 
     """Create the run's store, or reopen it for a resume after checking that it holds the same run."""
     if not (resume and RunStore.exists(run)):
         created = {"code_version": code_version(), "created_at": datetime.now(UTC).isoformat(timespec="seconds")}
-        return RunStore.create(run, {"spec": spec.to_dict(), "execution": asdict(options), "created": created})
+        gate = gate_snapshot(spec.catalog, spec.tasks)  # reports read these verdicts, never the live gate file
+        return RunStore.create(
+            run, {"spec": spec.to_dict(), "execution": asdict(options), "created": created, "gate": gate}
+        )
     store = RunStore.open(run, write=True)
     try:
         stored = store.meta("spec") or {}
@@ -76,11 +79,26 @@ def _open_store(spec: RunSpec, options: ExecutionOptions, run: Path, *, resume: 
             )
         if differing:
             store.set_meta("spec", spec.to_dict())
+            if (gate := store.meta("gate")) is not None:  # a run grown by --extend: verdicts of its new tasks
+                store.set_meta("gate", gate_snapshot(spec.catalog, spec.tasks, gate))
         store.set_meta("execution", asdict(options))
     except BaseException:
         store.close()
         raise
     return store
+
+
+def _tasks_as_created(spec: RunSpec, run: Path) -> RunSpec:
+    """`spec` with the tasks its selection resolved to when the stored run was created (the same selection
+    on the same catalog): `feasible`, the default, follows the gate's verdicts, and a re-gate since must
+    not change which tasks a resumed run holds."""
+    if not RunStore.exists(run):
+        return spec
+    with RunStore.open(run) as store:
+        stored = store.meta("spec") or {}
+    if (stored.get("selection"), stored.get("catalog_hash")) != (spec.selection, spec.catalog_hash):
+        return spec
+    return replace(spec, tasks=tuple(stored["tasks"]))
 
 
 def evaluate(
@@ -101,6 +119,8 @@ def evaluate(
     """
     options = options or ExecutionOptions()
     run = Path(run)
+    if resume:
+        spec = _tasks_as_created(spec, run)
     videos = options.video_selection
     plan = plan_of(spec)
     firsts = videos.filmed_while_running([p.key for p in plan])

@@ -1,10 +1,18 @@
-"""Reading runs for reports: the stored spec and every episode record of each run."""
+"""Reading runs for reports: the stored spec, the gate verdicts the run relies on, and every episode record.
+
+A report reads only the stored run: the feasibility verdicts behind its Oracle % and ⚠ columns are the
+snapshot taken when the run was created (store meta `gate`), so a re-gate never changes a stored run's
+report. Runs stored before snapshots were kept fall back to the catalog's live verdict file, and say so.
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
+from langgap.catalog.task import GateResult
+from langgap.catalog.verdicts import snapshot_gates
+from langgap.errors import LangGapError
 from langgap.records import EpisodeRecord
 from langgap.store import RunStore
 
@@ -17,11 +25,37 @@ class Run:
     path: Path
     spec: dict  # the run spec (`config` in stores written before run specs)
     records: list[EpisodeRecord]
+    gates: dict[str, GateResult] = field(default_factory=dict)  # the feasibility verdicts of its tasks
+    gate_hashes: list[str] | None = None  # SHA-256 of the verdict files of its snapshot (None: no snapshot)
 
     @property
     def privileged(self) -> bool:
         """The policy was given the goal or simulator state: a scripted reference, not a policy under test."""
         return any(r.privileged for r in self.records)
+
+    @property
+    def gate_source(self) -> str:
+        """Where the run's feasibility verdicts come from, as its report states it."""
+        if self.gate_hashes is None:
+            return (
+                "gate: the catalog's live verdict file (this run was stored before runs kept a snapshot; "
+                "a re-gate changes its Oracle % and ⚠)"
+            )
+        if not self.gate_hashes:
+            return "gate: no verdicts recorded when the run was created"
+        hashes = ", ".join(h[:12] for h in self.gate_hashes)
+        return f"gate: snapshot taken when the run was created (sha256 {hashes})"
+
+
+def live_gates(spec: dict) -> dict[str, GateResult]:
+    """The verdicts in the run's catalog's verdict file now (empty when it has none or cannot be read)."""
+    from langgap.catalog.catalog import load_catalog
+
+    try:
+        catalog = load_catalog(spec["catalog"])
+    except (KeyError, LangGapError):
+        return {}
+    return {task.id: task.gate for task in catalog if task.gate is not None}
 
 
 def load_runs(paths: list[str | Path]) -> list[Run]:
@@ -30,6 +64,9 @@ def load_runs(paths: list[str | Path]) -> list[Run]:
     for path in paths:
         with RunStore.open(path) as store:
             spec = store.meta("spec") or store.meta("config") or {}
+            snapshot = store.meta("gate")
             records = store.records()
-        runs.append(Run(f"{spec.get('policy', '?')} ({Path(path).name})", Path(path), spec, records))
+        gates = live_gates(spec) if snapshot is None else snapshot_gates(snapshot)
+        hashes = None if snapshot is None else list(snapshot["sha256"])
+        runs.append(Run(f"{spec.get('policy', '?')} ({Path(path).name})", Path(path), spec, records, gates, hashes))
     return runs

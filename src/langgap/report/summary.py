@@ -16,7 +16,6 @@ from pathlib import Path
 from langgap.catalog.labels import ALL_EXTENDED_DIMENSIONS, EXTENDED_DIMENSIONS, SPLIT_ORDER, SUITE_ORDER
 from langgap.catalog.task import BEYOND_DIMENSIONS, GateResult
 from langgap.engine.plan import repeat_of
-from langgap.errors import LangGapError
 from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Outcome, achieved
 from langgap.report.card import PROTOCOL_ITEMS, protocol_card
 from langgap.report.load import Run
@@ -66,17 +65,6 @@ def rates_by(
             groups[name].append(record)
     names = [n for n in order if n in groups] + sorted(n for n in groups if n not in order)
     return [rate(n, groups[n], gates) for n in names]
-
-
-def recorded_gates(spec: dict) -> dict[str, GateResult]:
-    """The feasibility verdicts recorded for the run's catalog (empty when it has none or cannot be read)."""
-    from langgap.catalog.catalog import load_catalog
-
-    try:
-        catalog = load_catalog(spec["catalog"])
-    except (KeyError, LangGapError):
-        return {}
-    return {task.id: task.gate for task in catalog if task.gate is not None}
 
 
 @dataclass(frozen=True)
@@ -269,6 +257,7 @@ class RunResults:
     spread: list[SpreadRow]  # between-seed spread (runs with --repeats)
     clips: list[Clip]  # filmed episodes (`--video`)
     capped: dict[str, str]  # task -> why it is marked ⚠ (unproven: oracle below target; or infeasible (proof))
+    gate_source: str  # where the verdicts behind Oracle % and ⚠ come from (`Run.gate_source`)
 
     @property
     def label(self) -> str:
@@ -290,7 +279,7 @@ def results(run: Run) -> RunResults:
     for r in given:
         if r.judged:
             per_outcome[r.task_id][str(r.outcome)] += 1
-    gates = recorded_gates(run.spec)
+    gates = run.gates
     tasks = [
         TaskRow(t, (i := info[t.group]).dimension, i.instruction, i.suite, i.split, dict(per_outcome[t.group]))
         for t in rates_by(given, lambda r: r.task_id, gates=gates)
@@ -320,6 +309,7 @@ def results(run: Run) -> RunResults:
         spread=spread(given, int(run.spec.get("seed", 0))),
         clips=clips(run),
         capped={t.rate.group: why for t in tasks if (why := capped_because(t.rate, gates.get(t.rate.group)))},
+        gate_source=run.gate_source,
     )
 
 
@@ -371,6 +361,7 @@ class Summary:
                     "spec": run.spec,
                     "card": run.card,
                     "capped_tasks": run.capped,
+                    "gate": run.gate_source,
                 }
             )
             for section, rows in sections.items():

@@ -28,8 +28,8 @@ PRIVILEGED_NOTE = (
 )
 PUBLISHED_NOTE = "Rows marked published are the LangGap paper's figures as printed (20 episodes per task), not re-run."
 CEILING_NOTE = (
-    "Oracle % is the scripted oracle's success on the same tasks and init states (the catalog's recorded "
-    "feasibility verdicts); Relative % is the rate as a share of it."
+    "Oracle % is the scripted oracle's success on the same tasks and init states (the feasibility verdicts "
+    "stored with the run when it was created); Relative % is the rate as a share of it."
 )
 SELECTION_NOTE = (
     "Tasks: `--tasks feasible` (the default) runs the tasks the feasibility gate accepted; `--tasks all` adds "
@@ -47,7 +47,7 @@ def selection_text(run: RunResults) -> str:
     else:
         chosen = f"a list of {len(selection.split(','))}" if "," in selection else f"`{selection}`"
     capped = "; ".join(f"{task} ({why})" for task, why in sorted(run.capped.items()))
-    return f"tasks: {chosen}" + (f"; ⚠ {capped}" if capped else "")
+    return f"tasks: {chosen}" + (f"; ⚠ {capped}" if capped else "") + f"; {run.gate_source}"
 
 
 def notes(summary: Summary, published: Published | None, *, ceiling: bool = True) -> list[str]:
