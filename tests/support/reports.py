@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from dataclasses import asdict
 from pathlib import Path
 
+from langgap.catalog.task import GateResult
 from langgap.records import EpisodeRecord, Outcome, Status, classify
 from langgap.store import RunStore
 
@@ -49,10 +51,17 @@ def episode(task_id: str, init_index: int, *, success=False, reached=None, condi
     )
 
 
-def write_run(directory: Path, policy: str, records: list[EpisodeRecord], **spec) -> Path:
-    """A run store holding `records`, with a spec naming `policy` (and `spec`'s other fields)."""
+def write_run(
+    directory: Path, policy: str, records: list[EpisodeRecord], gates: dict[str, GateResult] | None = None, **spec
+) -> Path:
+    """A run store holding `records`, with a spec naming `policy` (and `spec`'s other fields); `gates`, the
+    gate verdicts stored with it (None: a run stored before runs kept them)."""
     spec = {"policy": policy, "physics": {"mujoco": "3.2.3"}, "seed": 0, "style": "libero", **spec}
-    with RunStore.create(directory, {"spec": spec}) as store:
+    meta = {"spec": spec}
+    if gates is not None:
+        verdicts = {t: asdict(g) for t, g in gates.items()}
+        meta["gate"] = {"file": "test.gate.json", "sha256": ["0" * 64], "tasks": verdicts}
+    with RunStore.create(directory, meta) as store:
         for record in records:
             store.write(record)
     return directory

@@ -34,6 +34,7 @@ _LATEX_ESCAPES = (
     ("*", ""),
     ("×", r"$\times$"),
     ("†", r"$^\dagger$"),
+    ("<", r"$<$"),
 )
 
 
@@ -59,6 +60,11 @@ def latex_table(table: Table) -> str:
     return "\n".join(lines) + "\n"
 
 
+def answers(summary: Summary) -> list[str]:
+    """The sentences a report opens with, one per run (`langgap.report.answer`)."""
+    return [run.answer.text for run in summary.runs]
+
+
 def _header(summary: Summary, published: Published | None) -> str:
     """One line per run (where it is, its size, its tasks), then the notes; the protocol card follows."""
     runs = "".join(
@@ -69,15 +75,20 @@ def _header(summary: Summary, published: Published | None) -> str:
 
 
 def to_markdown(summary: Summary, published: Published | None = None, tables: list[Table] | None = None) -> str:
+    """The report in Markdown, opening with the answer; `tables` (the diagnosis) instead of the full report."""
+    opening = "".join(f"{sentence}\n\n" for sentence in answers(summary))
     body = "\n".join(markdown_table(t) for t in (full_report(summary, published) if tables is None else tables))
     if tables is None:
-        return _header(summary, published) + body
-    return body + "".join(f"\n{note}\n" for note in notes(summary, published, ceiling=False))
+        return opening + _header(summary, published) + body
+    return opening + body + "".join(f"\n{note}\n" for note in notes(summary, published, ceiling=False))
 
 
-def to_latex(summary: Summary, published: Published | None = None) -> str:
-    body = "\n".join(latex_table(t) for t in full_report(summary, published))
-    return body + "".join(f"\n\\noindent {_latex_escape(note)}\n" for note in notes(summary, published))
+def to_latex(summary: Summary, published: Published | None = None, tables: list[Table] | None = None) -> str:
+    """The report in LaTeX, opening with the answer; `tables` (the diagnosis) instead of the full report."""
+    opening = "".join(f"\\noindent {_latex_escape(sentence)}\n\n" for sentence in answers(summary))
+    body = "\n".join(latex_table(t) for t in (full_report(summary, published) if tables is None else tables))
+    shown = notes(summary, published, ceiling=tables is None)
+    return opening + body + "".join(f"\n\\noindent {_latex_escape(note)}\n" for note in shown)
 
 
 def to_json(summary: Summary, published: Published | None = None) -> str:
@@ -129,8 +140,18 @@ def render(paths: list[str | Path], fmt: str = "md", *, published: bool = True, 
     return FORMATS[fmt](summary, load_published() if published else None)
 
 
-def diagnosis_text(paths: list[str | Path], *, published: bool = False) -> str:
-    """The short diagnosis (Markdown): the protocol card, success by dimension, what each policy did instead."""
-    summary = summarize(load_runs(paths))
+# The formats that show the short diagnosis (`report --summary`): json and csv hold every number already.
+DIAGNOSIS_FORMATS: dict[str, Callable[[Summary, Published | None, list[Table]], str]] = {
+    "md": to_markdown,
+    "latex": to_latex,
+}
+
+
+def diagnosis_text(
+    paths: list[str | Path], fmt: str = "md", *, published: bool = False, allow_mismatch: bool = False
+) -> str:
+    """The short diagnosis: the answer, the protocol card, success by dimension, what each policy did instead
+    (`fmt`: a name in `DIAGNOSIS_FORMATS`; `allow_mismatch` pairs runs whose protocols differ)."""
+    summary = summarize(load_runs(paths), allow_mismatch=allow_mismatch)
     reference = load_published() if published else None
-    return to_markdown(summary, reference, diagnosis(summary, reference))
+    return DIAGNOSIS_FORMATS[fmt](summary, reference, diagnosis(summary, reference))

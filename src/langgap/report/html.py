@@ -1,5 +1,6 @@
-"""The report as one self-contained HTML page: every table of the Markdown report, sortable and
-filterable in the page, a per-dimension chart with 95 % intervals and coloured confusion matrices.
+"""The report as one self-contained HTML page: the answer first (one sentence per run), a stacked
+outcome bar per dimension, then every table of the Markdown report, sortable and filterable in the
+page, and coloured confusion matrices.
 
 Nothing is fetched: styles, script and chart are inline, so the page opens from `file://` or any
 static server. The summary's JSON is embedded too, so the page's numbers can be checked against it.
@@ -14,9 +15,10 @@ import urllib.parse
 from pathlib import Path
 
 from langgap.catalog.labels import DIMENSION_LABEL
+from langgap.records import Outcome
 from langgap.report.published import Published
 from langgap.report.summary import Summary, shown_dimensions
-from langgap.report.tables import Table, full_report, notes, selection_text
+from langgap.report.tables import OUTCOME_NAME, Table, full_report, notes, selection_text
 
 MEDIA_DIR = "media"
 
@@ -29,6 +31,7 @@ th { background: #f3f3f3; cursor: pointer; user-select: none; }
 th[aria-sort=ascending]::after { content: " ▲"; } th[aria-sort=descending]::after { content: " ▼"; }
 input.filter { margin: .25em 0; padding: .2em .4em; width: 20em; }
 .note { color: #555; font-size: .9em; }
+#answer p { font-size: 1.1em; border-left: 4px solid #2ca02c; padding: .2em .8em; background: #f6faf6; }
 svg text { font: 11px system-ui, sans-serif; }
 select.column-filter { margin: .25em 0 .25em .5em; }
 table.heatmap td { text-align: center; min-width: 2em; }
@@ -147,52 +150,74 @@ def _gallery(table: Table, ident: str, media: dict[str, str]) -> str:
 
 
 _COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b")
+# Each outcome's colour in the stacked bars: success at the bottom, the outcomes that explain failures above.
+OUTCOME_COLOURS = {
+    Outcome.SUCCESS: "#2ca02c",
+    Outcome.DID_SOURCE_TASK: "#ff7f0e",
+    Outcome.WRONG_ORDER: "#9467bd",
+    Outcome.DID_OTHER_TASK: "#d62728",
+    Outcome.NO_GOAL_REACHED: "#bbbbbb",
+    Outcome.POLICY_ERROR: "#555555",
+}
 
 
-def dimension_chart(summary: Summary) -> str:
-    """Success per dimension (and on the originals) with 95 % intervals, runs side by side, as inline SVG."""
+def outcome_chart(summary: Summary) -> str:
+    """Per dimension (and the originals), one stacked bar per run: the share of each outcome (success, did
+    source task, other task, no goal, ...), with the success rate's 95 % interval, as inline SVG."""
     groups = ["original", *shown_dimensions(summary.runs)]
-    width, height, left, bottom = 760, 260, 40, 40
+    width, height, left, bottom = 760, 280, 40, 56
     slot = (width - left) / len(groups)
     bar = slot * 0.8 / max(1, len(summary.runs))
-    parts = [f'<svg id="dimension-chart" width="{width}" height="{height + 20}" role="img">']
-    for tick in (0, 25, 50, 75, 100):
-        y = height - bottom - tick / 100 * (height - bottom - 10)
-        parts.append(f'<line x1="{left}" x2="{width}" y1="{y:.1f}" y2="{y:.1f}" stroke="#eee"/>')
-        parts.append(f'<text x="{left - 6}" y="{y + 4:.1f}" text-anchor="end">{tick}</text>')
+
+    def y(value: float) -> float:
+        return height - bottom - value * (height - bottom - 10)
+
+    parts = [f'<svg id="outcome-chart" width="{width}" height="{height + 20}" role="img">']
+    for tick in (0.0, 0.25, 0.5, 0.75, 1.0):
+        parts.append(f'<line x1="{left}" x2="{width}" y1="{y(tick):.1f}" y2="{y(tick):.1f}" stroke="#eee"/>')
+        parts.append(f'<text x="{left - 6}" y="{y(tick) + 4:.1f}" text-anchor="end">{100 * tick:.0f}</text>')
     for j, group in enumerate(groups):
-        x0 = left + j * slot + slot * 0.1
         label = html.escape(DIMENSION_LABEL[group])
-        parts.append(
-            f'<text x="{left + (j + 0.5) * slot:.1f}" y="{height - bottom + 16}" text-anchor="middle">{label}</text>'
-        )
+        parts.append(f'<text x="{left + (j + 0.5) * slot:.1f}" y="{y(0) + 30}" text-anchor="middle">{label}</text>')
         for i, run in enumerate(summary.runs):
-            rates = {r.group: r for r in run.by_dimension} | {"original": run.source("original")}
-            rate = rates.get(group)
-            if rate is None or rate.episodes == 0:
+            row = next((o for o in run.outcomes if o.group == group), None)
+            if row is None or row.episodes == 0:
                 continue
-            low, high = rate.ci
-
-            def y(value: float) -> float:
-                return height - bottom - value * (height - bottom - 10)
-
-            x = x0 + i * bar
-            colour = _COLOURS[i % len(_COLOURS)]
-            title = html.escape(f"{run.label} — {DIMENSION_LABEL[group]}: {100 * rate.rate:.1f} %")
-            parts.append(
-                f'<rect class="bar" x="{x:.1f}" y="{y(rate.rate):.1f}" width="{bar * 0.9:.1f}" '
-                f'height="{y(0) - y(rate.rate):.1f}" fill="{colour}"><title>{title}</title></rect>'
-            )
+            x = left + j * slot + slot * 0.1 + i * bar
+            parts.append(f'<g class="stack" data-run="{html.escape(run.label)}" data-group="{group}">')
+            base = 0.0
+            for outcome, colour in OUTCOME_COLOURS.items():
+                if (share := row.shares[outcome]) <= 0:
+                    continue
+                name = f"{DIMENSION_LABEL[group]}: {OUTCOME_NAME[outcome]}"
+                title = html.escape(f"{run.label} — {name} {100 * share:.1f} %")
+                parts.append(
+                    f'<rect class="segment" data-outcome="{outcome}" x="{x:.1f}" y="{y(base + share):.1f}" '
+                    f'width="{bar * 0.9:.1f}" height="{y(base) - y(base + share):.1f}" fill="{colour}">'
+                    f"<title>{title}</title></rect>"
+                )
+                base += share
+            rates = {r.group: r for r in run.by_dimension} | {"original": run.source("original")}
+            low, high = rates[group].ci
             middle = x + bar * 0.45
             parts.append(
                 f'<line x1="{middle:.1f}" x2="{middle:.1f}" y1="{y(low):.1f}" y2="{y(high):.1f}" stroke="#000"/>'
             )
-    legend = "".join(
-        f'<tspan fill="{_COLOURS[i % len(_COLOURS)]}">■ </tspan><tspan>{html.escape(run.label)}   </tspan>'
-        for i, run in enumerate(summary.runs)
+            parts.append(f'<text x="{middle:.1f}" y="{y(0) + 13}" text-anchor="middle">{i + 1}</text></g>')
+    runs = "".join(f"<tspan>{i + 1}: {html.escape(run.label)}   </tspan>" for i, run in enumerate(summary.runs))
+    outcomes = "".join(
+        f'<tspan fill="{colour}">■ </tspan><tspan>{OUTCOME_NAME[outcome]}   </tspan>'
+        for outcome, colour in OUTCOME_COLOURS.items()
     )
-    parts.append(f'<text x="{left}" y="{height + 12}">{legend}</text></svg>')
+    parts.append(f'<text x="{left}" y="{height - 4}">{outcomes}</text>')
+    parts.append(f'<text x="{left}" y="{height + 14}">{runs}</text></svg>')
     return "".join(parts)
+
+
+def answer_block(summary: Summary) -> str:
+    """The sentences the page opens with, one per run."""
+    sentences = "".join(f'<p class="answer">{html.escape(run.answer.text)}</p>' for run in summary.runs)
+    return f'<div id="answer">{sentences}</div>'
 
 
 def html_page(summary: Summary, published: Published | None = None, media: dict[str, str] | None = None) -> str:
@@ -207,10 +232,11 @@ def html_page(summary: Summary, published: Published | None = None, media: dict[
     return (
         '<!doctype html><html lang="en"><head><meta charset="utf-8">'
         f"<title>LangGap report — {runs}</title><style>{_STYLE}</style></head><body>"
-        f"<h1>LangGap report</h1><ul>{selections}</ul>"
+        f"<h1>LangGap report</h1>{answer_block(summary)}"
+        + "<h2>What each run did, by dimension (outcome shares; the line: success's 95 % Wilson interval)</h2>"
+        + outcome_chart(summary)
+        + f"<ul>{selections}</ul>"
         + "".join(f'<p class="note">{html.escape(n)}</p>' for n in notes(summary, published))
-        + "<h2>Success by dimension (95 % Wilson intervals)</h2>"
-        + dimension_chart(summary)
         + tables
         + f'<script type="application/json" id="langgap-summary">{data}</script>'
         + f"<script>{_SCRIPT}</script></body></html>"

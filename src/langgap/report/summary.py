@@ -17,6 +17,7 @@ from langgap.catalog.labels import ALL_EXTENDED_DIMENSIONS, EXTENDED_DIMENSIONS,
 from langgap.catalog.task import BEYOND_DIMENSIONS, GateResult
 from langgap.engine.plan import repeat_of
 from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Outcome, achieved
+from langgap.report.answer import Answer
 from langgap.report.card import PROTOCOL_ITEMS, protocol_card
 from langgap.report.load import Run
 from langgap.report.stats import PairedTest, Rate
@@ -219,6 +220,32 @@ def wording_tests(records: list[EpisodeRecord]) -> list[PairedTest]:
     return [t for t in tests if t is not None]
 
 
+def against_sources(records: list[EpisodeRecord]) -> PairedTest | None:
+    """Every extended episode against its source task's episode on the same init state, seed and condition
+    (a source's episode stands beside each of its extended tasks): the drop the extended tasks make."""
+    originals = {(r.task_id, r.init_index, r.seed, r.condition): r for r in records if r.kind == "original"}
+    extended = {r.key: r for r in records if r.kind == "extended"}
+    sources = {
+        key: source
+        for key, r in extended.items()
+        if (source := originals.get((r.source, r.init_index, r.seed, r.condition))) is not None
+    }
+    return paired("originals vs extended", sources, extended)
+
+
+def default_task(records: list[EpisodeRecord]) -> Rate:
+    """The default-task rate of extended episodes: the share that did the scene's original task instead
+    (as a `Rate`, for its interval)."""
+    judged = [r for r in records if r.judged]
+    return Rate(
+        group="did_source_task",
+        episodes=len(judged),
+        successes=sum(r.outcome == Outcome.DID_SOURCE_TASK for r in judged),
+        gaps=len(records) - len(judged),
+        tasks=len({r.task_id for r in records}),
+    )
+
+
 def confusion(records: list[EpisodeRecord]) -> dict[str, dict[str, dict[str, int]]]:
     """Per scene: intended task -> achieved task -> judged episode count."""
     matrices: dict[str, dict[str, Counter]] = defaultdict(lambda: defaultdict(Counter))
@@ -258,6 +285,9 @@ class RunResults:
     clips: list[Clip]  # filmed episodes (`--video`)
     capped: dict[str, str]  # task -> why it is marked ⚠ (unproven: oracle below target; or infeasible (proof))
     gate_source: str  # where the verdicts behind Oracle % and ⚠ come from (`Run.gate_source`)
+    against_originals: PairedTest | None  # extended episodes against their sources' (`against_sources`)
+    default_task: Rate  # extended episodes that did the scene's original task instead (`default_task`)
+    against_blind: PairedTest | None = None  # extended episodes against a compared `blind` run's (`summarize`)
 
     @property
     def label(self) -> str:
@@ -266,6 +296,14 @@ class RunResults:
 
     def source(self, group: str) -> Rate:
         return next(r for r in self.by_source if r.group == group)
+
+    @property
+    def answer(self) -> Answer:
+        """The run's opening sentence and what it rests on."""
+        original, extended = self.source("original"), self.source("extended")
+        return Answer(
+            self.label, original, extended, self.default_task, self.against_originals, self.against_blind, self.gaps
+        )
 
 
 def results(run: Run) -> RunResults:
@@ -310,6 +348,8 @@ def results(run: Run) -> RunResults:
         clips=clips(run),
         capped={t.rate.group: why for t in tasks if (why := capped_because(t.rate, gates.get(t.rate.group)))},
         gate_source=run.gate_source,
+        against_originals=against_sources(given),
+        default_task=default_task(extended),
     )
 
 
@@ -348,7 +388,7 @@ class Summary:
             "per_split": lambda run: run.by_split,
             "per_task": lambda run: [t.rate for t in run.tasks],
         }
-        for section in (*sections, "outcomes", "conditions", "wording", "spread", "videos"):
+        for section in ("answers", *sections, "outcomes", "conditions", "wording", "spread", "videos"):
             out[section] = []
         for run in self.runs:
             out["runs"].append(
@@ -368,6 +408,7 @@ class Summary:
                 for row in rows(run):
                     data = row.as_dict()
                     out[section].append({"run": run.name, "id": data.pop("group"), **data})
+            out["answers"].append({"run": run.name, **run.answer.as_dict()})
             out["outcomes"] += [{"run": run.name, **o.as_dict()} for o in run.outcomes]
             out["conditions"] += [{"run": run.name, **t.as_dict()} for t in run.conditions]
             out["wording"] += [{"run": run.name, **t.as_dict()} for t in run.wording]
@@ -377,22 +418,40 @@ class Summary:
         return out
 
 
+def protocol_differences(a: RunResults, b: RunResults) -> list[str]:
+    """The protocol items in which two runs differ (runs are paired episode by episode only when none)."""
+    return [item for item in PROTOCOL_ITEMS if a.card[item] != b.card[item]]
+
+
+BLIND_POLICY = "blind"  # the reference that does the scene's original task whatever it is asked
+
+
+def keyed(run: Run, member: Callable[[EpisodeRecord], bool] = lambda r: True) -> dict[tuple, EpisodeRecord]:
+    """A run's episodes (those `member` keeps) by key, for pairing with another run's."""
+    return {r.key: r for r in run.records if member(r)}
+
+
 def summarize(runs: list[Run], *, allow_mismatch: bool = False) -> Summary:
     """Aggregate runs once, for every table and format. Runs whose protocols differ from the first
-    run's are not paired episode by episode unless `allow_mismatch` is given."""
+    run's are not paired episode by episode unless `allow_mismatch` is given; nor is a run paired with
+    a compared `blind` run whose protocol differs from its own."""
     results_ = [results(run) for run in runs]
     first = results_[0]
-    mismatches = {
-        other.name: [item for item in PROTOCOL_ITEMS if other.card[item] != first.card[item]] for other in results_[1:]
-    }
+    mismatches = {other.name: protocol_differences(first, other) for other in results_[1:]}
     mismatches = {name: items for name, items in mismatches.items() if items}
     refused = bool(mismatches) and not allow_mismatch
-
-    def keyed(run: Run) -> dict[tuple, EpisodeRecord]:
-        return {r.key: r for r in run.records}
-
     comparisons = []
     if not refused:
         tests = (paired(f"{runs[0].name} vs {other.name}", keyed(runs[0]), keyed(other)) for other in runs[1:])
         comparisons = [t for t in tests if t is not None]
+    blind = next((i for i, run in enumerate(runs) if run.spec.get("policy") == BLIND_POLICY), None)
+    for run, result in zip(runs, results_, strict=True):
+        if blind is None or run is runs[blind]:
+            continue
+        if allow_mismatch or not protocol_differences(results_[blind], result):
+
+            def extended(r: EpisodeRecord) -> bool:
+                return r.kind == "extended" and r.condition == "given"
+
+            result.against_blind = paired("blind vs extended", keyed(runs[blind], extended), keyed(run, extended))
     return Summary(results_, comparisons, mismatches, refused)

@@ -1,0 +1,108 @@
+"""The answer a report opens with: one sentence per run that a reader can quote.
+
+It says how well the policy reads its instruction — success on the original tasks against the
+extended ones (with the extended rate's interval and the paired test), the oracle's ceiling on the
+extended tasks, and how often the policy did the scene's original task instead (the default-task
+rate, with its interval). The verdict word compares the extended rate with the original one:
+`READS` of it or more reads the instruction, `WEAKLY` or more reads it weakly, less hardly reads it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from langgap.report.stats import PairedTest, Rate
+
+READS = 0.8  # extended success at this share of original success or more: the policy reads its instruction
+WEAKLY = 0.2  # at this share or more (below READS): it reads its instruction weakly; below: hardly
+SIGNIFICANT = 0.05
+
+
+def percent(x: float) -> str:
+    return f"{100 * x:.0f} %"
+
+
+def interval(r: Rate) -> str:
+    low, high = r.ci
+    return f"[{100 * low:.0f}, {100 * high:.0f}]"
+
+
+def p_text(test: PairedTest) -> str:
+    return "p < 0.001" if test.p_value < 0.001 else f"p = {test.p_value:.2g}"
+
+
+@dataclass(frozen=True)
+class Answer:
+    """What one run's opening sentence says (every number from the summary)."""
+
+    label: str
+    original: Rate  # original tasks
+    extended: Rate  # extended tasks
+    default_task: Rate  # extended episodes that did the scene's original task instead
+    against_originals: PairedTest | None  # extended episodes against their sources'
+    against_blind: PairedTest | None  # extended episodes against a compared blind run's
+    gaps: int
+
+    @property
+    def verdict(self) -> str | None:
+        """How well the policy reads its instruction (None: no extended tasks, or no original success to
+        compare with)."""
+        if not self.extended.episodes or not self.original.episodes or not self.original.rate:
+            return None
+        share = self.extended.rate / self.original.rate
+        if share >= READS:
+            return "reads its instruction"
+        return "reads its instruction weakly" if share >= WEAKLY else "hardly reads its instruction"
+
+    def _tests(self) -> str:
+        parts = []
+        if (test := self.against_originals) is not None:
+            parts.append(f"paired with their originals: {p_text(test)}")
+        if (test := self.against_blind) is not None:
+            blind = percent(test.successes_a / test.pairs)
+            parts.append(f"against blind, {blind} on the same {test.pairs} episodes: {p_text(test)}")
+        return f" ({'; '.join(parts)})" if parts else ""
+
+    def _instead(self) -> str:
+        failures = self.extended.episodes - self.extended.successes
+        if not failures:
+            return "it failed no extended episode"
+        default = self.default_task
+        return (
+            f"{percent(default.successes / failures)} of its extended-task failures did the scene's original task "
+            f"instead ({percent(default.rate)} {interval(default)} of its extended episodes)"
+        )
+
+    @property
+    def text(self) -> str:
+        """The sentence."""
+        original, extended = self.original, self.extended
+        on_originals = f"{percent(original.rate)} on original tasks" if original.episodes else "no original tasks"
+        if not extended.episodes:
+            return (
+                f"{self.label}: {on_originals} {interval(original)}; the run has no extended tasks, so it does not "
+                "show whether the policy reads its instruction."
+            )
+        if (verdict := self.verdict) is None:
+            verdict = "does no original task, so the gap cannot be measured" if original.episodes else ""
+        head = f"{self.label} {verdict}" if verdict else self.label
+        oracle = (
+            "no oracle verdict covers them"
+            if extended.oracle_rate is None
+            else f"the oracle reaches {percent(extended.oracle_rate)} on them"
+        )
+        were = "episode was a gap" if self.gaps == 1 else "episodes were gaps"
+        gaps = f"; {self.gaps} {were}, left out" if self.gaps else ""
+        return (
+            f"{head}: {on_originals} vs {percent(extended.rate)} {interval(extended)} on extended tasks"
+            f"{self._tests()}; {oracle}; {self._instead()}{gaps}."
+        )
+
+    def as_dict(self) -> dict:
+        tests = {"against_originals": self.against_originals, "against_blind": self.against_blind}
+        return {
+            "text": self.text,
+            "verdict": self.verdict,
+            "default_task_rate": self.default_task.rate if self.default_task.episodes else None,
+            **{name: None if t is None else t.as_dict() for name, t in tests.items()},
+        }

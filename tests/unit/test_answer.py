@@ -1,0 +1,108 @@
+"""The sentence every report opens with, on constructed runs: how well the policy reads its instruction."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from langgap.catalog.task import GateResult
+from langgap.report import load_runs, render, summarize
+from tests.support.harness import run_cli
+from tests.support.reports import SOURCE, TASKS, episode, memoriser, reader, write_run
+
+RAMEKIN, STOVE = "spatial/s0/ramekin-on-plate", "spatial/s0/bowl-on-stove"
+
+
+def _answers(*runs, allow_mismatch=False) -> list[str]:
+    return [run.answer.text for run in summarize(load_runs(list(runs)), allow_mismatch=allow_mismatch).runs]
+
+
+def test_a_policy_that_reads_its_instruction(tmp_path):
+    (text,) = _answers(write_run(tmp_path / "vla", "my-vla", reader()))
+    assert text == (
+        "my-vla (vla) reads its instruction: 100 % on original tasks vs 88 % [53, 98] on extended tasks (paired "
+        "with their originals: p = 1); no oracle verdict covers them; 0 % of its extended-task failures did the "
+        "scene's original task instead (0 % [0, 32] of its extended episodes)."
+    )
+
+
+def test_a_policy_that_reads_weakly_beside_the_oracles_ceiling(tmp_path):
+    # Originals all done; the ramekin task done, the stove task never: the scene's original task instead.
+    records = [episode(SOURCE, k, success=True, reached={SOURCE: 5}) for k in range(4)]
+    records += [episode(RAMEKIN, k, success=True, reached={RAMEKIN: 5}) for k in range(4)]
+    records += [episode(STOVE, k, reached={SOURCE: 5}) for k in range(4)]
+    gates = {t: GateResult(episodes=4, successes=4 - (t == STOVE), feasible=True, inits=4) for t in TASKS}
+    (text,) = _answers(write_run(tmp_path / "vla", "my-vla", records, gates=gates))
+    assert text == (
+        "my-vla (vla) reads its instruction weakly: 100 % on original tasks vs 50 % [22, 78] on extended tasks "
+        "(paired with their originals: p = 0.12); the oracle reaches 88 % on them; 100 % of its extended-task "
+        "failures did the scene's original task instead (50 % [22, 78] of its extended episodes)."
+    )
+
+
+def test_a_policy_that_hardly_reads_against_a_compared_blind_run(tmp_path):
+    blind = write_run(tmp_path / "blind", "blind", memoriser(privileged=True))
+    vla = write_run(tmp_path / "vla", "my-vla", memoriser())
+    _, text = _answers(blind, vla)
+    assert text.startswith("my-vla (vla) hardly reads its instruction: 100 % on original tasks vs 0 % [0, 35]")
+    assert "(paired with their originals: p = 0.016; against blind, 0 % on the same 7 episodes: p = 1)" in text
+    assert text.endswith("100 % of its extended-task failures did the scene's original task instead "
+                         "(100 % [65, 100] of its extended episodes); 1 episode was a gap, left out.")  # fmt: skip
+    # The reader against the same blind run: it succeeds where blind did the original task.
+    reads = _answers(blind, write_run(tmp_path / "reader", "my-vla", reader()))[1]
+    assert "against blind, 0 % on the same 7 episodes: p = 0.031" in reads
+
+
+def test_a_blind_run_with_another_protocol_is_not_paired_unless_allowed(tmp_path):
+    blind = write_run(tmp_path / "blind", "blind", memoriser(privileged=True), physics={"mujoco": "3.3.0"})
+    vla = write_run(tmp_path / "vla", "my-vla", reader())
+    assert "against blind" not in _answers(blind, vla)[1]
+    assert "against blind, 0 % on the same 7 episodes" in _answers(blind, vla, allow_mismatch=True)[1]
+
+
+def test_runs_without_extended_tasks_or_without_original_success_say_what_cannot_be_told(tmp_path):
+    originals = write_run(tmp_path / "o", "my-vla", [episode(SOURCE, k, success=k < 3) for k in range(4)])
+    assert _answers(originals) == [
+        "my-vla (o): 75 % on original tasks [30, 95]; the run has no extended tasks, so it does not show whether "
+        "the policy reads its instruction."
+    ]
+    nothing = write_run(tmp_path / "n", "my-vla", [episode(t, k) for t in TASKS for k in range(2)])
+    (text,) = _answers(nothing)
+    assert text.startswith("my-vla (n) does no original task, so the gap cannot be measured: 0 % on original tasks")
+
+
+@pytest.fixture
+def runs(tmp_path):
+    return [
+        write_run(tmp_path / "blind", "blind", memoriser(privileged=True)),
+        write_run(tmp_path / "vla", "my-vla", reader()),
+    ]
+
+
+def test_every_report_opens_with_the_answer(runs):
+    blind, vla = _answers(*runs)
+    assert render(runs, "md").startswith(f"{blind}\n\n{vla}\n\n")
+    summary = run_cli("report", str(runs[0]), "--compare", str(runs[1]), "--summary")
+    assert summary.returncode == 0 and summary.stdout.startswith(f"{blind}\n\n{vla}\n\n")
+    assert render(runs, "latex").startswith(r"\noindent blind (blind) $^\dagger$ hardly reads its instruction: 100 \%")
+    assert [a["text"] for a in json.loads(render(runs, "json"))["answers"]] == [blind, vla]
+
+
+def test_summary_honours_format_and_allow_mismatch(tmp_path, runs):
+    latex = run_cli("report", *map(str, runs[1:]), "--summary", "--format", "latex", "--no-published")
+    assert latex.returncode == 0 and r"\begin{tabular}" in latex.stdout and "### " not in latex.stdout
+    assert r"\noindent my-vla (vla) reads its instruction" in latex.stdout
+    for fmt in ("json", "csv"):
+        refused = run_cli("report", str(runs[1]), "--summary", "--format", fmt)
+        assert refused.returncode == 2 and refused.stdout == ""
+        assert refused.stderr == (
+            f"error: --summary shows the diagnosis as md or latex; --format {fmt} holds every number of the full "
+            "report: drop --summary\n"
+        )
+    other = write_run(tmp_path / "other", "my-vla", reader(), physics={"mujoco": "3.3.0"})
+    base = ["report", str(runs[0]), "--compare", str(other), "--summary", "--no-published"]
+    refused = run_cli(*base)
+    assert "Runs not compared: their protocols differ" in refused.stdout and "against blind" not in refused.stdout
+    allowed = run_cli(*base, "--allow-mismatch")
+    assert "Runs not compared" not in allowed.stdout and "against blind, 0 % on the same 7" in allowed.stdout
