@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from langgap.report.formats import FORMATS
+from langgap.errors import LangGapError
+from langgap.report.formats import DIAGNOSIS_FORMATS, FORMATS
 
 
 def add_parser(subparsers) -> None:
@@ -13,7 +14,8 @@ def add_parser(subparsers) -> None:
     parser.add_argument(
         "--summary",
         action="store_true",
-        help="only the diagnosis: success by dimension and what the policy did instead",
+        help=f"only the diagnosis: the answer, success by dimension and what the policy did instead "
+        f"(--format {' or '.join(DIAGNOSIS_FORMATS)})",
     )
     parser.add_argument(
         "--no-published",
@@ -37,7 +39,12 @@ def run(args) -> int:
     paths = [args.run, *args.compare]
     published = not args.no_published
     if args.summary:
-        text = diagnosis_text(paths, published=published)
+        if args.format not in DIAGNOSIS_FORMATS:
+            raise LangGapError(
+                f"--summary shows the diagnosis as {' or '.join(DIAGNOSIS_FORMATS)}; --format {args.format} holds "
+                "every number of the full report: drop --summary"
+            )
+        text = diagnosis_text(paths, args.format, published=published, allow_mismatch=args.allow_mismatch)
     else:
         text = render(paths, args.format, published=published, allow_mismatch=args.allow_mismatch)
     print(text, end="")
