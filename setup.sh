@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Install everything, then run the main job:
 #   ./.venv          Python 3.11: LangGap, its pinned simulation stack, Ray, PyTorch (CPU, for small-bc), h5py
-#                    (export-hdf5), the test tools;
+#                    (export-hdf5), the test tools, MkDocs (the documentation site);
 #   ./.venv-lerobot  Python 3.12: LeRobot 0.6.1 with torch, LangGap and the `--env.type=langgap` plugin
 #                    (skip it with --core; set PYTHON312 to choose the interpreter);
 #   Debian chromium  the headless browser the HTML report is tested in (needs apt-get and root).
@@ -42,7 +42,7 @@ if ! "$PYTHON" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))'; then
 fi
 [ -x .venv/bin/python ] || "$PYTHON" -m venv .venv
 .venv/bin/python -m pip install --quiet --upgrade pip
-.venv/bin/python -m pip install --quiet -e ".[dev,ray,train,hdf5]"
+.venv/bin/python -m pip install --quiet -e ".[dev,ray,train,hdf5,docs]"
 # For the tests only: openpi's own client and server packages (the reference the `openpi` policy is
 # tested against). They pin numpy<2, which would downgrade the simulation stack's numpy; the modules
 # used (msgpack_numpy, image_tools, WebsocketPolicyServer) work with numpy 2, so they go in without
