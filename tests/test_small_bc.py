@@ -68,7 +68,9 @@ def test_policy_reads_the_instruction_and_is_deterministic(checkpoint, catalog):
     from langgap.sim.env import EnvOptions, TaskEnv
 
     policy = make_policy("small-bc", {"checkpoint": str(checkpoint)})
-    assert policy.spec.privileged and policy.spec.chunk == 8 and policy.spec.replan == 2
+    # It reads simulator state but is never told the goal: a learned policy under test.
+    assert policy.spec.sees_state and not policy.spec.sees_goal
+    assert policy.spec.chunk == 8 and policy.spec.replan == 2
     task = catalog.get(TINY_TASK)
     with TaskEnv(task, EnvOptions(privileged=True)) as env:
         env.reset(0)

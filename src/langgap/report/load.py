@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from langgap.records import EpisodeRecord
+from langgap.records import EpisodeRecord, Privilege, privilege
 from langgap.store import RunStore
 
 
@@ -19,9 +19,10 @@ class Run:
     records: list[EpisodeRecord]
 
     @property
-    def privileged(self) -> bool:
-        """The policy was given the goal or simulator state: a scripted reference, not a policy under test."""
-        return any(r.privileged for r in self.records)
+    def privilege(self) -> Privilege:
+        """What the policy was given beyond a policy under test (`goal`: a scripted reference; `state`:
+        it read simulator state)."""
+        return privilege(self.records)
 
 
 def load_runs(paths: list[str | Path]) -> list[Run]:
