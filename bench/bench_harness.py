@@ -167,7 +167,7 @@ def authors(episodes: int, workers: int, policy: str) -> None:
     agent = make_policy(policy)
     start = time.perf_counter()
     for task in tasks:
-        options = EnvOptions(cameras=CAMERAS, image_size=256, hard_reset=True, privileged=agent.spec.privileged)
+        options = EnvOptions(cameras=CAMERAS, image_size=256, hard_reset=True, privileged=agent.spec.sees_state)
         with TaskEnv(task, options) as env:
             for k in range(episodes):
                 # Their loop rendered both cameras at every step, whatever the policy looked at.

@@ -71,7 +71,12 @@ def test_resume_skips_done_and_extend_grows_the_run(short_catalog, tmp_path):
 
 
 def test_policy_output_errors_are_policy_failures(short_catalog, tmp_path):
-    for name, message in (("NanPolicy", "non-finite"), ("WrongShapePolicy", "shape")):
+    for name, message in (
+        ("NanPolicy", "non-finite"),
+        ("WrongShapePolicy", "shape"),
+        # Refused, never cut: the policy, the declared and the received lengths.
+        ("LongChunkPolicy", "LongChunkPolicy: policy returned a chunk of 3 actions; its spec declares chunk=2"),
+    ):
         run = tmp_path / name
         _eval(short_catalog, run, policy=f"tests.support.policies:{name}", episodes=1)
         rows = store_rows(run)
@@ -318,7 +323,7 @@ def test_report_formats(short_catalog, tmp_path):
     rows = list(csv.DictReader((tmp_path / "ep.csv").open()))
     assert len(rows) == 12 and {r["condition"] for r in rows} == {"given", "empty"}
     assert r"\toprule" in run_cli("report", str(run), "--format", "latex").stdout
-    assert run_cli("report", str(run), "--format", "csv").stdout.startswith("run,privileged,table,group")
+    assert run_cli("report", str(run), "--format", "csv").stdout.startswith("run,privilege,table,group")
 
 
 def _cli_eval(short_catalog, run, policy, *extra):

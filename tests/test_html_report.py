@@ -56,7 +56,9 @@ def _filmed(run: Path, records: list, filmed: dict[tuple[str, int], int]) -> lis
 def test_the_html_report_in_a_real_browser(tmp_path):
     clips = {("spatial/s0/ramekin-on-plate", 1): 30, (SOURCE, 0): 20, ("spatial/s0/bowl-on-stove", 0): 25}
     runs = [
-        write_run(tmp_path / "blind", "blind", _filmed(tmp_path / "blind", memoriser(privileged=True), clips)),
+        write_run(
+            tmp_path / "blind", "blind", _filmed(tmp_path / "blind", memoriser(sees_state=True, sees_goal=True), clips)
+        ),
         write_run(tmp_path / "vla", "my-vla", reader()),
     ]
     result = run_cli("report", str(runs[0]), "--compare", str(runs[1]), "--html", str(tmp_path / "html"))

@@ -36,6 +36,8 @@ def test_two_workers_sharing_one_batching_policy_give_the_episodes_of_unshared_w
     two_tasks = ["--tasks", "spatial/s0/black-bowl-*"]
     own = _eval(short_catalog, tmp_path / "own", *recorder("own.log"), *two_tasks)
     assert own.returncode == 0, own.stderr
+    own_rows = store_rows(tmp_path / "own")
+    assert len({r["policy_config_hash"] for r in own_rows}) == 1
     counted = {}
     for max_batch in (2, 1):
         run = tmp_path / f"shared-{max_batch}"
@@ -45,6 +47,8 @@ def test_two_workers_sharing_one_batching_policy_give_the_episodes_of_unshared_w
         )  # fmt: skip
         assert result.returncode == 0, result.stderr
         assert _episodes(run) == _episodes(tmp_path / "own")
+        # The same policy, the same provenance: batching settings are not part of the policy's config.
+        assert {r["policy_config_hash"] for r in store_rows(run)} == {r["policy_config_hash"] for r in own_rows}
         assert {r["worker"] for r in store_rows(run)} == {0, 1}
         queries, calls = map(int, SUMMARY.search(result.stdout).groups())
         sizes = [int(n) for n in (tmp_path / f"{max_batch}.log").read_text().split()]  # act_batch's log

@@ -127,7 +127,7 @@ def test_langgap_serve_matches_in_process_with_images_and_privileged_state(catal
     port = free_port()
     with running(langgap_serve(port, "tests.support.probe_policy:ProbePolicy"), port):
         remote = OpenpiPolicy(port=port)
-        assert remote.spec.cameras and remote.spec.privileged and remote.spec.image_size == 64
+        assert remote.spec.cameras and remote.spec.sees_state and remote.spec.sees_goal and remote.spec.image_size == 64
         remote_outcomes = episodes(remote, catalog, PLAN)
         remote.close()
     assert_same_episodes(

@@ -291,9 +291,9 @@ def test_a_goal_no_choice_can_meet_is_a_clear_error(catalog):
 def test_oracle_needs_privileged_observations(catalog):
     task = catalog.get("spatial/s0/black-bowl-1-on-plate")
     policy = make_policy("oracle")
-    assert policy.spec.privileged and not policy.spec.cameras
+    assert policy.spec.sees_state and policy.spec.sees_goal and not policy.spec.cameras
     with TaskEnv(task) as env:  # built without privileged state
         observation = env.reset(0)
         policy.reset(task_context(task, catalog, init_index=0, seed=0))
-        with pytest.raises(LangGapError, match="privileged"):
+        with pytest.raises(LangGapError, match=r"the oracle needs the simulator state .*PolicySpec.sees_state"):
             policy.act(observation)

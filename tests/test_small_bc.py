@@ -68,7 +68,9 @@ def test_policy_reads_the_instruction_and_is_deterministic(checkpoint, catalog):
     from langgap.sim.env import EnvOptions, TaskEnv
 
     policy = make_policy("small-bc", {"checkpoint": str(checkpoint)})
-    assert policy.spec.privileged and policy.spec.chunk == 8 and policy.spec.replan == 2
+    # It reads simulator state but is never told the goal: a learned policy under test.
+    assert policy.spec.sees_state and not policy.spec.sees_goal
+    assert policy.spec.chunk == 8 and policy.spec.replan == 2
     task = catalog.get(TINY_TASK)
     with TaskEnv(task, EnvOptions(privileged=True)) as env:
         env.reset(0)
@@ -92,6 +94,11 @@ def test_eval_runs_small_bc_in_a_worker(checkpoint, tmp_path):
     assert result.returncode == 0, result.stderr
     (row,) = store_rows(run)
     assert row["status"] == "done" and row["policy"] == "small-bc" and row["steps"] > 0
+    # A learned policy that read simulator state, never told the goal: so recorded, so reported.
+    assert (row["sees_state"], row["sees_goal"]) == (1, 0)
+    report = run_cli("report", str(run), "--format", "md").stdout
+    assert "small-bc (run) ‡" in report and "‡ reads simulator state" in report
+    assert "scripted reference" not in report
 
 
 def test_missing_or_foreign_checkpoint_is_a_clear_error(tmp_path):

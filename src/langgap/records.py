@@ -8,7 +8,7 @@ imports nothing else from LangGap.
 from __future__ import annotations
 
 import typing
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import asdict, dataclass, field, fields
 from enum import StrEnum
 
@@ -34,6 +34,14 @@ class Outcome(StrEnum):
 
 # The outcomes of judged episodes, in the order reports show them.
 JUDGED_OUTCOMES = tuple(o for o in Outcome if o is not Outcome.GAP)
+
+
+class Privilege(StrEnum):
+    """What a policy was given beyond a policy under test, the most telling first (see `privilege`)."""
+
+    GOAL = "goal"  # told the task id and goal (and shown the simulator state): a scripted reference
+    STATE = "state"  # shown the simulator state only: a learned policy that reads it, still under test
+    NONE = "none"
 
 
 class FailureKind(StrEnum):
@@ -88,7 +96,8 @@ class EpisodeRecord:
     settle_steps: int = 0  # idle steps after reset, before the policy acts
     policy: str = ""
     policy_config_hash: str = ""
-    privileged: bool = False  # the policy was given the goal and simulator state (a scripted reference)
+    sees_state: bool = False  # the policy's observations carried the simulator state
+    sees_goal: bool = False  # the policy was told the task id and goal (a scripted reference)
     cameras: list[str] = field(default_factory=list)  # the cameras the policy saw
     image_size: int = 0  # their size in pixels (0: no images)
     physics: dict = field(default_factory=dict)
@@ -107,6 +116,14 @@ class EpisodeRecord:
     def judged(self) -> bool:
         """True when the policy was evaluated (not a gap)."""
         return self.status == Status.DONE
+
+
+def privilege(records: Iterable[EpisodeRecord]) -> Privilege:
+    """The most telling privilege any of `records`' policies had (a run's, for its reports)."""
+    records = list(records)
+    if any(r.sees_goal for r in records):
+        return Privilege.GOAL
+    return Privilege.STATE if any(r.sees_state for r in records) else Privilege.NONE
 
 
 def classify(
@@ -175,6 +192,20 @@ def _columns() -> tuple[Column, ...]:
 
 
 COLUMNS = _columns()
+# Columns of older stores that the record no longer has (see `upgraded`).
+LEGACY_COLUMNS = ("privileged",)
+
+
+def upgraded(legacy: Mapping[str, object]) -> dict:
+    """Today's fields for the legacy columns of a stored row (`LEGACY_COLUMNS`, those the row has).
+
+    `privileged` (schema 2) was one flag for two things: such a policy was both told the goal and
+    shown the simulator state, so it maps to both (a small-bc run of then was handed the goal too).
+    """
+    if "privileged" not in legacy:
+        return {}
+    flag = bool(legacy["privileged"])
+    return {"sees_state": flag, "sees_goal": flag}
 
 
 def record_dict(record: EpisodeRecord) -> dict:

@@ -52,7 +52,7 @@ class ServedPolicy:
                 f"request has no {protocol.EPISODE_KEY}: a LangGap server needs LangGap's `openpi` client"
             )
         if episode != self._episode:
-            # Whatever a client sends, a policy that is not privileged never sees the goal.
+            # Whatever a client sends, a policy that does not declare `sees_goal` never sees the goal.
             context = protocol.context_from_message(request.get(protocol.CONTEXT_KEY))
             self.policy.reset(context.for_policy(self.policy.spec))
             self._episode = episode
@@ -60,7 +60,8 @@ class ServedPolicy:
         try:
             state = np.asarray(request[protocol.STATE_KEY], dtype=np.float32)
             images = {camera: request[protocol.CAMERA_KEYS[camera]] for camera in spec.cameras}
-            privileged = request[protocol.PRIVILEGED_KEY] if spec.privileged else None
+            # Nor the simulator state, unless it declares `sees_state` (then it must be whole: the schema).
+            privileged = protocol.privileged_from_message(request[protocol.PRIVILEGED_KEY]) if spec.sees_state else None
         except KeyError as exc:
             raise protocol.ProtocolError(f"request lacks {exc.args[0]!r}, which this policy's spec needs") from None
         observation = Observation(state=state, images=images, privileged=privileged)

@@ -21,11 +21,21 @@ from dataclasses import astuple
 from pathlib import Path
 
 from langgap.errors import LangGapError
-from langgap.records import COLUMNS, KEY_COLUMNS, EpisodeKey, EpisodeRecord, Status, record_dict
+from langgap.records import (
+    COLUMNS,
+    KEY_COLUMNS,
+    LEGACY_COLUMNS,
+    EpisodeKey,
+    EpisodeRecord,
+    Status,
+    record_dict,
+    upgraded,
+)
 
 # 2: the run's spec is stored whole (meta `spec`, `execution`), episodes say whether the policy was privileged.
-SCHEMA_VERSION = 2
-READABLE_SCHEMAS = (1, 2)
+# 3: that one `privileged` column is two, `sees_state` and `sees_goal` (`records.upgraded` reads schema 2's).
+SCHEMA_VERSION = 3
+READABLE_SCHEMAS = (1, 2, 3)
 DB_NAME = "episodes.sqlite"
 LOCK_NAME = ".writer.lock"
 
@@ -60,6 +70,7 @@ def _from_row(row: sqlite3.Row, present: set[str]) -> EpisodeRecord:
         elif column.kind is bool:
             value = bool(value)
         data[column.name] = value
+    data.update(upgraded({name: row[name] for name in LEGACY_COLUMNS if name in present}))
     return EpisodeRecord(**data)
 
 

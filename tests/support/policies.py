@@ -14,6 +14,7 @@ import numpy as np
 from langgap.policies.base import PolicySpec
 from langgap.policies.oracle import OraclePolicy
 from langgap.policies.simple import NoopPolicy, RandomPolicy
+from langgap.sim.privileged_schema import PrivilegedState
 
 
 class RaisingPolicy(NoopPolicy):
@@ -118,7 +119,8 @@ class ChunkPolicy:
 
 class ContextRecorder(NoopPolicy):
     """Holds still; appends to `path` what it was told at reset (the context's fields) and whether its
-    first observation carried simulator state (`simulator_state`): one JSON line per episode."""
+    first observation carried simulator state (`simulator_state`: the schema's type, with an end-effector
+    position): one JSON line per episode. It declares neither privilege."""
 
     def __init__(self, path: str = ""):
         self.path = Path(path)
@@ -130,15 +132,54 @@ class ContextRecorder(NoopPolicy):
     def act(self, observation):
         if self._told is not None:
             with self.path.open("a") as handle:
-                handle.write(json.dumps({**self._told, "simulator_state": observation.privileged is not None}) + "\n")
+                state = observation.privileged
+                shown = isinstance(state, PrivilegedState) and state["eef_pos"].shape == (3,)
+                handle.write(json.dumps({**self._told, "simulator_state": shown}) + "\n")
             self._told = None
         return super().act(observation)
 
 
 class PrivilegedContextRecorder(ContextRecorder):
-    """The same, declaring itself privileged (as the scripted references do)."""
+    """The same, declaring both privileges (as the scripted references do)."""
 
-    spec = PolicySpec(privileged=True)
+    spec = PolicySpec(sees_state=True, sees_goal=True)
+
+
+class StateContextRecorder(ContextRecorder):
+    """The same, declaring only `sees_state` (as `small-bc` does)."""
+
+    spec = PolicySpec(sees_state=True)
+
+
+class GoalContextRecorder(ContextRecorder):
+    """The same, declaring only `sees_goal`."""
+
+    spec = PolicySpec(sees_goal=True)
+
+
+def robot_only_state() -> PrivilegedState:
+    """The smallest valid simulator state: the robot's keys, a scene without entities."""
+    return PrivilegedState(
+        {"eef_pos": np.zeros(3), "eef_mat": np.eye(3), "gripper_qpos": np.zeros(2), "base_pos": np.zeros(3)}
+    )
+
+
+# Each recorder -> what its spec declares: (sees_state, sees_goal).
+RECORDERS = {
+    "ContextRecorder": (False, False),
+    "StateContextRecorder": (True, False),
+    "GoalContextRecorder": (False, True),
+    "PrivilegedContextRecorder": (True, True),
+}
+
+
+class LongChunkPolicy(NoopPolicy):
+    """Declares chunk 2 and returns 3 actions: misconfigured (refused as a policy error, never cut)."""
+
+    spec = PolicySpec(chunk=2, replan=2)
+
+    def act(self, observation):
+        return np.tile(super().act(observation), (3, 1))
 
 
 class ErrsOnInitsPolicy(NoopPolicy):

@@ -10,9 +10,9 @@ from langgap.sim.env import CAMERAS, Observation
 
 class ProbePolicy:
     """Actions computed from everything it observes, so a served copy matches in process only if every
-    image pixel, the state, the privileged dict and the context arrive intact."""
+    image pixel, the state, the simulator state and the context arrive intact."""
 
-    spec = PolicySpec(cameras=CAMERAS, image_size=64, privileged=True, chunk=4, replan=2)
+    spec = PolicySpec(cameras=CAMERAS, image_size=64, sees_state=True, sees_goal=True, chunk=4, replan=2)
 
     def reset(self, context: TaskContext) -> None:
         text = sum(map(ord, context.instruction)) % 1000

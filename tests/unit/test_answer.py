@@ -42,7 +42,7 @@ def test_a_policy_that_reads_weakly_beside_the_oracles_ceiling(tmp_path):
 
 
 def test_a_policy_that_hardly_reads_against_a_compared_blind_run(tmp_path):
-    blind = write_run(tmp_path / "blind", "blind", memoriser(privileged=True))
+    blind = write_run(tmp_path / "blind", "blind", memoriser(sees_state=True, sees_goal=True))
     vla = write_run(tmp_path / "vla", "my-vla", memoriser())
     _, text = _answers(blind, vla)
     assert text.startswith("my-vla (vla) hardly reads its instruction: 100 % on original tasks vs 0 % [0, 35]")
@@ -55,7 +55,7 @@ def test_a_policy_that_hardly_reads_against_a_compared_blind_run(tmp_path):
 
 
 def test_a_blind_run_with_another_protocol_is_not_paired_unless_allowed(tmp_path):
-    blind = write_run(tmp_path / "blind", "blind", memoriser(privileged=True), physics={"mujoco": "3.3.0"})
+    blind = write_run(tmp_path / "blind", "blind", memoriser(sees_state=True, sees_goal=True), physics={"mujoco": "3.3.0"})
     vla = write_run(tmp_path / "vla", "my-vla", reader())
     assert "against blind" not in _answers(blind, vla)[1]
     assert "against blind, 0 % on the same 7 episodes" in _answers(blind, vla, allow_mismatch=True)[1]
@@ -75,7 +75,7 @@ def test_runs_without_extended_tasks_or_without_original_success_say_what_cannot
 @pytest.fixture
 def runs(tmp_path):
     return [
-        write_run(tmp_path / "blind", "blind", memoriser(privileged=True)),
+        write_run(tmp_path / "blind", "blind", memoriser(sees_state=True, sees_goal=True)),
         write_run(tmp_path / "vla", "my-vla", reader()),
     ]
 

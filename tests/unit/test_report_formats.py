@@ -16,7 +16,7 @@ from tests.support.reports import memoriser, reader, write_run
 @pytest.fixture
 def runs(tmp_path):
     return [
-        write_run(tmp_path / "blind", "blind", memoriser(privileged=True)),
+        write_run(tmp_path / "blind", "blind", memoriser(sees_state=True, sees_goal=True)),
         write_run(tmp_path / "vla", "my-vla", reader()),
     ]
 
@@ -43,7 +43,7 @@ def test_csv_rows_are_the_json_rate_rows(runs):
             source["gaps"],
         )
         assert float(row["ci_high"]) == pytest.approx(source["ci_high"], abs=1e-4)
-    assert {row["run"]: row["privileged"] for row in rows} == {"blind (blind)": "1", "my-vla (vla)": "0"}
+    assert {row["run"]: row["privilege"] for row in rows} == {"blind (blind)": "goal", "my-vla (vla)": "none"}
 
 
 def test_markdown_and_latex_hold_the_papers_tables_and_mark_privileged_runs(runs):

@@ -18,8 +18,10 @@ import pytest
 from langgap.engine.pools.policy_process import GONE, PolicyProcess, SocketPolicyClient
 from langgap.engine.shared_policy import PolicyServer
 from langgap.errors import LangGapError, PolicyServerError
-from langgap.policies.base import PrivilegedContext, TaskContext
+from langgap.policies import make_policy
+from langgap.policies.base import PrivilegedContext, TaskContext, config_hash, policy_config
 from langgap.sim.env import Observation
+from tests.support.policies import RECORDERS, robot_only_state
 
 CONTEXT = TaskContext(
     instruction="put the bowl on the plate",
@@ -35,7 +37,7 @@ CONTEXT = TaskContext(
         goal_expression="(And (On akita_black_bowl_1 plate_1))",
     ),
 )
-SEEN = Observation(state=np.zeros(8, dtype=np.float32), privileged={"eef_pos": np.zeros(3)})
+SEEN = Observation(state=np.zeros(8, dtype=np.float32), privileged=robot_only_state())
 
 
 def test_the_shared_policy_server_waits_max_wait_ms_for_a_batch():
@@ -55,8 +57,8 @@ def test_the_shared_policy_server_waits_max_wait_ms_for_a_batch():
     assert asyncio.run(two_queries_50_ms_apart(5)) == 2
 
 
-@pytest.mark.parametrize("policy", ["ContextRecorder", "PrivilegedContextRecorder"])
-def test_the_server_gives_the_goal_and_the_simulator_state_to_privileged_policies_only(policy, tmp_path):
+@pytest.mark.parametrize("policy", RECORDERS)
+def test_the_server_gives_the_goal_and_the_simulator_state_only_to_policies_that_declare_them(policy, tmp_path):
     """Whatever a client sends (here: everything), as `langgap serve` does over the wire."""
     log = tmp_path / "told.jsonl"
     server = PolicyServer(f"tests.support.policies:{policy}", {"path": str(log)}, max_batch=1, max_wait_ms=0)
@@ -67,9 +69,9 @@ def test_the_server_gives_the_goal_and_the_simulator_state_to_privileged_policie
 
     asyncio.run(episode())
     (told,) = [json.loads(line) for line in log.read_text().splitlines()]
-    privileged = policy.startswith("Privileged")
+    sees_state, sees_goal = RECORDERS[policy]
     assert told["instruction"] == CONTEXT.instruction
-    assert (told["privileged"] is not None, told["simulator_state"]) == (privileged, privileged)
+    assert (told["simulator_state"], told["privileged"] is not None) == (sees_state, sees_goal)
 
 
 @pytest.fixture
@@ -99,7 +101,7 @@ def _act_together(clients: list[SocketPolicyClient]) -> list[np.ndarray]:
 
 def test_the_policy_process_batches_its_clients_queries_and_reports_its_counters(policy_process, tmp_path):
     clients = [policy_process.address.connect(worker) for worker in (0, 1)]
-    assert [c.spec.chunk for c in clients] == [1, 1] and clients[0].config()["shared"]["max_batch"] == 2
+    assert [c.spec.chunk for c in clients] == [1, 1]
     for k, client in enumerate(clients):
         client.reset(replace(CONTEXT, seed=k))
     actions = _act_together(clients)
@@ -112,6 +114,14 @@ def test_the_policy_process_batches_its_clients_queries_and_reports_its_counters
     assert not socket_dir.exists()
     with pytest.raises(PolicyServerError, match=GONE):
         policy_process.address.connect(0)
+
+
+def test_the_shared_policy_has_the_config_hash_of_the_policy_itself(policy_process, tmp_path):
+    """Batching is an execution option: the same policy must not look like another with --shared-policy."""
+    client = policy_process.address.connect(0)
+    own = make_policy("tests.support.policies:BatchRecorder", {"path": str(tmp_path / "batches")})
+    assert config_hash(policy_config(client)) == config_hash(policy_config(own))
+    client.close()
 
 
 def test_a_policy_error_is_an_error_of_the_query_and_the_process_serves_on(tmp_path):

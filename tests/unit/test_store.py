@@ -8,7 +8,9 @@ from dataclasses import fields
 
 import pytest
 
-from langgap.records import EpisodeKey, EpisodeRecord, Outcome, Status
+from langgap.records import EpisodeKey, EpisodeRecord, Outcome, Privilege, Status, privilege
+from langgap.report.load import load_runs
+from langgap.report.summary import results
 from langgap.store import SCHEMA_VERSION, RunStore, StoreError
 
 # The schema-1 layout (LangGap before the `privileged` column), as such stores exist on disk.
@@ -47,7 +49,7 @@ def record(task_id="spatial/s0/a", init_index=0, **changes) -> EpisodeRecord:
         t0_hash="1" * 64,
         reached={"spatial/s0/b": 7},
         kind="extended",
-        privileged=True,
+        sees_state=True,
         physics={"mujoco": "3.2.3"},
     )
     return EpisodeRecord(**{**base, **changes})
@@ -73,7 +75,7 @@ def _schema_1_store(directory, version="1"):
     db.executescript(_SCHEMA_1)
     db.execute("INSERT INTO meta VALUES ('schema_version', ?)", (version,))
     db.execute("INSERT INTO meta VALUES ('config', ?)", (json.dumps({"policy": "oracle"}),))
-    old = record(privileged=False)
+    old = record(sees_state=False)
     schema_1 = {row[1] for row in db.execute("PRAGMA table_info(episodes)")}
     row = {f.name: getattr(old, f.name) for f in fields(EpisodeRecord) if f.name in schema_1}
     for name in ("reached", "goals_at_start", "goals_at_end", "physics"):
@@ -87,7 +89,7 @@ def test_a_schema_1_store_opens_for_reading_and_refuses_writing_in_one_line(tmp_
     _schema_1_store(tmp_path / "old")
     with RunStore.open(tmp_path / "old") as store:
         (old,) = store.records()
-        assert old == record(privileged=False)  # the missing column takes the record's default
+        assert old == record(sees_state=False)  # the missing columns take the record's defaults
         assert store.meta("config") == {"policy": "oracle"}
     with pytest.raises(StoreError) as info:
         RunStore.open(tmp_path / "old", write=True)
@@ -99,3 +101,32 @@ def test_an_unknown_schema_is_a_one_line_error(tmp_path):
     _schema_1_store(tmp_path / "future", version="99")
     with pytest.raises(StoreError, match="unsupported run store schema 99"):
         RunStore.open(tmp_path / "future")
+
+
+# The schema-2 layout: schema 1's, with the one `privileged` column (split into `sees_state` and `sees_goal`).
+_SCHEMA_2 = _SCHEMA_1.replace("video TEXT,", "privileged INTEGER NOT NULL, video TEXT,")
+
+
+@pytest.mark.parametrize("privileged", [True, False])
+def test_a_schema_2_store_reads_its_privileged_flag_as_both_privileges(tmp_path, privileged):
+    directory = tmp_path / "old"
+    directory.mkdir()
+    db = sqlite3.connect(directory / "episodes.sqlite")
+    db.executescript(_SCHEMA_2)
+    db.execute("INSERT INTO meta VALUES ('schema_version', '2')")
+    db.execute("INSERT INTO meta VALUES ('spec', ?)", (json.dumps({"policy": "oracle", "seed": 0}),))
+    old = record()
+    schema_2 = {row[1] for row in db.execute("PRAGMA table_info(episodes)")}
+    row = {f.name: getattr(old, f.name) for f in fields(EpisodeRecord) if f.name in schema_2}
+    row.update({name: json.dumps(row[name]) for name in ("reached", "goals_at_start", "goals_at_end", "physics")})
+    row["privileged"] = int(privileged)
+    db.execute(f"INSERT INTO episodes ({', '.join(row)}) VALUES ({', '.join('?' * len(row))})", list(row.values()))
+    db.commit()
+    db.close()
+    with RunStore.open(directory) as store:
+        (read,) = store.records()
+    # Such a policy was told the goal and shown the simulator state: it reads as a scripted reference.
+    assert read == record(sees_state=privileged, sees_goal=privileged)
+    assert privilege([read]) == (Privilege.GOAL if privileged else Privilege.NONE)
+    (shown,) = load_runs([directory])  # and it still reports
+    assert results(shown).label == ("oracle (old) †" if privileged else "oracle (old)")

@@ -6,13 +6,14 @@ import dataclasses
 
 import pytest
 
-from langgap.report import load_runs, summarize
+from langgap.records import Privilege
+from langgap.report import load_runs, render, summarize
 from tests.support.reports import SOURCE, memoriser, reader, write_run
 
 
 @pytest.fixture
 def summary(tmp_path):
-    blind = write_run(tmp_path / "blind", "blind", memoriser(privileged=True))
+    blind = write_run(tmp_path / "blind", "blind", memoriser(sees_state=True, sees_goal=True))
     vla = write_run(tmp_path / "vla", "my-vla", reader() + reader(condition="empty"))
     return summarize(load_runs([blind, vla]))
 
@@ -73,16 +74,29 @@ def test_condition_and_run_comparisons_are_paired(summary):
 
 
 def test_privileged_runs_are_marked(summary):
-    assert [run.privileged for run in summary.runs] == [True, False]
+    assert [run.privilege for run in summary.runs] == [Privilege.GOAL, Privilege.NONE]
     assert summary.runs[0].label == "blind (blind) †" and summary.runs[1].label == "my-vla (vla)"
-    assert [run["privileged"] for run in summary.to_dict()["runs"]] == [True, False]
+    assert [run["privilege"] for run in summary.to_dict()["runs"]] == ["goal", "none"]
+
+
+def test_a_learned_policy_that_reads_simulator_state_is_not_called_a_scripted_reference(tmp_path):
+    bc = write_run(tmp_path / "bc", "small-bc", reader(sees_state=True))
+    blind = write_run(tmp_path / "blind", "blind", memoriser(sees_state=True, sees_goal=True))
+    summary = summarize(load_runs([bc, blind]))
+    assert [run.privilege for run in summary.runs] == [Privilege.STATE, Privilege.GOAL]
+    assert [run.label for run in summary.runs] == ["small-bc (bc) ‡", "blind (blind) †"]
+    assert summary.runs[0].card["privileged"] == "reads simulator state (not told the goal)"
+    assert summary.runs[1].card["privileged"] == "told the goal (a scripted reference)"
+    markdown = render([bc], "md")
+    assert "| small-bc (bc) ‡ |" in markdown and "‡ reads simulator state" in markdown
+    assert "scripted reference" not in markdown and "†" not in markdown
 
 
 def test_the_protocol_card_says_what_determines_the_numbers(summary):
     blind, vla = summary.runs
     assert blind.card["step limits"] == "libero_spatial 220" and blind.card["settle steps"] == "10"
     assert blind.card["init states"] == "0–3" and blind.card["seeds"] == "run seed 0 + init index"
-    assert blind.card["physics"] == "mujoco 3.2.3" and blind.card["privileged"].startswith("yes")
+    assert blind.card["physics"] == "mujoco 3.2.3" and blind.card["privileged"].startswith("told the goal")
     assert vla.card["privileged"] == "no" and vla.card["policy"] == "my-vla"
     assert summary.mismatches == {} and not summary.refused
 

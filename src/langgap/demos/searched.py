@@ -85,7 +85,7 @@ class Demonstration:
 class ReplayPolicy:
     """Acts a demonstration's actions in order, seeing nothing (open loop)."""
 
-    spec = PolicySpec(state=False)
+    spec = PolicySpec()
 
     def __init__(self, actions: np.ndarray):
         self._actions = actions

@@ -88,7 +88,8 @@ def execute_episode(
     common = dict(
         policy=policy_name,
         policy_config_hash=policy_hash,
-        privileged=policy.spec.privileged,
+        sees_state=policy.spec.sees_state,
+        sees_goal=policy.spec.sees_goal,
         cameras=list(policy.spec.cameras),
         image_size=policy.spec.image_size if policy.spec.cameras else 0,
         worker=worker,
@@ -105,7 +106,7 @@ def execute_episode(
             success=False,
             outcome=Outcome.POLICY_ERROR,
             failure_kind=FailureKind.POLICY,
-            error=str(exc),
+            error=f"{policy_name}: {exc}",
             steps=env.steps,
             policy_calls=0,
             t0_hash=env.t0_hash or "",

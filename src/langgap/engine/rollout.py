@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from langgap.goals import Goal, GoalProgress, is_ordered, unordered
-from langgap.policies.base import Policy, TaskContext, as_action_chunk
+from langgap.policies.base import Policy, TaskContext, as_action_chunk, observation_for
 from langgap.sim.env import SETTLE_STEPS, EnvOptions, TaskEnv
 
 # Called after every policy step with (env, step_index, action); used for videos and demonstrations.
@@ -30,7 +30,7 @@ class RolloutResult:
 def env_options_for(policy: Policy, **overrides) -> EnvOptions:
     """The cheapest environment that shows `policy` everything it declared, and nothing else."""
     spec = policy.spec
-    options = {"cameras": tuple(spec.cameras), "image_size": spec.image_size, "privileged": spec.privileged}
+    options = {"cameras": tuple(spec.cameras), "image_size": spec.image_size, "privileged": spec.sees_state}
     options.update(overrides)
     return EnvOptions(**options)
 
@@ -57,12 +57,14 @@ def run_episode(
     `on_start` sees the environment after settling, before the first action. `sampled_start` starts
     from the placement LIBERO samples with the context's seed instead of init state `init_index`
     (demonstrations; see `TaskEnv.reset`).
-    Exceptions from the policy propagate; a malformed action raises `PolicyOutputError`.
+    The policy is told the goal only if its spec `sees_goal`, and shown the simulator state only if it
+    `sees_state`, whatever `context` and `env` hold. Exceptions from the policy propagate; a malformed
+    action (or a chunk longer than the spec's) raises `PolicyOutputError`.
     """
     spec = policy.spec
     # The policy first looks after settling: an image of the unsettled start would be thrown away.
     env.reset(None if sampled_start else context.init_index, seed=context.seed, render=False)
-    policy.reset(context.for_policy(spec))  # the goal reaches privileged policies only
+    policy.reset(context.for_policy(spec))  # the goal reaches only policies that declare `sees_goal`
     env.settle(settle_steps)
     if on_start is not None:
         on_start(env)
@@ -79,7 +81,7 @@ def run_episode(
     success = False
     while not env.truncated:
         if not queue:
-            chunk = as_action_chunk(policy.act(env.observe(spec.cameras)), spec)
+            chunk = as_action_chunk(policy.act(observation_for(env.observe(spec.cameras), spec)), spec)
             calls += 1
             queue = list(chunk[: spec.replan])
         action = queue.pop(0)

@@ -9,18 +9,19 @@ calls together: it waits up to `max_wait_ms` for up to `max_batch` queries, then
 class's optional `act_batch(policies, observations)` once — or each policy's `act` if the class has
 no batched form.
 
-Privileges are enforced here, whatever a client sends: a policy whose spec is not privileged is
-reset without the privileged context and never shown the simulator state.
+Privileges are enforced here, whatever a client sends: a policy is reset with the goal only if its
+spec `sees_goal`, and shown the simulator state only if it `sees_state`. The served policy's config
+(what its runs' `policy_config_hash` is computed from) is the policy's own: batching is an execution
+option, stored with the run's spec, and must not make the same policy look like another.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
-from dataclasses import replace
 
 from langgap.policies import make_policy
-from langgap.policies.base import PolicySpec, TaskContext, policy_config
+from langgap.policies.base import PolicySpec, TaskContext, observation_for, policy_config
 from langgap.sim.env import Observation
 
 
@@ -44,8 +45,8 @@ class PolicyServer:
         return self._spec
 
     def config(self) -> dict:
-        """The served policy's configuration, with the batching limits."""
-        return {**self._config, "shared": {"max_batch": self.max_batch, "max_wait_ms": self.max_wait_s * 1000}}
+        """The served policy's configuration (`policy_config` of the policy itself, batching left out)."""
+        return self._config
 
     def stats(self) -> dict:
         """How many batched calls answered how many queries."""
@@ -66,8 +67,7 @@ class PolicyServer:
 
     async def act(self, slot: int, observation: Observation):
         """`slot`'s policy's action for `observation`, computed in a batch with other slots' queries."""
-        if not self._spec.privileged and observation.privileged is not None:
-            observation = replace(observation, privileged=None)
+        observation = observation_for(observation, self._spec)
         self.queries += 1
         future = asyncio.get_running_loop().create_future()
         self._pending.append((slot, observation, future))

@@ -1,10 +1,17 @@
 """The policy protocol: what a policy observes, how it chunks actions, and its two calls.
 
-A policy declares a `PolicySpec` (cameras and image size, or none; proprioceptive state;
-privileged simulator state; action chunking), is `reset` with a `TaskContext` at the start of
+A policy declares a `PolicySpec` (cameras and image size, or none; whether it reads simulator state;
+whether it is told the goal; action chunking), is `reset` with a `TaskContext` at the start of
 every episode, and `act`s on an `Observation`, returning one action (7,) or a chunk (k, 7) of
-OSC_POSE deltas + gripper in [-1, 1]. The evaluator executes the first `replan` actions of a chunk
-before it asks again, and renders only the cameras the spec names, only when it asks.
+OSC_POSE deltas + gripper in [-1, 1], k <= `chunk`. The evaluator executes the first `replan` actions
+of a chunk before it asks again, and renders only the cameras the spec names, only when it asks.
+Every policy sees the 8-D robot state (proprioception, as on a real robot; it names no task).
+
+The two privileges are separate. `sees_state`: observations carry the simulator state
+(`langgap.sim.privileged_schema.PrivilegedState`: object poses, contacts, joints), which a learned
+policy such as `small-bc` may read and still be a policy under test of whether it reads its
+instruction. `sees_goal`: the context carries the answer (`PrivilegedContext`: task id, goal, the
+source task's goal), which makes a policy a scripted reference (`oracle`, `blind`), never a policy under test.
 """
 
 from __future__ import annotations
@@ -16,17 +23,24 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from langgap.errors import LangGapError
 from langgap.sim.env import ACTION_DIM, CAMERAS, Observation
+from langgap.sim.privileged_schema import PrivilegedState
 
 
 @dataclass(frozen=True)
 class PolicySpec:
-    """What a policy observes and how it chunks actions."""
+    """What a policy observes and how it chunks actions.
+
+    `sees_state`: observations carry the simulator state; `sees_goal`: the reset context carries the
+    task id and the goal (see the module docstring). `chunk`: the most actions one `act` returns
+    (returning more is a policy error); `replan`: how many of them are executed before the next `act`.
+    """
 
     cameras: tuple[str, ...] = ()
     image_size: int = 256
-    state: bool = True
-    privileged: bool = False
+    sees_state: bool = False
+    sees_goal: bool = False
     chunk: int = 1
     replan: int = 1
 
@@ -40,8 +54,8 @@ class PolicySpec:
 
 @dataclass(frozen=True)
 class PrivilegedContext:
-    """What only a privileged policy (a scripted reference such as `oracle` or `blind`) is told: the
-    answer. The task id names the goal, and the condition says whether the instruction is the task's
+    """What only a policy whose spec `sees_goal` (a scripted reference such as `oracle` or `blind`) is
+    told: the answer. The task id names the goal, and the condition says whether the instruction is the task's
     own, so both are privileged too."""
 
     task_id: str
@@ -58,7 +72,7 @@ class TaskContext:
     `instruction` is the exact string the policy receives (and the one recorded). The other public
     fields name no task: the suite, the init state and seed (which select a placement shared by every
     task of the scene) and the step limit. `privileged` is None for every policy whose spec does not
-    declare `privileged`: the engine removes it before `reset` (`for_policy`), so a policy under test
+    declare `sees_goal`: the engine removes it before `reset` (`for_policy`), so a policy under test
     cannot read the goal, however it is written. There is deliberately no free-form field: every
     field a policy is told is one of these, so none can carry the answer past `for_policy`.
     """
@@ -72,7 +86,25 @@ class TaskContext:
 
     def for_policy(self, spec: PolicySpec) -> TaskContext:
         """The context a policy with `spec` may see."""
-        return self if spec.privileged else replace(self, privileged=None)
+        return self if spec.sees_goal else replace(self, privileged=None)
+
+
+def observation_for(observation: Observation, spec: PolicySpec) -> Observation:
+    """The observation a policy with `spec` may see: the simulator state only if it `sees_state`."""
+    if spec.sees_state or observation.privileged is None:
+        return observation
+    return replace(observation, privileged=None)
+
+
+class PrivilegeError(LangGapError):
+    """A policy was not given what it needs: its spec does not declare it, or the caller withheld it."""
+
+
+def simulator_state(observation: Observation, policy: str) -> PrivilegedState:
+    """`observation`'s simulator state, for a policy named `policy` that cannot act without it."""
+    if observation.privileged is None:
+        raise PrivilegeError(f"{policy} needs the simulator state in its observations (PolicySpec.sees_state)")
+    return observation.privileged
 
 
 @runtime_checkable
@@ -91,7 +123,12 @@ class PolicyOutputError(ValueError):
 
 
 def as_action_chunk(output, spec: PolicySpec) -> np.ndarray:
-    """Validate a policy's output and return it as a (k, 7) float64 chunk, k <= spec.chunk."""
+    """Validate a policy's output and return it as a (k, 7) float64 chunk, 1 <= k <= spec.chunk.
+
+    A longer chunk is refused, not cut: a policy that returns more actions than it declared is
+    misconfigured (its chunk or replan was meant otherwise), and executing a silently chosen prefix
+    would evaluate a policy other than the one described by its stored spec.
+    """
     try:
         actions = np.asarray(output, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -101,6 +138,10 @@ def as_action_chunk(output, spec: PolicySpec) -> np.ndarray:
     if actions.ndim != 2 or actions.shape[1] != ACTION_DIM or actions.shape[0] < 1:
         raise PolicyOutputError(
             f"policy returned shape {tuple(np.shape(output))}; expected ({ACTION_DIM},) or (k, {ACTION_DIM})"
+        )
+    if actions.shape[0] > spec.chunk:
+        raise PolicyOutputError(
+            f"policy returned a chunk of {actions.shape[0]} actions; its spec declares chunk={spec.chunk}"
         )
     if not np.all(np.isfinite(actions)):
         raise PolicyOutputError("policy returned a non-finite action (NaN or inf)")

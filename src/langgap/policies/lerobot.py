@@ -89,7 +89,7 @@ class LeRobotPolicy:
         )
         self._torch = torch
         self._instruction = ""
-        self.spec = PolicySpec(cameras=self.cameras, image_size=size, state=True, chunk=1, replan=1)
+        self.spec = PolicySpec(cameras=self.cameras, image_size=size, chunk=1, replan=1)
 
     @staticmethod
     def _cameras(config) -> tuple[str, ...]:

@@ -189,7 +189,9 @@ class OpenpiPolicy:
             raise PolicyServerError(f"policy server {self._connection.address}: {exc}") from None
 
     def act(self, observation: Observation) -> np.ndarray:
-        """Ask the server for an action chunk; returns at least `spec.replan` actions."""
+        """Ask the server for an action chunk; returns at least `spec.replan` actions (a served policy's
+        chunk whole, for the rollout to check against its spec; a plain openpi server's cut to `replan`,
+        the chunk this client declares for it)."""
         if self._context is None:
             raise PolicyServerError("openpi: act() before reset()")
         reply = self._connection.call(self._request(observation))
@@ -218,6 +220,6 @@ class OpenpiPolicy:
             request[protocol.EPISODE_KEY] = self._episode
             # Only what the served spec may see goes on the wire (the rollout already removed the rest).
             request[protocol.CONTEXT_KEY] = protocol.context_to_message(self._context.for_policy(self.spec))
-            if self.spec.privileged:
-                request[protocol.PRIVILEGED_KEY] = observation.privileged
+            if self.spec.sees_state:
+                request[protocol.PRIVILEGED_KEY] = protocol.privileged_to_message(observation.privileged)
         return request

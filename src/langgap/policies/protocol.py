@@ -15,14 +15,19 @@ openpi's protocol (its `WebsocketPolicyServer` / `WebsocketClientPolicy`):
 LangGap's extension, used only when the server's metadata has a `langgap` entry (a plain openpi
 server never sees it):
 
-* metadata `langgap` = `{"protocol": 1, "policy": <name>, "spec": <PolicySpec fields>, "config": ...}`:
+* metadata `langgap` = `{"protocol": 2, "policy": <name>, "spec": <PolicySpec fields>, "config": ...}`:
   the client then renders exactly the served spec's cameras at its image size (no resizing) and
   executes `spec.replan` actions of each chunk, so the served policy sees what it would see in process.
 * every request adds `langgap/episode` (a string that changes at each new episode; the server
   resets its policy when it changes) and `langgap/context` (the `TaskContext` fields; its
-  `privileged` part, with the task id and the goal, is null unless the served spec is privileged);
-  `langgap/privileged` (a flat map of arrays: the simulator state) is added only when the spec is
-  privileged. The server enforces the same rule on what it receives, whatever the client sends.
+  `privileged` part, with the task id and the goal, is null unless the served spec `sees_goal`);
+  `langgap/privileged` (the simulator state: a flat map of arrays following
+  `langgap.sim.privileged_schema`) is added only when the spec `sees_state`. The server enforces the
+  same rules on what it receives, whatever the client sends, and refuses a simulator state that does
+  not follow the schema.
+
+Protocol 2 split protocol 1's one `privileged` flag of the spec into `sees_state` and `sees_goal`
+(and dropped `state`); the two versions do not talk to each other.
 """
 
 from __future__ import annotations
@@ -35,8 +40,9 @@ import msgpack
 import numpy as np
 
 from langgap.policies.base import PolicySpec, PrivilegedContext, TaskContext
+from langgap.sim.privileged_schema import PrivilegedState, PrivilegedStateError
 
-PROTOCOL_VERSION = 1
+PROTOCOL_VERSION = 2
 HEALTH_PATH = "/healthz"
 METADATA_KEY = "langgap"
 EPISODE_KEY = "langgap/episode"
@@ -133,6 +139,21 @@ def context_from_message(message: Any) -> TaskContext:
         return TaskContext(**{**message, "privileged": privileged})
     except (KeyError, TypeError) as exc:
         raise ProtocolError(f"malformed {CONTEXT_KEY}: {exc}") from None
+
+
+def privileged_to_message(state: PrivilegedState | None) -> dict | None:
+    """The simulator state as a msgpack-able map (its arrays)."""
+    return None if state is None else dict(state.arrays)
+
+
+def privileged_from_message(message: Any) -> PrivilegedState:
+    """The `PrivilegedState` sent by `privileged_to_message`; `ProtocolError` if it breaks the schema."""
+    if not isinstance(message, dict):
+        raise ProtocolError(f"{PRIVILEGED_KEY} must be a map, got {type(message).__name__}")
+    try:
+        return PrivilegedState(message)
+    except PrivilegedStateError as exc:
+        raise ProtocolError(f"{PRIVILEGED_KEY}: {exc}") from None
 
 
 def actions_from_reply(reply: Any) -> np.ndarray:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
+from langgap.records import Privilege
 from langgap.report.load import Run
 
 # What determines a run's numbers besides the policy: runs compared episode by episode must agree on these.
@@ -21,6 +22,12 @@ PROTOCOL_ITEMS = (
     "seeds",
     "physics",
 )
+# The card's `privileged` item: what the policy was given beyond a policy under test.
+PRIVILEGE_CARD = {
+    Privilege.GOAL: "told the goal (a scripted reference)",
+    Privilege.STATE: "reads simulator state (not told the goal)",
+    Privilege.NONE: "no",
+}
 # The protocol card: the protocol, then what the policy was and saw.
 CARD_ITEMS = (
     *PROTOCOL_ITEMS,
@@ -72,7 +79,7 @@ def protocol_card(run: Run) -> dict[str, str]:
         "policy": str(spec.get("policy", "?")),
         "policy arguments": _joined(f"{k}={v}" for k, v in sorted(spec.get("policy_args", {}).items())),
         "policy config hash": _joined(sorted({r.policy_config_hash for r in records if r.policy_config_hash})),
-        "privileged": "yes (a scripted reference)" if run.privileged else "no",
+        "privileged": PRIVILEGE_CARD[run.privilege],
         "cameras": _joined(
             f"{', '.join(c) or 'none'}" + (f" at {size} px" if size else "") for c, size in sorted(cameras)
         ),

@@ -35,6 +35,7 @@ _LATEX_ESCAPES = (
     ("×", r"$\times$"),
     ("†", r"$^\dagger$"),
     ("<", r"$<$"),
+    ("‡", r"$^\ddagger$"),
 )
 
 
@@ -102,7 +103,7 @@ CSV_SECTIONS = ("by_source", "per_dimension", "per_suite", "per_split", "per_tas
 def to_csv(summary: Summary, published: Published | None = None) -> str:
     """Tidy CSV: one row per (run, table, group), the JSON report's rate rows."""
     data = summary.to_dict()
-    privileged = {run["run"]: run["privileged"] for run in data["runs"]}
+    privilege = {run["run"]: run["privilege"] for run in data["runs"]}
     buffer = io.StringIO()
     writer = csv.writer(buffer)
     columns = [
@@ -116,11 +117,11 @@ def to_csv(summary: Summary, published: Published | None = None) -> str:
         "oracle_rate",
         "relative_to_oracle",
     ]
-    writer.writerow(["run", "privileged", "table", "group", *columns])
+    writer.writerow(["run", "privilege", "table", "group", *columns])
     for section in CSV_SECTIONS:
         for row in data[section]:
             values = [f"{v:.4f}" if isinstance(v := row[c], float) else ("" if v is None else v) for c in columns]
-            writer.writerow([row["run"], int(privileged[row["run"]]), section, row["id"], *values])
+            writer.writerow([row["run"], privilege[row["run"]], section, row["id"], *values])
     return buffer.getvalue()
 
 

@@ -13,7 +13,7 @@ from pathlib import Path
 from langgap.catalog.task import GateResult
 from langgap.catalog.verdicts import snapshot_gates
 from langgap.errors import LangGapError
-from langgap.records import EpisodeRecord
+from langgap.records import EpisodeRecord, Privilege, privilege
 from langgap.store import RunStore
 
 
@@ -29,9 +29,10 @@ class Run:
     gate_hashes: list[str] | None = None  # SHA-256 of the verdict files of its snapshot (None: no snapshot)
 
     @property
-    def privileged(self) -> bool:
-        """The policy was given the goal or simulator state: a scripted reference, not a policy under test."""
-        return any(r.privileged for r in self.records)
+    def privilege(self) -> Privilege:
+        """What the policy was given beyond a policy under test (`goal`: a scripted reference; `state`:
+        it read simulator state)."""
+        return privilege(self.records)
 
     @property
     def gate_source(self) -> str:

@@ -16,7 +16,7 @@ from pathlib import Path
 from langgap.catalog.labels import ALL_EXTENDED_DIMENSIONS, EXTENDED_DIMENSIONS, SPLIT_ORDER, SUITE_ORDER
 from langgap.catalog.task import BEYOND_DIMENSIONS, GateResult
 from langgap.engine.plan import repeat_of
-from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Outcome, achieved
+from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Outcome, Privilege, achieved
 from langgap.report.answer import Answer
 from langgap.report.card import PROTOCOL_ITEMS, protocol_card
 from langgap.report.load import Run
@@ -261,6 +261,10 @@ def capped_because(task_rate: Rate, gate: GateResult | None) -> str | None:
     return None if gate is None else gate.capped_because(task_rate.oracle_successes, task_rate.oracle_episodes)
 
 
+# How tables mark a run whose policy had a privilege (explained by `tables.PRIVILEGE_NOTES`).
+PRIVILEGE_MARK = {Privilege.GOAL: "†", Privilege.STATE: "‡"}
+
+
 @dataclass
 class RunResults:
     """Everything reports show about one run."""
@@ -268,7 +272,7 @@ class RunResults:
     name: str
     path: Path
     spec: dict
-    privileged: bool
+    privilege: Privilege
     episodes: int  # stored episodes, all conditions
     gaps: int
     by_source: list[Rate]  # original, extended, total
@@ -291,8 +295,10 @@ class RunResults:
 
     @property
     def label(self) -> str:
-        """The name tables show: privileged runs are marked † (a scripted reference)."""
-        return f"{self.name} †" if self.privileged else self.name
+        """The name tables show: marked † if the policy was told the goal (a scripted reference), ‡ if it
+        read simulator state (`tables.PRIVILEGE_NOTES`)."""
+        mark = PRIVILEGE_MARK.get(self.privilege)
+        return f"{self.name} {mark}" if mark else self.name
 
     def source(self, group: str) -> Rate:
         return next(r for r in self.by_source if r.group == group)
@@ -329,7 +335,7 @@ def results(run: Run) -> RunResults:
         name=run.name,
         path=run.path,
         spec=run.spec,
-        privileged=run.privileged,
+        privilege=run.privilege,
         episodes=len(run.records),
         gaps=sum(not r.judged for r in run.records),
         by_source=[rate("original", originals, gates), rate("extended", extended, gates), rate("total", given, gates)],
@@ -369,8 +375,9 @@ class Summary:
     refused: bool = False  # paired tests left out because protocols differ (and no `allow_mismatch`)
 
     @property
-    def privileged(self) -> bool:
-        return any(run.privileged for run in self.runs)
+    def privileges(self) -> set[Privilege]:
+        """The privileges the runs' policies had (`Privilege.NONE` included when one had none)."""
+        return {run.privilege for run in self.runs}
 
     def to_dict(self) -> dict:
         """The summary as plain data (the JSON report)."""
@@ -397,7 +404,7 @@ class Summary:
                     "path": str(run.path),
                     "episodes": run.episodes,
                     "gaps": run.gaps,
-                    "privileged": run.privileged,
+                    "privilege": str(run.privilege),
                     "spec": run.spec,
                     "card": run.card,
                     "capped_tasks": run.capped,

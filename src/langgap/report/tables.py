@@ -6,7 +6,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from langgap.catalog.labels import DIMENSION_LABEL, EXTENDED_DIMENSIONS, SPLIT_LABEL, SUITE_LABEL, SUITE_ORDER, label
-from langgap.records import JUDGED_OUTCOMES, Outcome
+from langgap.records import JUDGED_OUTCOMES, Outcome, Privilege
 from langgap.report.card import CARD_ITEMS
 from langgap.report.published import Published
 from langgap.report.stats import PairedTest, Rate
@@ -23,9 +23,12 @@ OUTCOME_LABEL = {
 }
 OUTCOME_NAME = {o: o.replace("_", " ") for o in Outcome}
 OUTCOME_GROUP_LABEL = {**DIMENSION_LABEL, "extended": "All extended"}
-PRIVILEGED_NOTE = (
-    "† privileged policy (given the goal or simulator state): a scripted reference, not a policy under test"
-)
+PRIVILEGE_NOTES = {
+    Privilege.GOAL: "† told the goal (task id and goal; shown the simulator state too): a scripted reference, "
+    "not a policy under test",
+    Privilege.STATE: "‡ reads simulator state (object poses, contacts, joints), never told the goal: a learned "
+    "policy under test, with more than a camera shows",
+}
 PUBLISHED_NOTE = "Rows marked published are the LangGap paper's figures as printed (20 episodes per task), not re-run."
 CEILING_NOTE = (
     "Oracle % is the scripted oracle's success on the same tasks and init states (the feasibility verdicts "
@@ -55,7 +58,7 @@ def notes(summary: Summary, published: Published | None, *, ceiling: bool = True
     shown = [
         (SELECTION_NOTE, ceiling),
         (CEILING_NOTE, ceiling),
-        (PRIVILEGED_NOTE, summary.privileged),
+        *((note, privilege in summary.privileges) for privilege, note in PRIVILEGE_NOTES.items()),
         (PUBLISHED_NOTE, published is not None),
     ]
     return [note for note, show in shown if show]

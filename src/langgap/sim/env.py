@@ -28,6 +28,7 @@ from langgap.catalog import files
 from langgap.catalog.task import Task
 from langgap.errors import InitStateError, SimulationError
 from langgap.goals import Goal, GoalProgress, holds_now
+from langgap.sim.privileged_schema import PrivilegedState
 from langgap.stack import DEFAULT_STEPPING, STEPPINGS
 
 CAMERAS = ("agentview", "robot0_eye_in_hand")
@@ -80,7 +81,7 @@ class Observation:
 
     state: np.ndarray
     images: dict[str, np.ndarray] = field(default_factory=dict)
-    privileged: dict | None = None
+    privileged: PrivilegedState | None = None  # the simulator state (`EnvOptions.privileged`)
 
 
 def quat_to_axis_angle(quat_xyzw: np.ndarray) -> np.ndarray:

@@ -1,31 +1,8 @@
-"""Privileged state: simulator facts a scripted policy may read, as a flat dict of numpy arrays.
+"""Privileged state: the simulator facts a policy that `sees_state` may read, extracted from a `TaskEnv`.
 
-Being plain arrays, it crosses a process or network boundary unchanged, so a scripted policy can
-also be served remotely. Keys (`<e>` = an object or fixture of the scene, `<s>` = a region site,
-`<a>` = an articulated entity: a fixture with joints or a region site bound to joints):
-
-* `eef_pos` (3), `eef_mat` (3, 3): the end-effector site `gripper0_grip_site`; `gripper_qpos` (2);
-  `base_pos` (3): the robot's base (how far the arm must reach).
-* `body/<e>` (7): position + wxyz quaternion of the entity's root body.
-* `bbox/<e>` (6): world-frame axis-aligned box (min xyz, max xyz) of the entity's collision geoms.
-* `movable/<e>` (1): 1.0 for a loose object, 0.0 for a fixture.
-* `shape/<e>` (n, 6): the entity's collision geoms as boxes (min xyz, max xyz) in its root body's
-  frame; for fixtures only the parts no joint moves. Static.
-* `parts/<e>` (n, 15): the same geoms as oriented boxes in that frame: centre (3), half-sizes along
-  the box's own axes (3), rotation into the body's frame (9, row-major). Tighter than `shape` where
-  a geom is turned (a plate's slanted rim, a bowl's wall); static.
-* `contact/<e>` (2): whether the entity touches something other than itself and the robot, and
-  whether it touches the gripper (1.0 / 0.0).
-* `site/<s>` (3), `site_mat/<s>` (3, 3), `site_size/<s>` (3): a region site's frame and the
-  half-sizes LIBERO's `In`/`On` checks use.
-* `joint/<name>` (1): qpos of each articulated fixture joint.
-* `art/<a>/qpos` (1), `art/<a>/anchor` (3), `art/<a>/axis` (3), `art/<a>/slide` (1: 1 slide, 0 hinge),
-  `art/<a>/limits` (2): the (first) joint of the entity; `art/<a>/body` (7): pose of the body that
-  joint moves; `art/<a>/shape` (n, 6): its collision geoms as boxes in that body's frame (static);
-  `art/<a>/bbox` (6): their world box; `art/<a>/handle` (3): centre of the moving part that reaches
-  furthest along the opening direction (a drawer's handle; a hinge's highest part, e.g. a knob's
-  grip); `art/<a>/open|close|on|off` (2): the qpos interval, within the joint limits, where
-  LIBERO's predicate of that name holds (present only where the fixture defines it).
+The result is a `PrivilegedState` (`langgap.sim.privileged_schema`, which lists its keys): a flat
+mapping of numpy arrays, so it crosses a process or network boundary unchanged and a scripted
+policy can also be served remotely.
 
 Static parts are computed once per simulator model and cached on the environment; a step's
 extraction is vectorised numpy (well under a millisecond).
@@ -37,6 +14,8 @@ from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
+
+from langgap.sim.privileged_schema import PrivilegedState
 
 _ROBOT_PREFIXES = ("robot0_", "gripper0_", "mount0_")
 _GRIPPER_PREFIX = "gripper0_"
@@ -294,7 +273,7 @@ def _contacts(layout: _Layout, data) -> dict[str, np.ndarray]:
     return touching
 
 
-def privileged_state(env) -> dict[str, np.ndarray]:
+def privileged_state(env) -> PrivilegedState:
     """The privileged state of a `TaskEnv` at its current simulator state."""
     layout = _layout(env)
     sim = env.sim
@@ -334,7 +313,7 @@ def privileged_state(env) -> dict[str, np.ndarray]:
         out.update({prefix + key: interval for key, interval in art.intervals.items()})
         out[prefix + "body"] = np.concatenate([data.xpos[art.body], data.xquat[art.body]])
         out[prefix + "shape"] = art.shape
-    return out
+    return PrivilegedState(out)
 
 
 def _opening_direction(art: _Articulation, data) -> np.ndarray:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from langgap.policies.base import PolicySpec, PrivilegedContext, TaskContext
+from langgap.policies.base import PolicySpec, PrivilegedContext, TaskContext, simulator_state
 from langgap.policies.oracle.motion import Agent, Program
 from langgap.policies.oracle.planner import OracleError, parse_goal, program
 from langgap.policies.oracle.scene import Scene
@@ -22,7 +22,7 @@ class OraclePolicy:
     demonstrations. `drawer` fixes how drawers are opened (`skills.DrawerSkill.parse`).
     """
 
-    spec = PolicySpec(state=False, privileged=True)
+    spec = PolicySpec(sees_state=True, sees_goal=True)
 
     def __init__(self, noise: float = 0.0, noise_seed: int = 0, drawer: str = "auto"):
         if noise < 0:
@@ -50,7 +50,7 @@ class OraclePolicy:
 
     def reset(self, context: TaskContext) -> None:
         if context.privileged is None:
-            raise OracleError("the oracle needs the privileged context (the task's goal)")
+            raise OracleError("the oracle needs the privileged context (the task's goal: PolicySpec.sees_goal)")
         self._goal = parse_goal(self.goal_of(context.privileged))
         self._agent = Agent(self.drawer)
         self._program = None
@@ -58,9 +58,7 @@ class OraclePolicy:
         self._rng = np.random.default_rng(noise_key)
 
     def act(self, observation: Observation) -> np.ndarray:
-        if observation.privileged is None:
-            raise OracleError("the oracle needs privileged observations (PolicySpec.privileged=True)")
-        self._agent.scene = Scene(observation.privileged)
+        self._agent.scene = Scene(simulator_state(observation, "the oracle"))
         if self._program is None:
             self._program = program(self._agent, self._goal)
         action = next(self._program)

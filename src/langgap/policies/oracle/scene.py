@@ -1,13 +1,15 @@
-"""A read-only view of one privileged observation (see `langgap.sim.privileged`)."""
+"""A read-only view of one privileged observation (its keys: `langgap.sim.privileged_schema`)."""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
 from langgap.policies.oracle.geometry import Boxes, quat_to_mat
+from langgap.sim.privileged_schema import articulation_names, names
 
 INTERVAL_MARGIN = 0.15
 
@@ -69,15 +71,15 @@ class Region:
 class Scene:
     """Typed accessors over a privileged dict; raises KeyError for names the scene lacks."""
 
-    def __init__(self, privileged: dict[str, np.ndarray]):
+    def __init__(self, privileged: Mapping[str, np.ndarray]):
         self.raw = privileged
         self.eef_pos = np.asarray(privileged["eef_pos"], dtype=np.float64)
         self.eef_mat = np.asarray(privileged["eef_mat"], dtype=np.float64)
         self.gripper_width = float(np.sum(np.abs(privileged["gripper_qpos"])))
         self.base_pos = np.asarray(privileged["base_pos"], dtype=np.float64)
-        self.entities = tuple(k.split("/", 1)[1] for k in privileged if k.startswith("body/"))
-        self.regions = tuple(k.split("/", 1)[1] for k in privileged if k.startswith("site/"))
-        self.articulated = tuple(k.split("/")[1] for k in privileged if k.startswith("art/") and k.endswith("/qpos"))
+        self.entities = names(privileged, "body/")
+        self.regions = names(privileged, "site/")
+        self.articulated = articulation_names(privileged)
 
     def reach(self, point: np.ndarray) -> float:
         """Horizontal distance from the robot's base to `point`."""

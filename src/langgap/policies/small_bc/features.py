@@ -11,6 +11,8 @@ name is read as words (see `text`), never as an index: the model must match name
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 PROPRIO_DIM = 14
@@ -20,12 +22,12 @@ _FINE_SCALES = (0.03, 0.1)
 _COARSE_SCALE = 0.3
 
 
-def entity_names(privileged: dict) -> list[str]:
+def entity_names(privileged: Mapping) -> list[str]:
     """The entities of a scene, in a fixed (sorted) order."""
     return sorted(k for k in privileged if k.startswith(("body/", "joint/")))
 
 
-def proprio(privileged: dict) -> np.ndarray:
+def proprio(privileged: Mapping) -> np.ndarray:
     """(..., 14) proprioception from (stacked) privileged arrays."""
     eef = np.asarray(privileged["eef_pos"])
     lead = eef.shape[:-1]
@@ -33,7 +35,7 @@ def proprio(privileged: dict) -> np.ndarray:
     return np.concatenate([eef, mat, np.asarray(privileged["gripper_qpos"])], axis=-1).astype(np.float32)
 
 
-def entities(privileged: dict, names: list[str]) -> np.ndarray:
+def entities(privileged: Mapping, names: list[str]) -> np.ndarray:
     """(..., E, 14) entity features for `names` from (stacked) privileged arrays."""
     eef = np.asarray(privileged["eef_pos"])
     out = np.zeros((*eef.shape[:-1], len(names), ENTITY_DIM), dtype=np.float32)

@@ -1,15 +1,16 @@
-"""The `small-bc` policy: a checkpoint trained by `langgap train small-bc`, acting on privileged state.
+"""The `small-bc` policy: a checkpoint trained by `langgap train small-bc`, acting on simulator state.
 
 It reads the instruction as text (word tokens through the model's learned embeddings) and the
-scene from `observation.privileged` (entity poses, proprioception); it never sees the task id or
-the goal. Inference runs on one CPU thread, deterministically.
+scene from `observation.privileged` (entity poses, proprioception: its spec `sees_state`); it is
+never told the task id or the goal (its spec does not declare `sees_goal`), so it is a policy under
+test that reads simulator state, not a scripted reference. Inference runs on one CPU thread, deterministically.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from langgap.policies.base import PolicySpec, TaskContext
+from langgap.policies.base import PolicySpec, TaskContext, simulator_state
 from langgap.sim.env import Observation
 
 
@@ -28,7 +29,8 @@ class SmallBCPolicy:
         self._torch = torch
         self.model, self.vocab, self.training = load_checkpoint(checkpoint)
         chunk = self.model.config.chunk
-        self.spec = PolicySpec(state=False, privileged=True, chunk=chunk, replan=min(replan, chunk))
+        # It reads the simulator state but is never told the goal: a learned policy under test.
+        self.spec = PolicySpec(sees_state=True, chunk=chunk, replan=min(replan, chunk))
         self._instruction = None
         self._names: list[str] | None = None
         self._name_ids = None
@@ -46,7 +48,7 @@ class SmallBCPolicy:
         from langgap.policies.small_bc import features
 
         torch = self._torch
-        privileged = observation.privileged
+        privileged = simulator_state(observation, "small-bc")
         if self._names is None:
             self._names = features.entity_names(privileged)
             width = self.model.config.max_name_words
