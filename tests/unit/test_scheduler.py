@@ -8,7 +8,7 @@ from collections import deque
 import pytest
 
 from langgap.engine.plan import PlannedEpisode
-from langgap.engine.pools import EpisodeDone, EpisodeFailed, WorkerLost
+from langgap.engine.pools import ItemDone, ItemFailed, WorkerLost
 from langgap.engine.scheduler import RunStopped, make_units, schedule
 from langgap.records import EpisodeKey, EpisodeRecord, Status
 
@@ -50,9 +50,9 @@ class ScriptedPool:
         self.submitted.append((worker, planned.key, attempt))
         outcome = self.script(planned, attempt)
         if outcome == "done":
-            self._events.append(EpisodeDone(worker, record(planned, worker, attempt)))
+            self._events.append(ItemDone(worker, record(planned, worker, attempt)))
         elif outcome.startswith("fail:"):
-            self._events.append(EpisodeFailed(worker, outcome[5:]))
+            self._events.append(ItemFailed(worker, outcome[5:]))
         elif outcome == "lost":
             self._events.append(WorkerLost(worker, "worker process died (exit code 9)"))
 
@@ -222,7 +222,7 @@ class LateReportingPool(ScriptedPool):
     def kill(self, worker):
         super().kill(worker)
         planned, attempt = self.running[worker]
-        self._events.append(EpisodeDone(worker, record(planned, worker, attempt)))
+        self._events.append(ItemDone(worker, record(planned, worker, attempt)))
 
 
 def test_a_timeout_kills_that_worker_replaces_it_and_ignores_what_it_says_later():
