@@ -116,10 +116,10 @@ def collect(config: CollectConfig, out: str | Path, options: ExecutionOptions | 
     options = options or ExecutionOptions()
     setup = RunnerSetup(catalog=config.catalog, run_dir=str(out))
     items = [CollectTask(config, task_id) for task_id in config.tasks]
-    out.mkdir(parents=True, exist_ok=True)
     results: dict[str, TaskCollection] = {}
     for stats in execute(items, setup, options, unit="task", describe=_describe):
         results[stats.task_id] = stats
+    out.mkdir(parents=True, exist_ok=True)  # only now: a backend that cannot start leaves no directory
     manifest = {
         "format": FORMAT_VERSION,
         **asdict(config),
