@@ -18,7 +18,8 @@ from langgap.catalog.catalog import load_catalog
 from langgap.demos.collect import CollectConfig, collect
 from langgap.demos.compact import demo_files
 from langgap.demos.export import lerobot_available
-from langgap.demos.render import render_demo
+from langgap.demos.render import iter_demos
+from langgap.engine.spec import ExecutionOptions
 
 PAPER_DEMOS = 16 * 150
 
@@ -31,7 +32,9 @@ def main() -> None:
     tasks = tuple(t.id for t in load_catalog().select(args.tasks))
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()
-        manifest = collect(CollectConfig("langgap99", tasks, args.demos), tmp, workers=0, progress=False)
+        manifest = collect(
+            CollectConfig("langgap99", tasks, args.demos), tmp, ExecutionOptions(workers=0, progress=False)
+        )
         simulate = time.perf_counter() - start
         kept = sum(len(s["kept"]) for s in manifest["tasks"].values())
         attempts = sum(s["attempts"] for s in manifest["tasks"].values())
@@ -41,7 +44,9 @@ def main() -> None:
         print(f"  {rate:.0f} demos/hour/core, {steps / simulate:.0f} steps/s")
         if lerobot_available():
             start = time.perf_counter()
-            frames = sum(render_demo("langgap99", str(p))[0].length for p in demo_files(tmp))
+            frames = sum(
+                d.length for d, _ in iter_demos("langgap99", demo_files(tmp), render=True, workers=0, progress=False)
+            )
             render = time.perf_counter() - start
             print(
                 f"render (LeRobot form): {frames} frames x 2 cameras in {render:.1f}s, {frames / render:.1f} frames/s"

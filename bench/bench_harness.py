@@ -265,11 +265,19 @@ def protocol(policy: str, run: str | None, stepping: str) -> None:
 
 
 def validation(workers: int, run: str | None, stepping: str) -> None:
-    from langgap.validate import FULL_INITS, validate
+    from langgap.engine.spec import ExecutionOptions
+    from langgap.gate.rows import FULL_INITS
+    from langgap.gate.validation import validate
 
     start = time.perf_counter()
     found = validate(
-        "langgap99", "all", inits=FULL_INITS, workers=workers, run=run, resume=run is not None, stepping=stepping
+        "langgap99",
+        "all",
+        inits=FULL_INITS,
+        options=ExecutionOptions(workers=workers),
+        run=run,
+        resume=run is not None,
+        stepping=stepping,
     )
     wall = time.perf_counter() - start
     episodes = sum(row.episodes for row in found.rows)

@@ -52,9 +52,10 @@ def short_catalog(tmp_path_factory):
 def tiny_collection(tmp_path_factory) -> Path:
     """Two oracle demonstrations of one spatial task (compact form, with execution noise), collected once."""
     from langgap.demos.collect import collect
+    from langgap.engine.spec import ExecutionOptions
 
     out = tmp_path_factory.mktemp("demos") / "tiny"
-    collect(tiny_config(), out, workers=0, progress=False)
+    collect(tiny_config(), out, ExecutionOptions(workers=0, progress=False))
     return out
 
 

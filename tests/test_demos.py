@@ -9,6 +9,7 @@ import numpy as np
 from langgap.demos.collect import collect
 from langgap.demos.compact import demo_files, load_demo, read_manifest, save_demo
 from langgap.demos.record import SAME_STATE_TOLERANCE
+from langgap.engine.spec import ExecutionOptions
 from langgap.sim.env import TaskEnv
 from tests.support.harness import TINY_TASK, run_cli, tiny_config
 
@@ -50,7 +51,7 @@ def test_collection_keeps_successes_from_fresh_starts(tiny_collection, catalog):
 
 
 def test_collection_is_deterministic_across_worker_counts(tiny_collection, tmp_path):
-    collect(tiny_config(), tmp_path / "again", workers=1, progress=False)
+    collect(tiny_config(), tmp_path / "again", ExecutionOptions(workers=1, progress=False))
     for a, b in zip(demo_files(tiny_collection), demo_files(tmp_path / "again"), strict=True):
         first, second = load_demo(a), load_demo(b)
         np.testing.assert_array_equal(first.actions, second.actions)

@@ -16,6 +16,7 @@ from langgap.demos.compact import demo_files, load_demo
 from langgap.demos.hdf5 import hdf5_path, obs_name, write_hdf5
 from langgap.demos.record import Demo, start_episode
 from langgap.demos.verify import replay_demo
+from langgap.engine.spec import ExecutionOptions
 from langgap.sim.env import CAMERAS, EnvOptions, TaskEnv
 from langgap.version import code_version
 from tests.support.harness import TINY_TASK, run_cli
@@ -35,7 +36,7 @@ def pair(tmp_path_factory):
     """One demonstration of each of two tasks of one scene, exported without images."""
     root = tmp_path_factory.mktemp("pair") / "c"
     config = CollectConfig("langgap99", (TINY_TASK, STOVE_TASK), demos=1, seed=7, noise=0.2)
-    collect(config, root, workers=0, progress=False)
+    collect(config, root, ExecutionOptions(workers=0, progress=False))
     return root, write_hdf5(root, out=root / "h5", progress=False)
 
 
@@ -43,7 +44,11 @@ def pair(tmp_path_factory):
 def with_images(tmp_path_factory):
     """One demonstration exported with images (rendering both cameras costs ~25 s per demonstration here)."""
     root = tmp_path_factory.mktemp("images") / "c"
-    collect(CollectConfig("langgap99", (TINY_TASK,), demos=1, seed=7, noise=0.2), root, workers=0, progress=False)
+    collect(
+        CollectConfig("langgap99", (TINY_TASK,), demos=1, seed=7, noise=0.2),
+        root,
+        ExecutionOptions(workers=0, progress=False),
+    )
     return root, write_hdf5(root, out=root / "h5", images=True, workers=0, progress=False)[0]
 
 

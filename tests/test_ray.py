@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.support.harness import REPO, run_cli, store_rows
+from tests.support.harness import REPO, TINY_TASK, run_cli, store_rows
 
 pytestmark = pytest.mark.requires(shutil.which("unshare") is not None, "unshare (util-linux) for a network namespace")
 
@@ -41,7 +41,7 @@ def _in_network_namespace(
         set -euo pipefail
         ip link set lo up
         {_FAKE_NETWORK if network else ""}
-        export PATH={bin_dir}:$PATH PYTHONPATH={REPO} RAY_AUTH_MODE=disabled RAY_USAGE_STATS_ENABLED=0
+        export PATH={bin_dir}:$PATH PYTHONPATH={REPO / "src"}:{REPO} RAY_AUTH_MODE=disabled RAY_USAGE_STATS_ENABLED=0
         export RAY_TMPDIR={ray_tmp}
         trap 'ray stop --force >/dev/null 2>&1 || true' EXIT
     """
@@ -253,3 +253,40 @@ def test_a_local_ray_instance_listens_on_loopback_only(short_catalog, tmp_path):
     exposed = [a for a in listening if a.rsplit(":", 1)[0] not in ("127.0.0.1", "[::ffff:127.0.0.1]", "[::1]")]
     assert not exposed, result.stdout
     assert len(store_rows(run)) == 3
+
+
+def test_every_kind_of_work_runs_on_a_worker_node_that_sees_another_disk(short_catalog, tiny_collection, tmp_path):
+    """eval --video, collect and validate on a two-node cluster whose only worker node has its own disk at the
+    output directory (a tmpfs mounted there in its mount namespace): what the driver finds there, it wrote
+    from what the actors sent back; and the results are those of a local run."""
+    out = tmp_path / "out"
+    out.mkdir()
+    cluster = "--backend ray --ray-address 127.0.0.1:6399 --no-progress"
+    local_gate = tmp_path / "local-gate.json"
+    gate = ["validate", "--catalog", short_catalog, "--inits", "1", "--search-budget", "1", "--no-progress"]
+    assert run_cli(*gate, "--workers", "0", "--out", str(local_gate)).returncode == 1  # 15 steps: all rejected
+    result = _in_network_namespace(
+        f"""
+        ray start --head --port 6399 --num-cpus 0 --include-dashboard false --temp-dir "$RAY_TMPDIR" > /dev/null
+        unshare -m bash -c 'mount -t tmpfs tmpfs {out} && ray start --address 127.0.0.1:6399 --num-cpus 2 > /dev/null'
+        python -m langgap.cli.main eval --policy noop --catalog {short_catalog} --episodes 1 --video first:1 \
+            --quiet --workers 2 --run {out}/eval {cluster}
+        python -m langgap.cli.main collect --tasks {TINY_TASK} --demos 2 --seed 7 --noise 0.2 --format compact \
+            --out {out}/demos --workers 1 {cluster}
+        python -m langgap.cli.main {" ".join(gate)} --out {out}/gate.json --workers 2 {cluster} || echo "gate: $?"
+    """,
+        _ray_tmp(),
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+    filmed = [r for r in store_rows(out / "eval") if r["video"]]
+    assert len(filmed) == 1 and (out / "eval" / filmed[0]["video"]).stat().st_size > 1000
+    assert "gate: 1" in result.stdout  # rejected, as locally
+    ray_gate, here = json.loads((out / "gate.json").read_text()), json.loads(local_gate.read_text())
+    assert ray_gate == here
+    from langgap.demos.compact import demo_files, load_demo
+
+    assert [p.relative_to(out / "demos") for p in demo_files(out / "demos")] == [
+        p.relative_to(tiny_collection) for p in demo_files(tiny_collection)
+    ]
+    for a, b in zip(demo_files(out / "demos"), demo_files(tiny_collection), strict=True):
+        assert (load_demo(a).actions == load_demo(b).actions).all()

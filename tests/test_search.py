@@ -11,6 +11,7 @@ import langgap
 from langgap.catalog.catalog import load_catalog, registry_path
 from langgap.demos.searched import Demonstration, DemonstrationError, replay_env, verify
 from langgap.engine.plan import episode_seed
+from langgap.engine.spec import ExecutionOptions
 from langgap.search import demonstrate, search
 
 DRAWER = "goal/s0/open-cabinet-bottom-drawer"
@@ -46,8 +47,9 @@ def test_a_stored_demonstration_replays_to_its_goal_at_its_step(found, catalog, 
 
 
 def test_the_gate_keeps_only_what_replays_from_the_file(catalog, tmp_path):
-    shown = demonstrate(catalog, {DRAWER: [(0, episode_seed(0, 0))]}, tmp_path, stepping="exact", budget=16,
-                        oracle_args=WITHOUT_THE_PRESSED_DRAG)  # fmt: skip
+    here = ExecutionOptions(workers=0, progress=False)
+    shown = demonstrate("langgap99", {DRAWER: [(0, episode_seed(0, 0))]}, tmp_path, stepping="exact", budget=16,
+                        oracle_args=WITHOUT_THE_PRESSED_DRAG, options=here)  # fmt: skip
     assert shown == {DRAWER: [0]} and (tmp_path / DRAWER / "init-00.npz").is_file()
 
 

@@ -9,10 +9,14 @@ import yaml
 
 from langgap.bddl import Predicate
 from langgap.catalog.catalog import load_catalog_file
+from langgap.engine.spec import ExecutionOptions
+from langgap.gate.rows import goals_exclude
+from langgap.gate.validation import validate
 from langgap.goals import conjunction
-from langgap.validate import goals_exclude, validate
 from langgap.version import code_version
 from tests.support.harness import REPO, run_cli
+
+IN_PROCESS = ExecutionOptions(workers=0, progress=False)
 
 
 @pytest.fixture(scope="module")
@@ -44,7 +48,7 @@ def test_gate_with_the_oracle_passes_doable_tasks_and_rejects_a_goal_true_at_t0(
     path = tmp_path / "probe.yaml"
     path.write_text(yaml.safe_dump({"catalog": "probe", "max_steps": source["max_steps"], "tasks": [*keep, already]}))
     selection = "spatial/s0/ramekin-on-plate,spatial/s0/plate-on-plate-spot"
-    rows = {r.id: r for r in validate(str(path), selection, inits=2, workers=0, progress=False).rows}
+    rows = {r.id: r for r in validate(str(path), selection, inits=2, options=IN_PROCESS).rows}
     doable = rows["spatial/s0/ramekin-on-plate"]
     assert doable.feasible and doable.successes == 2 and doable.rate == 1.0, doable.reason
     # Where the goals exclude each other, the source task's goal must be false after the oracle's success.
@@ -54,7 +58,7 @@ def test_gate_with_the_oracle_passes_doable_tasks_and_rejects_a_goal_true_at_t0(
 
 
 def test_gate_rows_and_checks(probe_registry):
-    found = validate(str(probe_registry), "all", inits=2, workers=0, policy="noop", progress=False, blind=True)
+    found = validate(str(probe_registry), "all", inits=2, options=IN_PROCESS, policy="noop", blind=True)
     rows = {r.id: r for r in found.rows}
     assert set(rows) == {
         "spatial/s0/black-bowl-1-on-plate",
@@ -136,6 +140,32 @@ def test_claims_only_resets_every_task_without_a_policy(probe_registry, tmp_path
     assert nothing_at_t0["violations"][0].endswith("init 0: spatial/s0/plate-on-plate-spot")
     refused = run_cli(*args, "--record")
     assert refused.returncode == 2 and refused.stderr.startswith("error: --claims-only runs no policy")
+
+
+@pytest.mark.parametrize("flags", [["--policy", "oracle"], ["--run", "r"], ["--resume"], ["--search-budget", "0"]])
+def test_claims_only_refuses_the_flags_of_a_gate_that_runs_a_policy(probe_registry, flags):
+    result = run_cli("validate", "--catalog", str(probe_registry), "--claims-only", *flags)
+    assert result.returncode == 2 and result.stderr.strip().splitlines() == [
+        "error: --claims-only runs no policy: it stores no episodes, records no verdicts and searches nothing "
+        f"(drop {flags[0]})"
+    ]
+
+
+def test_claims_only_runs_its_probes_on_the_execution_flags(probe_registry):
+    # Each task's start probe is a work item: a timeout far too short kills its worker, and the
+    # fail-fast rule stops the command at the first failure.
+    args = ("validate", "--catalog", str(probe_registry), "--inits", "1", "--claims-only", "--no-progress")
+    result = run_cli(*args, "--workers", "1", "--timeout", "0.01", "--max-failure-streak", "1")
+    assert result.returncode == 4 and result.stderr.strip().splitlines()[-1].startswith(
+        "error: stopped after 1 start probes in a row failed with: start probe timed out after 0s"
+    ), result.stderr
+
+
+def test_resume_without_a_run_is_refused(probe_registry):
+    result = run_cli("validate", "--catalog", str(probe_registry), "--resume")
+    assert result.returncode == 2 and result.stderr.strip() == (
+        "error: --resume needs --run (the directory of the validation to continue)"
+    )
 
 
 @pytest.mark.parametrize(

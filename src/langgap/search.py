@@ -13,15 +13,17 @@ oracle's own closed-loop plan, so every candidate starts from what the oracle al
 * Waypoints: Gaussian noise on every motion command (each candidate its own draw and size), which
   moves every waypoint the plan reaches.
 
-Each candidate is one episode; the first that reaches the goal is kept as a `Demonstration`, which the
-gate stores, replays from the file and verifies before it counts (`langgap.validate`). The search is
-seeded: the same task, init state and budget try the same candidates.
+Each candidate is one episode; the first that reaches the goal is kept as a `Demonstration`, which is
+stored, replayed from the file and verified before the gate (`langgap.gate`) counts it. A task's search
+is one work item for the engine's scheduler (`SearchTask`). The search is seeded: the same task, init
+state and budget try the same candidates.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
@@ -29,7 +31,11 @@ from langgap.catalog.catalog import Catalog
 from langgap.catalog.task import Task
 from langgap.demos.searched import Demonstration, demonstration_path, replay_env, verify
 from langgap.engine.context import task_context
+from langgap.engine.execute import execute
 from langgap.engine.rollout import env_options_for, run_episode
+from langgap.engine.runner import RunnerSetup
+from langgap.engine.spec import ExecutionOptions
+from langgap.engine.work import Job
 from langgap.goals import atoms
 from langgap.policies import make_policy
 from langgap.policies.oracle.planner import order_goal
@@ -37,6 +43,9 @@ from langgap.policies.oracle.scene import Scene
 from langgap.sim.env import TaskEnv
 from langgap.stack import physics_stack
 from langgap.version import code_version
+
+if TYPE_CHECKING:
+    from langgap.engine.runner import WorkRunner
 
 BUDGET = 16  # candidate episodes per init state the oracle fails
 MAX_NOISE = 0.15  # action units
@@ -205,30 +214,59 @@ def search(
     return result
 
 
+@dataclass(frozen=True)
+class SearchTask(Job):
+    """The work item of one task's search: the plan entries (init state, seed) the oracle failed, in order.
+
+    Each demonstration found is stored in the runner's output directory under the task's id, read back,
+    replayed on a fresh environment and kept only if it does the task at its recorded step. The search
+    stops at the task's first init state without one (which bounds a task no candidate does to one
+    budget: its other init states would not decide it)."""
+
+    kind: ClassVar[str] = "search"
+
+    task_id: str
+    entries: tuple[tuple[int, int], ...]
+    stepping: str
+    budget: int = BUDGET
+    oracle_args: tuple[tuple[str, str], ...] = ()
+
+    @property
+    def size(self) -> int:
+        return len(self.entries) * (self.budget + 1)  # the candidates, and each find's replay
+
+    def perform(self, runner: WorkRunner) -> tuple[str, list[int]]:
+        """The task's id, and the init states now shown doable."""
+        catalog, task = runner.catalog, runner.catalog.get(self.task_id)
+        shown = []
+        for init_index, seed in self.entries:
+            found = search(task, catalog, init_index=init_index, seed=seed, stepping=self.stepping,
+                           budget=self.budget, oracle_args=dict(self.oracle_args) or None).found  # fmt: skip
+            if found is None:
+                break
+            path = found.save(demonstration_path(runner.output_dir / self.task_id, init_index))
+            with replay_env(task, self.stepping) as env:
+                verify(env, Demonstration.load(path), catalog)
+            shown.append(init_index)
+        return self.task_id, shown
+
+
 def demonstrate(
-    catalog: Catalog,
+    catalog: str,
     failures: dict[str, list[tuple[int, int]]],
     directory: Path,
     *,
     stepping: str,
     budget: int = BUDGET,
     oracle_args: dict[str, str] | None = None,
+    options: ExecutionOptions | None = None,
 ) -> dict[str, list[int]]:
-    """Search a demonstration for each (init state, seed) of `failures` (task id -> the plan entries the
-    oracle failed, in order); each one found is stored in `directory`/<task id>/, read back, replayed on
-    a fresh environment and kept only if it does the task at its recorded step. A task's search stops at
-    its first init state without one (which bounds a task no candidate does to one budget). Returns task
-    id -> the init states now shown doable."""
-    shown: dict[str, list[int]] = {}
-    for task_id, entries in failures.items():
-        task = catalog.get(task_id)
-        for init_index, seed in entries:
-            entry = dict(init_index=init_index, seed=seed, stepping=stepping, budget=budget, oracle_args=oracle_args)
-            found = search(task, catalog, **entry).found
-            if found is None:
-                break  # the task stays short of a demonstration there: its other init states would not decide it
-            stored = Demonstration.load(found.save(demonstration_path(directory / task_id, init_index)))
-            with replay_env(task, stepping) as env:
-                verify(env, stored, catalog)
-            shown.setdefault(task_id, []).append(init_index)
-    return shown
+    """Search demonstrations for the (init state, seed) entries of `failures` (task id -> the plan entries
+    the oracle failed, in order) of catalog `catalog` (a name or registry path), a task per work item
+    (`SearchTask`) run as `options` say, each one found stored in `directory`/<task id>/. Returns task id
+    -> the init states now shown doable."""
+    args = tuple(sorted((oracle_args or {}).items()))
+    items = [SearchTask(t, tuple(entries), stepping, budget, args) for t, entries in failures.items()]
+    setup = RunnerSetup(catalog=catalog, run_dir=str(directory), stepping=stepping)
+    found = execute(items, setup, options or ExecutionOptions(), unit="task", describe=lambda r: f"{r[0]}: {r[1]}")
+    return {task_id: shown for task_id, shown in found if shown}

@@ -7,7 +7,8 @@ import pytest
 from langgap import proofs
 from langgap.catalog.catalog import registry_path
 from langgap.catalog.verdicts import read_verdicts
-from langgap.validate import TaskValidation, record
+from langgap.gate.recording import record
+from langgap.gate.rows import TaskValidation
 
 DRAWER = "spatial/s2/open-cabinet-bottom-drawer"
 BOWL = "spatial/s2/black-bowl-1-on-plate"

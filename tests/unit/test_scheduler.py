@@ -8,8 +8,9 @@ from collections import deque
 import pytest
 
 from langgap.engine.plan import PlannedEpisode
-from langgap.engine.pools import EpisodeDone, EpisodeFailed, WorkerLost
+from langgap.engine.pools import ItemDone, ItemFailed, WorkerLost
 from langgap.engine.scheduler import RunStopped, make_units, schedule
+from langgap.engine.work import Job, WorkFailed, refuse_gap
 from langgap.records import EpisodeKey, EpisodeRecord, Status
 
 
@@ -50,9 +51,9 @@ class ScriptedPool:
         self.submitted.append((worker, planned.key, attempt))
         outcome = self.script(planned, attempt)
         if outcome == "done":
-            self._events.append(EpisodeDone(worker, record(planned, worker, attempt)))
+            self._events.append(ItemDone(worker, record(planned, worker, attempt)))
         elif outcome.startswith("fail:"):
-            self._events.append(EpisodeFailed(worker, outcome[5:]))
+            self._events.append(ItemFailed(worker, outcome[5:]))
         elif outcome == "lost":
             self._events.append(WorkerLost(worker, "worker process died (exit code 9)"))
 
@@ -222,7 +223,7 @@ class LateReportingPool(ScriptedPool):
     def kill(self, worker):
         super().kill(worker)
         planned, attempt = self.running[worker]
-        self._events.append(EpisodeDone(worker, record(planned, worker, attempt)))
+        self._events.append(ItemDone(worker, record(planned, worker, attempt)))
 
 
 def test_a_timeout_kills_that_worker_replaces_it_and_ignores_what_it_says_later():
@@ -290,3 +291,52 @@ def test_many_workers_and_mixed_trouble_still_give_one_record_per_episode():
     assert sorted(r.key for r in records) == sorted(index)
     assert {r.key: r.attempts for r in records} == {k: 2 if n in trouble else 1 for k, n in index.items()}
     assert len(pool.spawned) == 3 + 2 and not pool.closed
+
+
+@dataclasses.dataclass(frozen=True)
+class Probe(Job):
+    """A work item of another kind than an episode, `size` episodes' worth of simulation."""
+
+    kind = "probe"
+
+    task_id: str
+    weight: int = 1
+
+    @property
+    def size(self) -> int:
+        return self.weight
+
+
+class ProbePool(ScriptedPool):
+    """Workers that report a probe's task id as its result, or never report (`hang`) the probes `script` says."""
+
+    def submit(self, worker, item, attempt):
+        self.submitted.append((worker, item.key, attempt))
+        if self.script(item, attempt) == "done":
+            self._events.append(ItemDone(worker, item.task_id))
+
+
+def test_work_of_another_kind_gets_the_same_scheduling_with_a_timeout_scaled_by_its_size():
+    now = [0.0]
+
+    def clock():
+        now[0] += 5.0
+        return now[0]
+
+    slow, heavy = Probe("s0/slow"), Probe("s1/heavy", weight=10)
+    pool = ProbePool(lambda item, attempt: "hang" if attempt == 1 else "done")
+    killed_at = {}
+    pool.kill = lambda worker: killed_at.setdefault(worker, now[0])
+    results = run([slow, heavy], pool, clock=clock, timeout_s=12, make_gap=refuse_gap)
+    assert sorted(results) == ["s0/slow", "s1/heavy"]  # each retried once, on a new worker
+    first = {k.task_id: w for w, k, a in pool.submitted if a == 1}
+    # The size-1 probe was killed past 12 s; the size-10 one had 120 s.
+    assert killed_at[first["s0/slow"]] < 30 and 120 < killed_at[first["s1/heavy"]] < 140
+
+
+def test_work_that_has_no_gap_fails_the_command_once_its_attempts_are_spent():
+    pool = ProbePool(lambda item, attempt: "never")
+    pool.submit = lambda worker, item, attempt: pool._events.append(ItemFailed(worker, "GL context lost"))
+    with pytest.raises(WorkFailed, match=r"^probe s0/a failed 2 time\(s\): GL context lost$") as info:
+        run([Probe("s0/a")], pool, make_gap=refuse_gap, max_attempts=2)
+    assert info.value.exit_code == 4

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from langgap.cli.execution_flags import add_execution_options, execution_options
 from langgap.cli.tasks_cmd import add_catalog_options
 
 
@@ -14,7 +15,6 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--tasks", required=True, metavar="SELECTION", help="task selection (e.g. train, spatial)")
     parser.add_argument("--demos", type=int, required=True, metavar="N", help="successful demonstrations per task")
     parser.add_argument("--out", required=True, metavar="DIR", help="new collection directory")
-    parser.add_argument("--workers", type=int, default=1, help="worker processes, one task at a time each (0: here)")
     parser.add_argument("--seed", type=int, default=0, help="attempt j of every task uses env seed SEED+j")
     parser.add_argument(
         "--noise",
@@ -23,7 +23,9 @@ def add_parser(subparsers) -> None:
         metavar="SIGMA",
         help="execution noise on the oracle's motion commands (std); labels stay the clean commands (DART)",
     )
-    parser.add_argument("--max-attempts", type=int, default=0, help="attempts per task before giving up (3N+10)")
+    parser.add_argument(
+        "--max-attempts", type=int, default=0, help="demonstration attempts per task before giving up (3N+10)"
+    )
     parser.add_argument(
         "--format",
         choices=("auto", "compact", "lerobot"),
@@ -31,7 +33,8 @@ def add_parser(subparsers) -> None:
         help="compact: NPZ only; lerobot: also the LeRobot v3 dataset (needs LeRobot); auto: lerobot if installed",
     )
     parser.add_argument("--repo-id", default="local/langgap_demos", help="LeRobot dataset repo id (no upload)")
-    parser.add_argument("--no-progress", action="store_true")
+    # A task's collection is one work item: its infrastructure retries have their own flag.
+    add_execution_options(parser, attempts_flag="--max-task-attempts")
     parser.set_defaults(handler=run)
 
 
@@ -56,7 +59,7 @@ def run(args) -> int:
         style=args.style,
         max_attempts=args.max_attempts,
     )
-    manifest = collect(config, args.out, workers=args.workers, progress=not args.no_progress)
+    manifest = collect(config, args.out, execution_options(args))
     short = 0
     print(f"{'task':<48} {'kept':>5} {'attempts':>8} {'success':>8}")
     for task_id, stats in manifest["tasks"].items():

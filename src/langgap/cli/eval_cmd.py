@@ -7,16 +7,13 @@ infrastructure failures with one cause; 2 bad input or another error (nothing st
 
 from __future__ import annotations
 
+from langgap.cli.execution_flags import add_execution_options, execution_options
 from langgap.cli.tasks_cmd import add_catalog_options
 from langgap.engine.filming import DEFAULT_VIDEO, VIDEO_DIR, VIDEO_HELP
 from langgap.engine.plan import CONDITION_HELP, CONDITIONS
-from langgap.engine.pools import BACKENDS
 from langgap.engine.spec import (
-    DEFAULT_FAILURE_STREAK,
-    DEFAULT_MAX_ATTEMPTS,
     DEFAULT_MAX_BATCH,
     DEFAULT_MAX_WAIT_MS,
-    DEFAULT_TIMEOUT_S,
     PAPER_EPISODES,
     RESULT_STEPPINGS,
 )
@@ -52,7 +49,6 @@ def add_parser(subparsers) -> None:
         help="episodes per task = init states 0..N-1 (default: %(default)s, as in the paper)",
     )
     parser.add_argument("--run", required=True, metavar="DIR", help="run directory (SQLite store, videos)")
-    parser.add_argument("--workers", type=int, default=1, help="local worker processes; 0 runs in this process")
     parser.add_argument("--resume", action="store_true", help="continue a run: skip stored episodes, redo gaps")
     parser.add_argument(
         "--extend",
@@ -80,30 +76,7 @@ def add_parser(subparsers) -> None:
         help="run every planned episode with R seeds on the same init state (repeat r: seed SEED+1000r+k); "
         "reports give the between-seed spread",
     )
-    parser.add_argument(
-        "--timeout",
-        type=float,
-        metavar="S",
-        help=f"seconds per episode before it is an infrastructure failure (default: {DEFAULT_TIMEOUT_S:g}; "
-        "needs worker processes)",
-    )
-    parser.add_argument(
-        "--max-attempts", type=int, default=DEFAULT_MAX_ATTEMPTS, help="attempts before an episode becomes a gap"
-    )
-    parser.add_argument(
-        "--max-failure-streak",
-        type=int,
-        default=DEFAULT_FAILURE_STREAK,
-        metavar="N",
-        help="stop the run after N consecutive infrastructure failures with the same cause (default: %(default)s)",
-    )
-    parser.add_argument(
-        "--backend",
-        choices=sorted(BACKENDS),
-        default="local",
-        help="local worker processes, or actors on a Ray cluster (pip install 'langgap[ray]')",
-    )
-    parser.add_argument("--ray-address", metavar="ADDR", help="Ray cluster to join (default: start a local one)")
+    add_execution_options(parser)
     parser.add_argument(
         "--shared-policy",
         action="store_true",
@@ -116,7 +89,6 @@ def add_parser(subparsers) -> None:
         help=f"shared policy: how long a query waits for others (default: {DEFAULT_MAX_WAIT_MS:g})",
     )
     parser.add_argument("--policy-gpus", type=float, help="ray's shared policy: GPUs for the policy actor (default: 0)")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--quiet", action="store_true", help="print no diagnosis table at the end")
     parser.set_defaults(handler=run)
 
@@ -134,7 +106,7 @@ def add_stepping_option(parser) -> None:
 
 def run(args) -> int:
     from langgap.engine.evaluate import evaluate
-    from langgap.engine.spec import ExecutionOptions, RunSpec
+    from langgap.engine.spec import RunSpec
 
     if args.extend and not args.resume:
         raise LangGapError("--extend needs --resume")
@@ -150,15 +122,9 @@ def run(args) -> int:
         style=args.style,
         stepping=args.stepping,
     )
-    options = ExecutionOptions(
-        backend=args.backend,
-        workers=args.workers,
-        timeout_s=args.timeout,
-        max_attempts=args.max_attempts,
-        max_failure_streak=args.max_failure_streak,
+    options = execution_options(
+        args,
         video=args.video,
-        progress=not args.no_progress,
-        ray_address=args.ray_address,
         shared_policy=args.shared_policy,
         max_batch=args.max_batch,
         max_wait_ms=args.max_wait_ms,

@@ -97,7 +97,8 @@ def run(args) -> int:
     print("\n".join(summary_lines(tasks)))
     print(f"wrote {path}")
     if args.gate_inits:
-        from langgap.validate import gate_summary, record
+        from langgap.gate.recording import record
+        from langgap.gate.text import gate_summary
 
         rows = run_gate(args, str(path), "all", args.gate_inits, recording=True).rows
         print(gate_summary(rows))

@@ -7,18 +7,20 @@ from pathlib import Path
 
 from langgap.catalog.task import INFEASIBLE, unproven
 from langgap.cli.eval_cmd import add_stepping_option
+from langgap.cli.execution_flags import add_execution_options, execution_options
 from langgap.cli.tasks_cmd import add_catalog_option
 from langgap.errors import LangGapError
+from langgap.gate.rows import FEASIBLE_RATE, FULL_INITS
 from langgap.search import BUDGET
-from langgap.validate import FEASIBLE_RATE, FULL_INITS
+
+DEFAULT_POLICY = "oracle"
 
 
 def add_gate_options(parser) -> None:
-    """Options shared by `validate` and `generate --gate-inits`."""
-    parser.add_argument("--workers", type=int, default=1, help="local worker processes (default: %(default)s)")
+    """Options shared by `validate` and `generate --gate-inits`: the execution flags, and the gate's own."""
+    add_execution_options(parser)
     parser.add_argument("--run", metavar="DIR", help="keep the oracle's episodes in this run directory (resumable)")
     parser.add_argument("--resume", action="store_true", help="continue an interrupted validation in --run")
-    parser.add_argument("--no-progress", action="store_true")
     parser.add_argument(
         "--search-budget",
         type=int,
@@ -36,9 +38,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("tasks", nargs="?", default="all", metavar="SELECTION", help="task selection (default: all)")
     add_catalog_option(parser)
     parser.add_argument("--inits", type=int, default=FULL_INITS, help="first K init states per task (default: all 50)")
-    parser.add_argument(
-        "--policy", default="oracle", help="the scripted policy that proves tasks (default: %(default)s)"
-    )
+    parser.add_argument("--policy", help=f"the scripted policy that proves tasks (default: {DEFAULT_POLICY})")
     parser.add_argument(
         "--blind",
         action="store_true",
@@ -48,7 +48,8 @@ def add_parser(subparsers) -> None:
         "--claims-only",
         action="store_true",
         help="only the claims about starts (one t0 state per scene and init state, no scene goal at t0): "
-        "every task's own environment reset to each init state, no policy run",
+        "every task's own environment reset to each init state (with --stepping, on the execution flags' "
+        "workers), no policy run",
     )
     parser.add_argument("--out", metavar="FILE", help="write the report as JSON (a row per task, the claims)")
     parser.add_argument(
@@ -61,10 +62,18 @@ def add_parser(subparsers) -> None:
 
 
 def run_gate(
-    args, catalog: str, selection: str, inits: int, policy: str = "oracle", blind: bool = False, recording: bool = False
+    args,
+    catalog: str,
+    selection: str,
+    inits: int,
+    policy: str = DEFAULT_POLICY,
+    blind: bool = False,
+    recording: bool = False,
 ):
     """Run the feasibility gate with the options of `add_gate_options`; returns its `Validation`. Searched
     demonstrations go beside the catalog's registry when `recording` (the verdicts will name them)."""
+    if args.resume and args.run is None:
+        raise LangGapError("--resume needs --run (the directory of the validation to continue)")
     budget = args.search_budget
     if budget is not None and budget < 0:
         raise LangGapError(f"--search-budget must be >= 0, got {budget}")
@@ -72,17 +81,17 @@ def run_gate(
         raise LangGapError(f"--search-budget varies the oracle's plan; --policy {policy} has none to vary")
     if budget is None:
         budget = BUDGET if policy == "oracle" else 0
-    from langgap.validate import demonstrations_dir, validate
+    from langgap.gate.recording import demonstrations_dir
+    from langgap.gate.validation import validate
 
     return validate(
         catalog,
         selection,
         inits=inits,
-        workers=args.workers,
+        options=execution_options(args),
         run=args.run,
         resume=args.resume,
         policy=policy,
-        progress=not args.no_progress,
         blind=blind,
         stepping=args.stepping,
         search_budget=budget,
@@ -91,11 +100,13 @@ def run_gate(
 
 
 def run(args) -> int:
-    from langgap.validate import prove_rejected, record, table_text
+    from langgap.gate.recording import prove_rejected, record
+    from langgap.gate.text import table_text
 
     if args.claims_only:
         return _claims_only(args)
-    found = run_gate(args, args.catalog, args.tasks, args.inits, args.policy, blind=args.blind, recording=args.record)
+    policy = args.policy or DEFAULT_POLICY
+    found = run_gate(args, args.catalog, args.tasks, args.inits, policy, blind=args.blind, recording=args.record)
     print(table_text(found.rows))
     _print_claims(found, args.out)
     if args.record:
@@ -105,27 +116,43 @@ def run(args) -> int:
                 print(f"{row.id}: {INFEASIBLE}: {proofs[row.id]}")
             elif row.short:
                 print(f"{row.id}: {unproven(row.successes, row.episodes)}")
-        options = dict(inits=args.inits, policy=args.policy, stepping=args.stepping, proofs=proofs)
+        options = dict(inits=args.inits, policy=policy, stepping=args.stepping, proofs=proofs)
         path = record(args.catalog, found.rows, **options)
         print(f"recorded verdicts in {path}")
     return 0 if found.passed else 1
 
 
 def _claims_only(args) -> int:
+    """The claims about starts alone; the flags of a gate that runs a policy are refused."""
     from langgap.catalog.catalog import load_catalog
-    from langgap.validate import Validation, scene_starts, start_claims
+    from langgap.gate.claims import start_claims
+    from langgap.gate.probes import scene_starts
+    from langgap.gate.validation import Validation
 
-    if args.record or args.blind:
-        raise LangGapError("--claims-only runs no policy: it records no verdicts and runs no blind policy")
-    catalog = load_catalog(args.catalog)
-    found = Validation([], start_claims(scene_starts(catalog, catalog.select(args.tasks), args.inits)))
+    policy_flags = {
+        "--policy": args.policy is not None,
+        "--blind": args.blind,
+        "--record": args.record,
+        "--run": args.run is not None,
+        "--resume": args.resume,
+        "--search-budget": args.search_budget is not None,
+    }
+    given = [flag for flag, present in policy_flags.items() if present]
+    if given:
+        raise LangGapError(
+            f"--claims-only runs no policy: it stores no episodes, records no verdicts and searches nothing "
+            f"(drop {', '.join(given)})"
+        )
+    tasks = load_catalog(args.catalog).select(args.tasks)
+    starts = scene_starts(args.catalog, tasks, args.inits, execution_options(args), stepping=args.stepping)
+    found = Validation([], start_claims(starts))
     _print_claims(found, args.out)
     return 0 if found.passed else 1
 
 
 def _print_claims(found, out: str | None) -> None:
     """Print the claims; with `out`, write the whole validation there as JSON."""
-    from langgap.validate import claims_text, report
+    from langgap.gate.text import claims_text, report
 
     print(claims_text(found.claims))
     if out:

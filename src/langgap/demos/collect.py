@@ -1,23 +1,28 @@
-"""`collect`: N successful oracle demonstrations per task, from sampled starts, in worker processes.
+"""`collect`: N successful oracle demonstrations per task, from sampled starts, on the engine's workers.
 
-Attempt `j` of every task uses env seed `seed + j`; attempts run in order until `demos` succeed or
-`max_attempts` are spent, so the result depends only on the arguments, not on the number of workers.
-Failed attempts are dropped (and counted); the states of kept ones are replayed once for their
-privileged observations. Nothing is rendered here.
+Each task's collection is one work item (`CollectTask`) for the engine's scheduler, so it runs on any
+backend (`--backend local|ray`) with the scheduler's retries and timeouts. Attempt `j` of every task
+uses env seed `seed + j`; attempts run in order until `demos` succeed or `max_attempts` are spent, so
+the result depends only on the arguments, not on the workers or the backend. Failed attempts are
+dropped (and counted); the states of kept ones are replayed once for their privileged observations.
+Nothing is rendered here.
 """
 
 from __future__ import annotations
 
-import multiprocessing
 import time
-from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import ClassVar
 
 from langgap import stack
-from langgap.catalog.catalog import load_catalog
+from langgap.catalog.catalog import Catalog
 from langgap.demos.compact import FORMAT_VERSION, read_manifest, save_demo, write_manifest
 from langgap.demos.record import add_privileged, record_attempt
+from langgap.engine.execute import execute
+from langgap.engine.runner import RunnerSetup, WorkRunner
+from langgap.engine.spec import ExecutionOptions
+from langgap.engine.work import Job
 from langgap.errors import LangGapError
 from langgap.policies import make_policy
 from langgap.sim.env import EnvOptions, TaskEnv
@@ -59,9 +64,25 @@ class TaskCollection:
         return len(self.kept) / self.attempts if self.attempts else 0.0
 
 
-def collect_task(config: CollectConfig, task_id: str, out: str) -> TaskCollection:
-    """Collect one task's demonstrations into `out` (runs in a worker process)."""
-    catalog = load_catalog(config.catalog)
+@dataclass(frozen=True)
+class CollectTask(Job):
+    """The work item of one task's collection: its demonstrations go to the runner's output directory."""
+
+    kind: ClassVar[str] = "collection"
+
+    config: CollectConfig
+    task_id: str
+
+    @property
+    def size(self) -> int:
+        return self.config.attempts_cap
+
+    def perform(self, runner: WorkRunner) -> TaskCollection:
+        return collect_task(self.config, runner.catalog, self.task_id, runner.output_dir)
+
+
+def collect_task(config: CollectConfig, catalog: Catalog, task_id: str, out: Path) -> TaskCollection:
+    """Collect one task's demonstrations into `out`."""
     task = catalog.get(task_id)
     policy = make_policy(config.policy)
     stats = TaskCollection(task_id)
@@ -80,35 +101,25 @@ def collect_task(config: CollectConfig, task_id: str, out: str) -> TaskCollectio
                 stats.failed.append(seed)
                 continue
             add_privileged(env, demo)
-            save_demo(Path(out), demo)
+            save_demo(out, demo)
             stats.kept.append(seed)
     stats.wall_time_s = time.perf_counter() - started
     return stats
 
 
-def _collect_task_star(args) -> TaskCollection:
-    return collect_task(*args)
-
-
-def _run(config: CollectConfig, out: Path, workers: int) -> Iterator[TaskCollection]:
-    jobs = [(config, task_id, str(out)) for task_id in config.tasks]
-    if workers <= 0:
-        yield from map(_collect_task_star, jobs)
-        return
-    # Spawned, not forked: no GL or MuJoCo state may cross into a worker.
-    with multiprocessing.get_context("spawn").Pool(min(workers, len(jobs))) as pool:
-        yield from pool.imap_unordered(_collect_task_star, jobs)
-
-
-def collect(config: CollectConfig, out: str | Path, *, workers: int = 1, progress: bool = True) -> dict:
-    """Collect every task of `config` into `out` and write its manifest; returns the manifest."""
+def collect(config: CollectConfig, out: str | Path, options: ExecutionOptions | None = None) -> dict:
+    """Collect every task of `config` into `out` (a task per work item, run as `options` say) and write its
+    manifest; returns the manifest."""
     out = Path(out)
     if (out / "collection.json").exists():
         raise LangGapError(f"{out} already holds a collection ({read_manifest(out)['demos']} demos per task)")
-    out.mkdir(parents=True, exist_ok=True)
+    options = options or ExecutionOptions()
+    setup = RunnerSetup(catalog=config.catalog, run_dir=str(out))
+    items = [CollectTask(config, task_id) for task_id in config.tasks]
     results: dict[str, TaskCollection] = {}
-    for stats in _progress(_run(config, out, workers), len(config.tasks), enabled=progress):
+    for stats in execute(items, setup, options, unit="task", describe=_describe):
         results[stats.task_id] = stats
+    out.mkdir(parents=True, exist_ok=True)  # only now: a backend that cannot start leaves no directory
     manifest = {
         "format": FORMAT_VERSION,
         **asdict(config),
@@ -122,14 +133,5 @@ def collect(config: CollectConfig, out: str | Path, *, workers: int = 1, progres
     return manifest
 
 
-def _progress(items: Iterator[TaskCollection], total: int, *, enabled: bool) -> Iterator[TaskCollection]:
-    if not enabled:
-        yield from items
-        return
-    from tqdm import tqdm
-
-    with tqdm(total=total, unit="task", desc="collect", dynamic_ncols=True) as bar:
-        for stats in items:
-            bar.set_postfix_str(f"{stats.task_id}: {len(stats.kept)}/{stats.attempts}")
-            bar.update()
-            yield stats
+def _describe(stats: TaskCollection) -> str:
+    return f"{stats.task_id}: {len(stats.kept)}/{stats.attempts}"

@@ -4,18 +4,30 @@ Shared by the exports (LeRobot, HDF5): a demonstration's frames exist nowhere bu
 the collection shows the same pixels. Frames are LangGap's images (`TaskEnv.render`): `IMAGE_SIZE`
 square, upright, i.e. the raw MuJoCo render rotated 180 degrees (`raw[::-1, ::-1]`) — the orientation of
 `lerobot/libero` and openpi's LIBERO data (LIBERO's own HDF5 files hold the raw, upside-down render).
+
+Rendering a demonstration is a work item (`RenderDemo`) for the engine's scheduler, on local workers:
+the demonstration files are read where they lie.
 """
 
 from __future__ import annotations
 
-import multiprocessing
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
 from langgap.demos.compact import load_demo
 from langgap.demos.record import Demo, replay_states
+from langgap.engine.execute import execute, with_progress
+from langgap.engine.runner import RunnerSetup
+from langgap.engine.spec import ExecutionOptions
+from langgap.engine.work import Job
+
+if TYPE_CHECKING:
+    from langgap.engine.runner import WorkRunner
+    from langgap.sim.env import TaskEnv
 
 IMAGE_SIZE = 256
 # Recorded with exported images (HDF5 attributes) so a reader need not guess.
@@ -24,43 +36,37 @@ IMAGE_ORIENTATION = (
     "LIBERO's own HDF5 files store the raw render, upside down"
 )
 
-# One rendering env per process, for the task being rendered (a collection is ordered by task).
-_ENVS: dict = {}
 
+def render_frames(env: TaskEnv, demo: Demo) -> dict[str, np.ndarray]:
+    """Replay `demo`'s states on `env` (built for its task with every camera) and render every camera at
+    each: per camera (`langgap.sim.env.CAMERAS`), its (T, H, W, 3) uint8 frames."""
+    from langgap.sim.env import CAMERAS
 
-def render_demo(catalog: str, path: str | Path) -> tuple[Demo, dict[str, np.ndarray]]:
-    """Replay the stored demonstration at `path` and render every camera at every recorded state.
-
-    Returns the demonstration and, per camera (`langgap.sim.env.CAMERAS`), its (T, H, W, 3) uint8 frames;
-    runs in a worker process or here.
-    """
-    from langgap.catalog.catalog import load_catalog
-    from langgap.sim.env import CAMERAS, EnvOptions, TaskEnv
-
-    demo = load_demo(Path(path))
-    env = _ENVS.get(demo.task_id)
-    if env is None:
-        close_render_envs()
-        env = _ENVS[demo.task_id] = TaskEnv(
-            load_catalog(catalog).get(demo.task_id), EnvOptions(cameras=CAMERAS, image_size=IMAGE_SIZE)
-        )
     frames = list(replay_states(env, demo, lambda e: [e.render(c) for c in CAMERAS]))
-    return demo, {camera: np.stack([f[i] for f in frames]) for i, camera in enumerate(CAMERAS)}
+    return {camera: np.stack([f[i] for f in frames]) for i, camera in enumerate(CAMERAS)}
 
 
-def close_render_envs() -> None:
-    """Close this process's rendering env (GL context and simulator)."""
-    for env in _ENVS.values():
-        env.close()
-    _ENVS.clear()
+@dataclass(frozen=True)
+class RenderDemo(Job):
+    """The work item of one stored demonstration rendered; `index` is its place in the requested order."""
 
+    kind: ClassVar[str] = "render"
 
-def _render_star(args) -> tuple[Demo, dict[str, np.ndarray]]:
-    return render_demo(*args)
+    index: int
+    path: str
 
+    @property
+    def task_id(self) -> str:
+        # The folder of one task's demonstrations: they share a worker's rendering environment.
+        return Path(self.path).parent.as_posix()
 
-def _load(path: Path) -> tuple[Demo, dict[str, np.ndarray]]:
-    return load_demo(path), {}
+    def perform(self, runner: WorkRunner) -> tuple[int, Demo, dict[str, np.ndarray]]:
+        from langgap.sim.env import CAMERAS, EnvOptions
+
+        demo = load_demo(Path(self.path))
+        options = EnvOptions(cameras=CAMERAS, image_size=IMAGE_SIZE)
+        env = runner.kept_env(runner.catalog.get(demo.task_id), options)
+        return self.index, demo, render_frames(env, demo)
 
 
 def iter_demos(
@@ -68,31 +74,18 @@ def iter_demos(
 ) -> Iterator[tuple[Demo, dict[str, np.ndarray]]]:
     """Each demonstration of `paths`, in that order, with its frames per camera when `render` (else `{}`).
 
-    Rendering runs in `workers` spawned processes (0: here); the order is that of `paths` whatever their
-    number, so an exported dataset does not depend on it.
+    Rendering runs on `workers` local worker processes (0: here), through the engine's scheduler; the
+    order is that of `paths` whatever their number, so an exported dataset does not depend on it.
     """
-    items = _iter_demos(catalog, paths, render=render, workers=workers)
-    if not progress:
-        yield from items
-        return
-    from tqdm import tqdm
-
-    yield from tqdm(items, total=len(paths), unit="demo", desc="render" if render else "read")
-
-
-def _iter_demos(
-    catalog: str, paths: list[Path], *, render: bool, workers: int
-) -> Iterator[tuple[Demo, dict[str, np.ndarray]]]:
     if not render:
-        yield from map(_load, paths)
+        yield from with_progress(((load_demo(p), {}) for p in paths), len(paths), unit="demo", enabled=progress)
         return
-    jobs = [(catalog, str(p)) for p in paths]
-    if workers <= 0 or not jobs:
-        try:
-            yield from map(_render_star, jobs)
-        finally:
-            close_render_envs()
-        return
-    # Spawned, not forked: no GL or MuJoCo state may cross into a worker.
-    with multiprocessing.get_context("spawn").Pool(min(workers, len(jobs))) as pool:
-        yield from pool.imap(_render_star, jobs)
+    items = [RenderDemo(i, str(p)) for i, p in enumerate(paths)]
+    options = ExecutionOptions(workers=workers, progress=progress)
+    waiting: dict[int, tuple[Demo, dict[str, np.ndarray]]] = {}
+    next_index = 0
+    for index, demo, frames in execute(items, RunnerSetup(catalog=catalog), options, unit="demo"):
+        waiting[index] = demo, frames
+        while next_index in waiting:  # in the order of `paths`, whichever worker finished first
+            yield waiting.pop(next_index)
+            next_index += 1

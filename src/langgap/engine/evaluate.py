@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import contextlib
-import sys
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import asdict, dataclass, field, replace
 from datetime import UTC, datetime
@@ -11,11 +10,11 @@ from pathlib import Path
 
 from langgap.catalog.catalog import gate_snapshot, load_catalog
 from langgap.engine.episode import gap_record
+from langgap.engine.execute import scheduled, with_progress
 from langgap.engine.filming import VideoSelection, replay_matches
 from langgap.engine.plan import PlannedEpisode, build_plan
 from langgap.engine.pools import WorkerPool, make_pool
 from langgap.engine.runner import RunnerSetup
-from langgap.engine.scheduler import schedule
 from langgap.engine.spec import PLAN_FIELDS, ExecutionOptions, RunSpec, SpecError
 from langgap.records import EpisodeRecord, Status
 from langgap.store import RunStore
@@ -35,6 +34,10 @@ class RunSummary:
     policy_server: dict = field(default_factory=dict)  # a shared policy's counters (Ray): calls, queries
     filmed: int = 0  # episodes with a clip among those `--video` chose
     film_mismatches: int = 0  # replays (per-outcome filming) that ended otherwise: no clip attached
+
+    def rates(self, _latest: EpisodeRecord | None = None) -> str:
+        """The running success rate (of judged episodes) and the gaps, for the progress bar."""
+        return f"success={self.successes / max(1, self.ran - self.gaps):.0%}, gaps={self.gaps}"
 
     @property
     def complete(self) -> bool:
@@ -142,15 +145,7 @@ def evaluate(
                 planned, task, policy_name=spec.policy, error=error, attempts=attempts, physics=spec.physics
             )
 
-        return schedule(
-            todo,
-            pool,
-            workers=max(1, options.workers),
-            make_gap=make_gap,
-            max_attempts=options.max_attempts,
-            max_failure_streak=options.max_failure_streak,
-            timeout_s=options.episode_timeout_s,
-        )
+        return scheduled(todo, pool, options, make_gap)
 
     # The pool comes first: options it cannot satisfy (no Ray, too few GPUs) fail before a run
     # directory exists. Workers only start when the scheduler asks for them.
@@ -161,7 +156,8 @@ def evaluate(
         done = store.done_keys()
         todo = [p for p in plan if p.key not in done]
         summary = RunSummary(run, planned=len(plan), skipped=len(plan) - len(todo))
-        for record in _with_progress(run_episodes(todo, pool), len(todo), summary, enabled=options.progress):
+        counted = _counted(run_episodes(todo, pool), summary)
+        for record in with_progress(counted, len(todo), unit="ep", enabled=options.progress, describe=summary.rates):
             store.write(record)
     summary.policy_server = dict(getattr(pool, "server_stats", {}))  # set by closing a shared-policy pool
     if videos:
@@ -209,31 +205,10 @@ def _film(
             replays.close()
 
 
-def _with_progress(
-    records: Iterable[EpisodeRecord], total: int, summary: RunSummary, *, enabled: bool
-) -> Iterator[EpisodeRecord]:
-    """Count results into `summary` and show a progress bar (ETA, running success rate) on stderr."""
-    bar = None
-    if enabled and total:
-        from tqdm import tqdm
-
-        bar = tqdm(
-            total=total,
-            unit="ep",
-            file=sys.stderr,
-            dynamic_ncols=True,
-            mininterval=0.5 if sys.stderr.isatty() else 30.0,
-        )
-    try:
-        for record in records:
-            yield record
-            summary.ran += 1
-            summary.successes += record.success
-            summary.gaps += record.status == Status.GAP
-            if bar is not None:
-                valid = summary.ran - summary.gaps
-                bar.set_postfix(success=f"{summary.successes / max(1, valid):.0%}", gaps=summary.gaps, refresh=False)
-                bar.update(1)
-    finally:
-        if bar is not None:
-            bar.close()
+def _counted(records: Iterable[EpisodeRecord], summary: RunSummary) -> Iterator[EpisodeRecord]:
+    """`records`, counted into `summary` as they pass."""
+    for record in records:
+        summary.ran += 1
+        summary.successes += record.success
+        summary.gaps += record.status == Status.GAP
+        yield record

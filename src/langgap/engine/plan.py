@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass
+from typing import ClassVar
 
 from langgap.catalog.catalog import Catalog
 from langgap.catalog.task import Task
@@ -23,10 +24,19 @@ CONDITION_HELP = (
 
 @dataclass(frozen=True)
 class PlannedEpisode:
+    """An evaluation episode: the first kind of work item (`langgap.engine.work.WorkItem`)."""
+
+    kind: ClassVar[str] = "episode"
+    size: ClassVar[int] = 1  # one episode's timeout
+
     key: EpisodeKey
     instruction: str  # the exact string the policy will receive
     scene: str = ""  # the scene it is set in: a worker's environment serves every task of one scene
     film: bool = False  # record a clip of the episode (the run's `--video` chose it)
+
+    @property
+    def task_id(self) -> str:
+        return self.key.task_id
 
     @property
     def instruction_sha256(self) -> str:

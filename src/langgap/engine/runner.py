@@ -1,27 +1,32 @@
-"""What executes episodes wherever they run (in-process, a worker process, a Ray actor).
+"""What executes work items wherever they run (in-process, a worker process, a Ray actor).
 
-An `EpisodeRunner` owns one policy and at most one environment; the environment is built lazily
-for the task of the next episode and kept (soft resets) while consecutive episodes share the task.
-After an infrastructure failure everything is rebuilt, since a crash may leave either broken.
+A `WorkRunner` dispatches on the item's kind: a planned episode (`PlannedEpisode`) runs here, with the
+runner's policy; any other work item is a `Job` that does its own work (`Job.perform`) with what the
+runner lends it (the catalog, a kept environment, the output directory). A runner owns at most one
+policy and one environment; the environment is built lazily for the task of the next item and kept
+(soft resets) while consecutive items share the task. After an infrastructure failure everything is
+rebuilt, since a crash may leave either broken.
 """
 
 from __future__ import annotations
 
 import contextlib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Protocol
+from typing import Any, Protocol
 
 from langgap.catalog.catalog import load_catalog
+from langgap.catalog.task import DEFAULT_STYLE, Task
 from langgap.engine.episode import execute_episode, video_hook
 from langgap.engine.filming import VIDEO_DIR, clip_name
 from langgap.engine.plan import PlannedEpisode
 from langgap.engine.rollout import env_options_for
+from langgap.engine.work import Job, WorkItem
 from langgap.errors import one_line
 from langgap.policies import make_policy
 from langgap.policies.base import Policy, config_hash, policy_config
 from langgap.records import EpisodeRecord
-from langgap.sim.env import CAMERAS, TaskEnv
+from langgap.sim.env import CAMERAS, EnvOptions, TaskEnv
 from langgap.stack import DEFAULT_STEPPING
 from langgap.video import FRAME_EVERY, VIDEO_SUFFIX
 
@@ -36,22 +41,24 @@ class PolicyServerHandle(Protocol):
 
 @dataclass(frozen=True)
 class RunnerSetup:
-    """Everything a runner needs, picklable so it can cross into a worker process."""
+    """Everything a runner needs, picklable so it can cross into a worker process. Only episodes use a policy."""
 
     catalog: str
-    policy: str
-    policy_args: dict[str, str]
-    style: str
-    run_dir: str | None = None  # where a filmed episode's clip goes (its `videos` folder)
+    policy: str = ""
+    policy_args: dict[str, str] = field(default_factory=dict)
+    style: str = DEFAULT_STYLE
+    run_dir: str | None = None  # where work writes its files (a filmed episode's clip: its `videos` folder)
     stepping: str = DEFAULT_STEPPING  # how physics substeps are computed (`RunSpec.stepping`)
     policy_server: PolicyServerHandle | None = None  # a shared policy; None: each runner builds its own
 
 
-class EpisodeFailure(Exception):
-    """An episode could not be run (infrastructure): its one-line message travels to the scheduler."""
+class WorkFailure(Exception):
+    """A work item could not be done (infrastructure): its one-line message travels to the scheduler."""
 
 
-class EpisodeRunner:
+class WorkRunner:
+    """Does work items on one worker; see the module's docstring."""
+
     def __init__(self, setup: RunnerSetup, worker: int = 0):
         self.setup = setup
         self.worker = worker
@@ -60,15 +67,33 @@ class EpisodeRunner:
         self._policy_hash = ""
         self._env: TaskEnv | None = None
 
-    def run(self, planned: PlannedEpisode, attempts: int = 1) -> EpisodeRecord:
-        """Run one episode; raises EpisodeFailure on any infrastructure error (after discarding env and policy)."""
+    @property
+    def output_dir(self) -> Path:
+        """Where work writes its files (`RunnerSetup.run_dir`; a Ray actor's are sent to the driver's)."""
+        return Path(self.setup.run_dir or ".")
+
+    def run(self, item: WorkItem, attempts: int = 1) -> Any:
+        """Do one work item; raises WorkFailure on any infrastructure error (after discarding env and policy)."""
         try:
-            return self._run(planned, attempts)
+            if isinstance(item, PlannedEpisode):
+                return self._run_episode(item, attempts)
+            if isinstance(item, Job):
+                return item.perform(self)
+            raise TypeError(f"not a work item: {type(item).__name__}")
         except Exception as exc:
             self.close()
-            raise EpisodeFailure(one_line(exc)) from exc
+            raise WorkFailure(one_line(exc)) from exc
 
-    def _run(self, planned: PlannedEpisode, attempts: int) -> EpisodeRecord:
+    def kept_env(self, task: Task, options: EnvOptions) -> TaskEnv:
+        """An environment of `task` built with `options`: the runner's own, kept while consecutive work
+        asks for the same task and options (and closed with the runner)."""
+        env = self._env
+        if env is None or env.task.id != task.id or env.options != options:
+            self._close_env()
+            self._env = TaskEnv(task, options)
+        return self._env
+
+    def _run_episode(self, planned: PlannedEpisode, attempts: int) -> EpisodeRecord:
         task = self.catalog.get(planned.key.task_id)
         if self._policy is None:
             if self.setup.policy_server is not None:
@@ -109,7 +134,7 @@ class EpisodeRunner:
             from langgap.video import write_video
 
             clip = Path(VIDEO_DIR) / f"{clip_name(planned.key)}{VIDEO_SUFFIX}"
-            write_video(Path(self.setup.run_dir or ".") / clip, frames)
+            write_video(self.output_dir / clip, frames)
             record.video = clip.as_posix()
         return record
 

@@ -1,31 +1,36 @@
-"""The one scheduling loop: planned episodes onto a worker pool, with retries, timeouts, respawns and gaps.
+"""The one scheduling loop: work items onto a worker pool, with retries, timeouts, respawns and gaps.
 
-* Work goes out in *units*: consecutive episodes of one scene, so a worker reuses its environment
-  (soft resets), split when there are too few to keep every worker busy.
+It is generic over the items (`langgap.engine.work.WorkItem`: planned episodes, collections, searches,
+probes, renders) and their results; it never looks at what kind of work an item is.
+
+* Work goes out in *units*: consecutive items of one task, the tasks of a scene one after another, so
+  a worker reuses its environment (soft resets), split when there are too few to keep every worker busy.
 * An infrastructure failure (an exception outside the policy's action check, a worker that dies, an
-  episode past its timeout) puts the episode back at the end of the queue until it has been
-  attempted `max_attempts` times; then it becomes a gap record (no verdict on the policy).
-* Failures with the same cause on `max_failure_streak` different episodes in a row (no episode
-  finishing in between) stop the run (`RunStopped`): a dead policy server must not cost hours of
-  retries, while one task that keeps crashing only costs its own attempts. Everything yielded
-  before is intact.
+  item past its timeout) puts the item back at the end of the queue until it has been attempted
+  `max_attempts` times; then `make_gap` turns it into a gap (an episode's gap record: no verdict on
+  the policy; other work refuses gaps, `langgap.engine.work.refuse_gap`).
+* Failures with the same cause on `max_failure_streak` different items in a row (none finishing in
+  between) stop the run (`RunStopped`): a dead policy server must not cost hours of retries, while one
+  task that keeps crashing only costs its own attempts. Everything yielded before is intact.
 """
 
 from __future__ import annotations
 
 import time
 from collections import deque
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Hashable, Iterator
 from dataclasses import dataclass, field
+from typing import Generic, TypeVar
 
-from langgap.engine.plan import PlannedEpisode
-from langgap.engine.pools import EpisodeDone, EpisodeFailed, WorkerLost, WorkerPool
+from langgap.engine.pools import ItemDone, ItemFailed, WorkerLost, WorkerPool
+from langgap.engine.work import WorkItem
 from langgap.errors import LangGapError
-from langgap.records import EpisodeKey, EpisodeRecord
 
 POLL_S = 0.2
-# Called with (episode, error, attempts) when an episode's attempts are used up.
-GapFactory = Callable[[PlannedEpisode, str, int], EpisodeRecord]
+Item = TypeVar("Item", bound=WorkItem)
+Result = TypeVar("Result")
+# Called with (item, error, attempts) when an item's attempts are used up.
+GapFactory = Callable[[Item, str, int], Result]
 
 
 class RunStopped(LangGapError):
@@ -34,116 +39,117 @@ class RunStopped(LangGapError):
     exit_code = 4
 
 
-def make_units(plan: list[PlannedEpisode], workers: int) -> deque[deque[PlannedEpisode]]:
-    """Consecutive episodes of one task, the tasks of a scene one after another (so a worker's environment
+def make_units(plan: list[Item], workers: int) -> deque[deque[Item]]:
+    """Consecutive items of one task, the tasks of a scene one after another (so a worker's environment
     serves the next task of the same scene), split when there are too few tasks to keep every worker busy."""
-    by_task: dict[str, list[PlannedEpisode]] = {}
-    for planned in sorted(plan, key=lambda p: p.scene):
-        by_task.setdefault(planned.key.task_id, []).append(planned)
+    by_task: dict[str, list[Item]] = {}
+    for item in sorted(plan, key=lambda p: p.scene):
+        by_task.setdefault(item.task_id, []).append(item)
     pieces_per_task = max(1, -(-2 * workers // max(1, len(by_task))))
-    units: deque[deque[PlannedEpisode]] = deque()
-    for episodes in by_task.values():
-        size = max(1, -(-len(episodes) // pieces_per_task))
-        for start in range(0, len(episodes), size):
-            units.append(deque(episodes[start : start + size]))
+    units: deque[deque[Item]] = deque()
+    for items in by_task.values():
+        size = max(1, -(-len(items) // pieces_per_task))
+        for start in range(0, len(items), size):
+            units.append(deque(items[start : start + size]))
     return units
 
 
-class Ledger:
-    """The work left to do, and how often each episode was attempted."""
+class Ledger(Generic[Item]):
+    """The work left to do, and how often each item was attempted."""
 
-    def __init__(self, plan: list[PlannedEpisode], workers: int, max_attempts: int):
+    def __init__(self, plan: list[Item], workers: int, max_attempts: int):
         self.units = make_units(plan, workers)
         self.max_attempts = max_attempts
-        self._attempts: dict[EpisodeKey, int] = {}
+        self._attempts: dict[Hashable, int] = {}
 
     def __bool__(self) -> bool:
         return bool(self.units)
 
-    def take(self) -> deque[PlannedEpisode]:
+    def take(self) -> deque[Item]:
         return self.units.popleft()
 
-    def give_back(self, episodes: deque[PlannedEpisode]) -> None:
-        """Return episodes that were handed out but never started (they go first)."""
-        if episodes:
-            self.units.appendleft(episodes)
+    def give_back(self, items: deque[Item]) -> None:
+        """Return items that were handed out but never started (they go first)."""
+        if items:
+            self.units.appendleft(items)
 
-    def started(self, key: EpisodeKey) -> int:
+    def started(self, key: Hashable) -> int:
         """Count an attempt of `key`; returns its number."""
         self._attempts[key] = self._attempts.get(key, 0) + 1
         return self._attempts[key]
 
-    def failed(self, planned: PlannedEpisode) -> int | None:
-        """Queue `planned` for another attempt (None), or return its attempt count once they are used up.
+    def failed(self, item: Item) -> int | None:
+        """Queue `item` for another attempt (None), or return its attempt count once they are used up.
 
-        The retry goes last, so a failure that has one cause for every episode shows on different
-        episodes (and stops the run) before one episode's attempts are spent.
+        The retry goes last, so a failure that has one cause for every item shows on different
+        items (and stops the run) before one item's attempts are spent.
         """
-        attempts = self._attempts.get(planned.key, 0)
+        attempts = self._attempts.get(item.key, 0)
         if attempts >= self.max_attempts:
             return attempts
-        self.units.append(deque([planned]))
+        self.units.append(deque([item]))
         return None
 
 
 @dataclass
-class _Slot:
+class _Slot(Generic[Item]):
     """One worker as the scheduler sees it."""
 
-    unit: deque[PlannedEpisode] = field(default_factory=deque)
-    current: PlannedEpisode | None = None
+    unit: deque[Item] = field(default_factory=deque)
+    current: Item | None = None
     started_at: float = 0.0
 
 
 class _Streak:
-    """The episodes that failed in a row with the same cause."""
+    """The items that failed in a row with the same cause."""
 
     def __init__(self, limit: int):
         self.limit = limit
         self.cause = ""
-        self.episodes: set[EpisodeKey] = set()
+        self.items: set[Hashable] = set()
 
     def success(self) -> None:
-        self.cause, self.episodes = "", set()
+        self.cause, self.items = "", set()
 
-    def failure(self, key: EpisodeKey, cause: str) -> None:
+    def failure(self, item: WorkItem, cause: str) -> None:
         if cause != self.cause:
-            self.cause, self.episodes = cause, set()
-        self.episodes.add(key)
-        if len(self.episodes) >= self.limit:
+            self.cause, self.items = cause, set()
+        self.items.add(item.key)
+        if len(self.items) >= self.limit:
             raise RunStopped(
-                f"stopped after {len(self.episodes)} episodes in a row failed with: {cause} "
-                "(stored episodes are intact; fix the cause and --resume)"
+                f"stopped after {len(self.items)} {item.kind}s in a row failed with: {cause} "
+                "(stored results are intact; fix the cause and run again, with --resume where the command has it)"
             )
 
 
 def schedule(
-    plan: list[PlannedEpisode],
+    plan: list[Item],
     pool: WorkerPool,
     *,
     workers: int,
-    make_gap: GapFactory,
+    make_gap: GapFactory[Item, Result],
     max_attempts: int,
     max_failure_streak: int,
     timeout_s: float | None,
     clock: Callable[[], float] = time.monotonic,
-) -> Iterator[EpisodeRecord]:
-    """Run `plan` on `pool` with up to `workers` workers; yields every episode's record (or gap) as it ends.
+) -> Iterator[Result]:
+    """Run `plan` on `pool` with up to `workers` workers; yields every item's result (or gap) as it ends.
 
-    The pool stays open: whoever made it closes it.
+    An item's timeout is `timeout_s` times its `size` (the episodes' worth it may take). The pool stays
+    open: whoever made it closes it.
     """
-    ledger = Ledger(plan, workers, max_attempts)
-    slots: dict[int, _Slot] = {}
+    ledger: Ledger[Item] = Ledger(plan, workers, max_attempts)
+    slots: dict[int, _Slot[Item]] = {}
     streak = _Streak(max_failure_streak)
 
-    def failed(planned: PlannedEpisode, error: str) -> Iterator[EpisodeRecord]:
-        attempts = ledger.failed(planned)
+    def failed(item: Item, error: str) -> Iterator[Result]:
+        attempts = ledger.failed(item)
         if attempts is not None:
-            yield make_gap(planned, error, attempts)
-        streak.failure(planned.key, error)
+            yield make_gap(item, error, attempts)
+        streak.failure(item, error)
 
-    def retire(worker: int, reason: str) -> Iterator[EpisodeRecord]:
-        """A worker is gone: its episode is charged, the rest of its unit goes back, a new worker takes over."""
+    def retire(worker: int, reason: str) -> Iterator[Result]:
+        """A worker is gone: its item is charged, the rest of its unit goes back, a new worker takes over."""
         slot = slots.pop(worker)
         ledger.give_back(slot.unit)
         if slot.current is not None:
@@ -165,18 +171,19 @@ def schedule(
             slot = slots.get(event.worker)
             if slot is None:  # a worker retired earlier (e.g. killed for a timeout)
                 continue
-            if isinstance(event, EpisodeDone):
+            if isinstance(event, ItemDone):
                 slot.current = None
                 streak.success()
-                yield event.record
-            elif isinstance(event, EpisodeFailed):
-                episode, slot.current = slot.current, None
-                if episode is not None:
-                    yield from failed(episode, event.error)
+                yield event.result
+            elif isinstance(event, ItemFailed):
+                item, slot.current = slot.current, None
+                if item is not None:
+                    yield from failed(item, event.error)
             elif isinstance(event, WorkerLost):
                 yield from retire(event.worker, event.reason)
         if timeout_s is not None:
             for worker in [w for w, s in slots.items() if s.current is not None]:
-                if clock() - slots[worker].started_at > timeout_s:
+                limit = timeout_s * slots[worker].current.size
+                if clock() - slots[worker].started_at > limit:
                     pool.kill(worker)
-                    yield from retire(worker, f"episode timed out after {timeout_s:.0f}s")
+                    yield from retire(worker, f"{slots[worker].current.kind} timed out after {limit:.0f}s")

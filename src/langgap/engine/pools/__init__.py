@@ -1,7 +1,7 @@
-"""Worker pools: where episodes run. They only provide workers; `langgap.engine.scheduler` decides what runs.
+"""Worker pools: where work items run. They only provide workers; `langgap.engine.scheduler` decides what runs.
 
-A pool starts workers, hands one planned episode at a time to a worker, and reports what happened
-as typed events. Retries, timeouts, respawns and gaps are the scheduler's, written once for all pools.
+A pool starts workers, hands one work item (`langgap.engine.work`) at a time to a worker, and reports
+what happened as typed events. Retries, timeouts, respawns and gaps are the scheduler's, written once for all pools.
 
 Backends by name (`--backend`): `local` (worker processes on this machine, or this process with
 `--workers 0`) and `ray` (actors on a Ray cluster). Both can share one batching policy among their
@@ -12,28 +12,27 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from langgap.errors import LangGapError
-from langgap.records import EpisodeRecord
 
 if TYPE_CHECKING:
-    from langgap.engine.plan import PlannedEpisode
     from langgap.engine.runner import RunnerSetup
     from langgap.engine.spec import ExecutionOptions
+    from langgap.engine.work import WorkItem
 
 
 @dataclass(frozen=True)
-class EpisodeDone:
-    """A worker finished an episode (a success or a policy failure: the policy was judged)."""
+class ItemDone:
+    """A worker finished a work item (an episode: a success or a policy failure, the policy was judged)."""
 
     worker: int
-    record: EpisodeRecord
+    result: Any  # what the item's work returned (an episode's `EpisodeRecord`)
 
 
 @dataclass(frozen=True)
-class EpisodeFailed:
-    """Infrastructure failed an episode on a worker that is still usable (its runner rebuilt its state)."""
+class ItemFailed:
+    """Infrastructure failed a work item on a worker that is still usable (its runner rebuilt its state)."""
 
     worker: int
     error: str
@@ -47,7 +46,7 @@ class WorkerLost:
     reason: str
 
 
-Event = EpisodeDone | EpisodeFailed | WorkerLost
+Event = ItemDone | ItemFailed | WorkerLost
 
 
 class WorkerPool(Protocol):
@@ -57,8 +56,8 @@ class WorkerPool(Protocol):
         """Start a worker; returns its id (never reused)."""
         ...
 
-    def submit(self, worker: int, planned: PlannedEpisode, attempt: int) -> None:
-        """Start `planned` on an idle `worker`."""
+    def submit(self, worker: int, item: WorkItem, attempt: int) -> None:
+        """Start `item` on an idle `worker`."""
         ...
 
     def poll(self, timeout: float) -> list[Event]:
@@ -66,7 +65,7 @@ class WorkerPool(Protocol):
         ...
 
     def kill(self, worker: int) -> None:
-        """Stop a worker at once (an episode past its timeout); no event follows for it."""
+        """Stop a worker at once (an item past its timeout); no event follows for it."""
         ...
 
     def close(self) -> None:

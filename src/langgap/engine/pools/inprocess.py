@@ -1,37 +1,37 @@
-"""The pool of one worker: this process (`--workers 0`). Nothing can stop an episode here, so no timeouts."""
+"""The pool of one worker: this process (`--workers 0`). Nothing can stop an item here, so no timeouts."""
 
 from __future__ import annotations
 
-from langgap.engine.plan import PlannedEpisode
-from langgap.engine.pools import EpisodeDone, EpisodeFailed, Event
-from langgap.engine.runner import EpisodeFailure, EpisodeRunner, RunnerSetup
+from langgap.engine.pools import Event, ItemDone, ItemFailed
+from langgap.engine.runner import RunnerSetup, WorkFailure, WorkRunner
+from langgap.engine.work import WorkItem
 
 
 class InProcessPool:
-    """Runs each submitted episode in this process when polled."""
+    """Runs each submitted item in this process when polled."""
 
     def __init__(self, setup: RunnerSetup):
         self.setup = setup
-        self._runners: dict[int, EpisodeRunner] = {}
-        self._pending: list[tuple[int, PlannedEpisode, int]] = []
+        self._runners: dict[int, WorkRunner] = {}
+        self._pending: list[tuple[int, WorkItem, int]] = []
         self._next_id = 0
 
     def spawn(self) -> int:
         worker, self._next_id = self._next_id, self._next_id + 1
-        self._runners[worker] = EpisodeRunner(self.setup, worker=worker)
+        self._runners[worker] = WorkRunner(self.setup, worker=worker)
         return worker
 
-    def submit(self, worker: int, planned: PlannedEpisode, attempt: int) -> None:
-        self._pending.append((worker, planned, attempt))
+    def submit(self, worker: int, item: WorkItem, attempt: int) -> None:
+        self._pending.append((worker, item, attempt))
 
     def poll(self, timeout: float) -> list[Event]:
         events: list[Event] = []
         while self._pending:
-            worker, planned, attempt = self._pending.pop(0)
+            worker, item, attempt = self._pending.pop(0)
             try:
-                events.append(EpisodeDone(worker, self._runners[worker].run(planned, attempt)))
-            except EpisodeFailure as exc:
-                events.append(EpisodeFailed(worker, str(exc)))
+                events.append(ItemDone(worker, self._runners[worker].run(item, attempt)))
+            except WorkFailure as exc:
+                events.append(ItemFailed(worker, str(exc)))
         return events
 
     def kill(self, worker: int) -> None:

@@ -15,33 +15,33 @@ import queue
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
-from langgap.engine.plan import PlannedEpisode
-from langgap.engine.pools import EpisodeDone, EpisodeFailed, Event, WorkerLost
+from langgap.engine.pools import Event, ItemDone, ItemFailed, WorkerLost
 from langgap.engine.pools.lifetime import exit_with_parent
 from langgap.engine.pools.policy_process import PolicyProcess
-from langgap.engine.runner import EpisodeFailure, EpisodeRunner, RunnerSetup
+from langgap.engine.runner import RunnerSetup, WorkFailure, WorkRunner
+from langgap.engine.work import WorkItem
 
 if TYPE_CHECKING:
     from langgap.engine.spec import ExecutionOptions
 
 
 def worker_main(worker: int, setup: RunnerSetup, inbox, outbox, parent_pid: int) -> None:
-    """Entry point of a worker process: run the episodes it is sent until it receives None."""
+    """Entry point of a worker process: run the work items it is sent until it receives None."""
     exit_with_parent(parent_pid)
-    runner = EpisodeRunner(setup, worker=worker)
+    runner = WorkRunner(setup, worker=worker)
     try:
-        while (item := inbox.get()) is not None:
-            planned, attempt = item
+        while (message := inbox.get()) is not None:
+            item, attempt = message
             try:
-                outbox.put(EpisodeDone(worker, runner.run(planned, attempt)))
-            except EpisodeFailure as exc:
-                outbox.put(EpisodeFailed(worker, str(exc)))
+                outbox.put(ItemDone(worker, runner.run(item, attempt)))
+            except WorkFailure as exc:
+                outbox.put(ItemFailed(worker, str(exc)))
     finally:
         runner.close()
 
 
 class ProcessPool:
-    """Worker processes on this machine, one episode at a time each (and the shared policy's process)."""
+    """Worker processes on this machine, one work item at a time each (and the shared policy's process)."""
 
     def __init__(self, setup: RunnerSetup, options: ExecutionOptions):
         self.server: PolicyProcess | None = None
@@ -70,8 +70,8 @@ class ProcessPool:
         self._workers[worker] = (process, inbox)
         return worker
 
-    def submit(self, worker: int, planned: PlannedEpisode, attempt: int) -> None:
-        self._workers[worker][1].put((planned, attempt))
+    def submit(self, worker: int, item: WorkItem, attempt: int) -> None:
+        self._workers[worker][1].put((item, attempt))
 
     def poll(self, timeout: float) -> list[Event]:
         # Deaths are read before the queue is drained: whatever a dead worker sent before it died is

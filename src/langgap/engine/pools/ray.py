@@ -1,4 +1,9 @@
-"""The pool of Ray actors: one `EpisodeRunner` per actor, results back to the driver (and its store).
+"""The pool of Ray actors: one `WorkRunner` per actor, results back to the driver (and its store).
+
+An actor may run on another machine, so it never writes into the driver's directories: its runner
+writes into a directory of the actor's own, and every file a work item wrote there (a clip, a
+demonstration) travels back with the item's result and is written by the driver where a local worker
+would have written it (`RunnerSetup.run_dir`).
 
 Without `--ray-address` a local Ray instance is started that listens on 127.0.0.1 only (Ray has no
 authentication). With `--shared-policy` one policy actor (a `PolicyServer`, given `--policy-gpus`)
@@ -8,13 +13,17 @@ serves every environment actor, batching their queries (`langgap.engine.shared_p
 from __future__ import annotations
 
 import os
+import shutil
+import tempfile
 from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from langgap.engine.plan import PlannedEpisode
-from langgap.engine.pools import EpisodeDone, EpisodeFailed, Event, WorkerLost
-from langgap.engine.runner import EpisodeFailure, EpisodeRunner, RunnerSetup
+from langgap.atomic import write_bytes_atomically
+from langgap.engine.pools import Event, ItemDone, ItemFailed, WorkerLost
+from langgap.engine.runner import RunnerSetup, WorkFailure, WorkRunner
 from langgap.engine.shared_policy import PolicyServer
+from langgap.engine.work import WorkItem
 from langgap.errors import DependencyNotInstalled, LangGapError
 from langgap.policies.base import TaskContext
 from langgap.sim.env import Observation
@@ -61,16 +70,31 @@ class RayPolicyServer:
 
 
 class RunnerActor:
-    """The body of a Ray actor: an `EpisodeRunner` that lives as long as the actor."""
+    """The body of a Ray actor: a `WorkRunner` that lives as long as the actor, writing into a directory
+    of its own whose files go back with each result."""
 
     def __init__(self, setup: RunnerSetup, worker: int):
-        self.runner = EpisodeRunner(setup, worker=worker)
+        self.output = Path(tempfile.mkdtemp(prefix=f"langgap-actor-{worker}-"))
+        self.runner = WorkRunner(replace(setup, run_dir=str(self.output)), worker=worker)
 
     def pid(self) -> int:
         return os.getpid()
 
-    def run(self, planned: PlannedEpisode, attempt: int):
-        return self.runner.run(planned, attempt)
+    def run(self, item: WorkItem, attempt: int) -> tuple[Any, dict[str, bytes]]:
+        """The item's result, and the files it wrote (path relative to the output directory -> bytes)."""
+        try:
+            return self.runner.run(item, attempt), self._take_files()
+        except BaseException:
+            self._take_files()  # a failed attempt's files are not the result's
+            raise
+
+    def _take_files(self) -> dict[str, bytes]:
+        files = {}
+        for path in sorted(p for p in self.output.rglob("*") if p.is_file()):
+            files[path.relative_to(self.output).as_posix()] = path.read_bytes()
+        shutil.rmtree(self.output)
+        self.output.mkdir()
+        return files
 
 
 # Ray takes a node address of 127.0.0.1 as a request to find the machine's network address, and then
@@ -118,6 +142,7 @@ class RayPool:
             self.close()
             raise
         self.setup = setup
+        self._output = Path(setup.run_dir or ".")  # where the actors' files are written, on this machine
         self._remote = ray.remote(num_cpus=1, max_restarts=0, max_task_retries=0)(RunnerActor)
         self._actors: dict[int, object] = {}
         self._running: dict[object, int] = {}  # object ref -> worker
@@ -148,8 +173,8 @@ class RayPool:
         self._actors[worker] = self._remote.remote(self.setup, worker)
         return worker
 
-    def submit(self, worker: int, planned: PlannedEpisode, attempt: int) -> None:
-        self._running[self._actors[worker].run.remote(planned, attempt)] = worker
+    def submit(self, worker: int, item: WorkItem, attempt: int) -> None:
+        self._running[self._actors[worker].run.remote(item, attempt)] = worker
 
     def poll(self, timeout: float) -> list[Event]:
         from ray.exceptions import GetTimeoutError, RayActorError, RayTaskError
@@ -161,10 +186,13 @@ class RayPool:
         for ref in ready:
             worker = self._running.pop(ref)
             try:
-                events.append(EpisodeDone(worker, self._ray.get(ref, timeout=60)))
+                result, files = self._ray.get(ref, timeout=60)
+                for name, data in files.items():
+                    write_bytes_atomically(self._output / name, data)
+                events.append(ItemDone(worker, result))
             except RayTaskError as exc:
-                cause = exc.cause if isinstance(exc.cause, EpisodeFailure) else exc
-                events.append(EpisodeFailed(worker, str(cause).strip().splitlines()[-1]))
+                cause = exc.cause if isinstance(exc.cause, WorkFailure) else exc
+                events.append(ItemFailed(worker, str(cause).strip().splitlines()[-1]))
             except (RayActorError, GetTimeoutError) as exc:
                 self._drop(worker)
                 events.append(WorkerLost(worker, f"Ray actor died: {type(exc).__name__}"))

@@ -1,0 +1,65 @@
+"""The execution flags of every command that runs work on the engine (`eval`, `validate`, `collect`,
+`generate --gate-inits`): where and how its work items run. None of them changes a result."""
+
+from __future__ import annotations
+
+import argparse
+
+from langgap.engine.pools import BACKENDS
+from langgap.engine.spec import DEFAULT_FAILURE_STREAK, DEFAULT_MAX_ATTEMPTS, DEFAULT_TIMEOUT_S, ExecutionOptions
+
+
+def add_execution_options(parser: argparse.ArgumentParser, *, attempts_flag: str = "--max-attempts") -> None:
+    """Add the execution flags: backend, workers, timeout, retries, fail-fast, Ray's address, progress.
+    `attempts_flag` names the retries' flag where the command's own `--max-attempts` means something else."""
+    parser.add_argument(
+        "--backend",
+        choices=sorted(BACKENDS),
+        default="local",
+        help="local worker processes, or actors on a Ray cluster (pip install 'langgap[ray]')",
+    )
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=1,
+        help="local worker processes (0: this process) or Ray actors (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--timeout",
+        type=float,
+        metavar="S",
+        help=f"seconds per episode (a longer work item: per episode it may run) before it is an infrastructure "
+        f"failure (default: {DEFAULT_TIMEOUT_S:g}; needs worker processes)",
+    )
+    parser.add_argument(
+        attempts_flag,
+        dest="work_attempts",
+        metavar="N",
+        type=int,
+        default=DEFAULT_MAX_ATTEMPTS,
+        help="attempts at a work item before it is given up (an episode becomes a gap; other work fails the "
+        "command; default: %(default)s)",
+    )
+    parser.add_argument(
+        "--max-failure-streak",
+        type=int,
+        default=DEFAULT_FAILURE_STREAK,
+        metavar="N",
+        help="stop after N consecutive infrastructure failures with the same cause (default: %(default)s)",
+    )
+    parser.add_argument("--ray-address", metavar="ADDR", help="Ray cluster to join (default: start a local one)")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def execution_options(args: argparse.Namespace, **more) -> ExecutionOptions:
+    """The `ExecutionOptions` of the flags `add_execution_options` added, with `more` (a command's own)."""
+    return ExecutionOptions(
+        backend=args.backend,
+        workers=args.workers,
+        timeout_s=args.timeout,
+        max_attempts=args.work_attempts,
+        max_failure_streak=args.max_failure_streak,
+        ray_address=args.ray_address,
+        progress=not args.no_progress,
+        **more,
+    )

@@ -1,0 +1,79 @@
+"""Work items: what the scheduler hands to workers. Every kind of episode work is one.
+
+A planned evaluation episode (`langgap.engine.plan.PlannedEpisode`) is the first kind. The others are
+`Job`s, frozen dataclasses that live with the feature they serve and do their work in `perform`, on a
+worker's `WorkRunner` (which lends them the catalog and a kept environment): a demonstration
+collection of one task (`langgap.demos.collect`), a demonstration rendered (`langgap.demos.render`),
+the search for demonstrations of one task (`langgap.search`), and the gate's probes of a scene
+(`langgap.gate.probes`). Whichever the kind, the scheduler gives it the same retries, timeouts, gaps
+and fail-fast rule, and every backend runs it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Hashable
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
+
+from langgap.errors import LangGapError
+
+if TYPE_CHECKING:
+    from langgap.engine.runner import WorkRunner
+
+
+class WorkItem(Protocol):
+    """What the scheduler needs of a work item."""
+
+    kind: ClassVar[str]  # what work it is (for messages; the runner dispatches on the item's type)
+
+    @property
+    def key(self) -> Hashable:
+        """Unique among the items of one schedule: attempts are counted per key."""
+        ...
+
+    @property
+    def task_id(self) -> str:
+        """The task it works on: consecutive items of one task go to one worker (its environment is kept)."""
+        ...
+
+    @property
+    def scene(self) -> str:
+        """The scene it is set in: the tasks of a scene are handed out one after another."""
+        ...
+
+    @property
+    def size(self) -> int:
+        """How many episodes' worth of simulation it may take: its timeout is that many episode timeouts."""
+        ...
+
+
+class Job:
+    """A work item that does its own work on a worker (mixed into a frozen dataclass)."""
+
+    kind: ClassVar[str] = "job"
+
+    @property
+    def key(self) -> Hashable:
+        return self
+
+    @property
+    def scene(self) -> str:
+        return ""
+
+    @property
+    def size(self) -> int:
+        return 1
+
+    def perform(self, runner: WorkRunner) -> Any:
+        """Do the work on a worker; an exception is an infrastructure failure (retried, then a gap)."""
+        raise NotImplementedError
+
+
+class WorkFailed(LangGapError):
+    """A work item failed on every attempt; work other than an evaluation episode has no gap to record."""
+
+    exit_code = 4
+
+
+def refuse_gap(item: WorkItem, error: str, attempts: int) -> Any:
+    """The gap factory of work whose results cannot have gaps: the whole command fails with one line."""
+    raise WorkFailed(f"{item.kind} {item.task_id} failed {attempts} time(s): {error}")

@@ -1,0 +1,115 @@
+"""The feasibility gate: the scripted oracle must prove a task physically doable before it ships.
+
+`validate` runs the oracle (rendering off) on the first K fixed init states of each task through the
+ordinary evaluation harness, then checks per task:
+
+* success rate — below `FEASIBLE_RATE` the task is rejected (unproven: the oracle does not do it; only
+  a proof from `langgap.proofs`, recorded with `--record`, makes it infeasible);
+* the goal is false at t0 (after settling) in every episode;
+* for an extended task whose goal excludes its source's goal (the same object placed elsewhere), the
+  source goal is false at the end of every successful episode;
+* the environment builds and its scene settles (no infrastructure gap; objects at rest after the
+  settle steps, on the first init states of each scene).
+
+Then the benchmark's own claims, over every validated init state (`langgap.gate.claims`): the tasks of
+a scene start from the identical state (equal t0 hashes per init state), no scene task's goal holds
+at t0, and — with `blind=True`, which also runs the `blind` policy — the scene's original task done
+whatever the instruction says succeeds exactly where the oracle does on originals and never on an
+extended task whose goal differs. A claim that fails is a release blocker.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from langgap.catalog.catalog import load_catalog
+from langgap.demos.searched import stored_demonstrations
+from langgap.engine.evaluate import evaluate
+from langgap.engine.spec import ExecutionOptions, RunSpec
+from langgap.gate.claims import Claim, benchmark_claims
+from langgap.gate.probes import settle_drifts
+from langgap.gate.recording import beside_registry
+from langgap.gate.rows import FULL_INITS, TaskValidation, task_row
+from langgap.records import EpisodeRecord
+from langgap.search import demonstrate
+from langgap.stack import DEFAULT_STEPPING
+from langgap.store import RunStore
+
+
+@dataclass
+class Validation:
+    """What `validate` found: one row per task, and the benchmark's claims."""
+
+    rows: list[TaskValidation]
+    claims: list[Claim]
+
+    @property
+    def passed(self) -> bool:
+        return all(r.feasible for r in self.rows) and all(c.holds for c in self.claims)
+
+
+def validate(
+    catalog_name: str,
+    selection: str | None = "all",
+    *,
+    inits: int = FULL_INITS,
+    options: ExecutionOptions | None = None,
+    run: str | Path | None = None,
+    resume: bool = False,
+    policy: str = "oracle",
+    blind: bool = False,
+    stepping: str = DEFAULT_STEPPING,
+    search_budget: int = 0,
+    demonstrations: str | Path | None = None,
+) -> Validation:
+    """Run the gate on the selected tasks and check the benchmark's claims on its episodes; with
+    `blind`, the `blind` policy runs the same episodes too (kept in `run`-blind when `run` is given).
+
+    With a `search_budget`, each init state the oracle fails gets a search for a demonstration
+    (`langgap.search`, that many candidate episodes); those found are stored under `demonstrations`
+    (a directory; the run's, or a temporary one, when None), replayed from there and counted.
+
+    Every part (the episodes, the searches, the settle probes) is work for the engine's scheduler, run
+    as `options` say (backend, workers, retries, timeouts, progress)."""
+    catalog = load_catalog(catalog_name)
+    tasks = catalog.select(selection)
+    options = options or ExecutionOptions()
+
+    def episodes(policy_name: str, directory: Path) -> list[EpisodeRecord]:
+        ids = ",".join(t.id for t in tasks)
+        spec = RunSpec.create(policy_name, catalog=catalog_name, tasks=ids, episodes=inits, stepping=stepping)
+        evaluate(spec, directory, options, resume=resume, extend=resume)
+        with RunStore.open(directory) as store:
+            return store.records()
+
+    with tempfile.TemporaryDirectory(prefix="langgap-validate-") as scratch:
+        directory = Path(run) if run is not None else Path(scratch) / "run"
+        records = episodes(policy, directory)
+        blind_records = episodes("blind", directory.with_name(directory.name + "-blind")) if blind else None
+        demonstrated: dict[str, list[int]] = {}
+        where = Path(demonstrations) if demonstrations is not None else directory / "demonstrations"
+        if search_budget > 0 and policy == "oracle":
+            failures: dict[str, list[tuple[int, int]]] = {}
+            for r in records:
+                if r.judged and not r.success:
+                    failures.setdefault(r.task_id, []).append((r.init_index, r.seed))
+            demonstrated = demonstrate(
+                catalog_name, failures, where, stepping=stepping, budget=search_budget, options=options
+            )
+    by_task: dict[str, list[EpisodeRecord]] = {}
+    for record in records:
+        by_task.setdefault(record.task_id, []).append(record)
+    drift_by_scene = settle_drifts(catalog_name, tasks, options)
+    rows = []
+    for task in tasks:
+        drift = drift_by_scene[(task.suite, task.scene_task)]
+        row = task_row(task, catalog, by_task.get(task.id, []), drift, demonstrated.get(task.id, []))
+        for init_index, path in stored_demonstrations(where / task.id).items():
+            if init_index not in row.demonstrated_inits:
+                path.unlink()  # an earlier gate's: this verdict does not rest on it
+        if row.demonstrated_inits:
+            row.demonstration = beside_registry(where / task.id, catalog_name)
+        rows.append(row)
+    return Validation(rows, benchmark_claims(catalog, records, blind_records))
