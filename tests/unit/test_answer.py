@@ -55,7 +55,8 @@ def test_a_policy_that_hardly_reads_against_a_compared_blind_run(tmp_path):
 
 
 def test_a_blind_run_with_another_protocol_is_not_paired_unless_allowed(tmp_path):
-    blind = write_run(tmp_path / "blind", "blind", memoriser(sees_state=True, sees_goal=True), physics={"mujoco": "3.3.0"})
+    scripted = memoriser(sees_state=True, sees_goal=True)
+    blind = write_run(tmp_path / "blind", "blind", scripted, physics={"mujoco": "3.3.0"})
     vla = write_run(tmp_path / "vla", "my-vla", reader())
     assert "against blind" not in _answers(blind, vla)[1]
     assert "against blind, 0 % on the same 7 episodes" in _answers(blind, vla, allow_mismatch=True)[1]
