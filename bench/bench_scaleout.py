@@ -24,7 +24,7 @@ from bench_harness import TimedRun, timed_eval, timed_run
 
 # 220 steps: `noop` and `delay` never succeed, so every episode runs the whole step limit.
 BATCH_TASK = "spatial/s0/black-bowl-1-on-plate"
-# The projection's assumptions (README, Performance): a 16-core box with one H100 running a VLA that
+# The projection's assumptions (docs/performance.md, "Projection"): a 16-core box with one H100 running a VLA that
 # is queried every step, as in vla-eval's published run (DB-CogACT 7B, LIBERO-Spatial, 50 shards,
 # batches of 16: ~486 observations/s, 2,000 episodes in ~18 min, i.e. ~262 queries per episode).
 PROJECTED_CORES = 16

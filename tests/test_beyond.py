@@ -19,7 +19,7 @@ from langgap.catalog.registry_writer import registry_text
 from langgap.catalog.task import BEYOND_DIMENSIONS
 from langgap.goals import Then, holds_now, plain_atoms, witness
 
-# The counts the README gives, per suite and dimension.
+# The counts docs/catalogs.md gives ("The catalog" of langgap-beyond), per suite and dimension.
 COUNTS = {
     "libero_spatial": {"original": 10, "ordering": 76, "negation": 20, "paraphrase": 40},
     "libero_object": {"original": 10, "negation": 10, "paraphrase": 40, "attribute_reference": 10},

@@ -30,7 +30,7 @@ SAMPLE = [
     "goal/s7/turn-on-stove",  # libero_goal, Turnon
     "libero10/s3/close-cabinet-bottom-drawer+black-bowl-in-cabinet-bottom-drawer",  # libero_10, In + Close
 ]
-# Broader: every task of the catalog that reaches 95 % on the first init states (see README).
+# Broader: every task of the catalog that reaches 95 % on the first init states (docs/gate.md, "The verdicts").
 SLOW_SAMPLE = [
     "goal/s3/black-bowl-in-cabinet-top-drawer",
     "goal/s6/cream-cheese-on-black-bowl",

