@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -184,3 +185,21 @@ def test_registered_through_the_module_id_in_a_fresh_interpreter():
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, env=env)
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == ["LangGapTaskEnv", "(7,)"]
+
+
+@pytest.mark.slow
+def test_docs_examples_run_as_shown(tmp_path):
+    text = (REPO / "docs/gymnasium.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    assert len(blocks) == 3
+    env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
+    outputs = []
+    for index, block in enumerate(blocks):
+        script = tmp_path / f"example_{index}.py"
+        script.write_text(block)
+        done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, cwd=tmp_path, env=env)
+        assert done.returncode == 0, done.stderr[-3000:]
+        outputs.append(done.stdout.split("\n"))
+    assert outputs[0][0].split()[2:4] == ["(128,", "128,"]
+    assert outputs[1][0].split()[0] == "True"  # the oracle succeeds through the gym door
+    assert "spatial/s0/black-bowl-1-on-plate" in outputs[2][1]
