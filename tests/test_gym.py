@@ -87,6 +87,7 @@ def test_episode_truncates_at_the_step_limit_and_must_be_reset(short_catalog):
         assert obs["instruction"] == "" and info["steps"] == 0
     finally:
         env.close()
+    assert env.unwrapped._sim is None  # the simulator is freed
 
 
 def _gym_oracle_episode(init_index: int, seed: int) -> dict:

@@ -66,7 +66,6 @@ class LangGapLiberoEnv(gym.Wrapper):
                 hard_reset=hard_reset,
             )
         )
-        self.metadata = {**self.env.metadata, "render_fps": FPS}
         self.task = task_id
         self.task_description = self.env.task.instruction(style)
         self._max_episode_steps = self.env.task.max_steps
