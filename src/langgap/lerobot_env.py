@@ -30,7 +30,6 @@ from lerobot.envs.utils import _LazyAsyncVectorEnv, freeze_after_episode_end, pa
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
 from langgap.catalog.task import DEFAULT_STYLE
 from langgap.errors import LangGapError
-from langgap.gym import LangGapTaskEnv
 from langgap.lerobot_libero import CAMERA_KEYS, FPS, LIBERO_CAMERA_NAMES, robot_state
 
 
@@ -54,6 +53,10 @@ class LangGapLiberoEnv(gym.Wrapper):
         episode_index: int = 0,
         n_envs: int = 1,
     ):
+        # Imported here: the `lerobot` policy imports this module for `LangGapEnv` (its processors) and must
+        # not pull in the Gymnasium env, which sits above the policy layer (engine).
+        from langgap.gym import LangGapTaskEnv
+
         super().__init__(
             LangGapTaskEnv(
                 task_id,
