@@ -21,6 +21,7 @@ from lerobot.envs.utils import NEW_ROLLOUT_OPTION, preprocess_observation  # noq
 from lerobot.processor.env_processor import LiberoProcessorStep  # noqa: E402
 
 from langgap.engine.context import task_context  # noqa: E402
+from langgap.engine.plan import episode_seed  # noqa: E402
 from langgap.engine.rollout import env_options_for, run_episode  # noqa: E402
 from langgap.errors import LangGapError  # noqa: E402
 from langgap.lerobot_env import LangGapEnv  # noqa: E402
@@ -170,7 +171,8 @@ def test_env_type_applies_init_states_instruction_and_lerobot_orientation(catalo
             assert list(info["init_index"]) == [2 * batch, 2 * batch + 1]  # LeRobot's scheme: episode k, init k
             seen = processor.observation(preprocess_observation(raw))
             for index, seed in enumerate(seeds):
-                reference.reset(2 * batch + index, seed=seed)
+                # LangGap's seed rule (langgap.gym): env seed = the seed LeRobot passes + the init index
+                reference.reset(2 * batch + index, seed=episode_seed(seed, 2 * batch + index))
                 reference.settle()
                 expected = torch.from_numpy(reference.render("agentview").copy()).permute(2, 0, 1).float() / 255
                 assert torch.equal(seen["observation.images.image"][index], expected)

@@ -4,19 +4,20 @@
 rate and the env processor (`LiberoProcessorStep`: 180-degree flip, 8-D state) are LeRobot's. What
 differs is where episodes come from: `--env.task` is a LangGap task selection (ids, globs,
 `paper:N`, `spatial&heldout`, ...), each selected task is one vector env (reported under its task
-id), the instruction is the catalog's (`--env.style`), and the simulator is LangGap's `TaskEnv`:
-the task's fixed init states applied after reset, then LangGap's 10 settle steps. Resets are soft by
-default, as in `langgap eval` (LeRobot's LIBERO env rebuilds the model each time): `TaskEnv`'s soft
-reset gives the same episode as a fresh env, and a test pins that.
+id), the instruction is the catalog's (`--env.style`), and each sub-env is a thin layer over
+LangGap's Gymnasium env (`langgap.gym.LangGapTaskEnv`): the task's fixed init states applied after
+reset, then LangGap's 10 settle steps, the goal judged by LangGap. Resets are soft by default, as in
+`langgap eval` (LeRobot's LIBERO env rebuilds the model each time): `TaskEnv`'s soft reset gives the
+same episode as a fresh env, and a test pins that.
 
 Episode `k` of a task (k = batch * batch_size + sub-env index, LeRobot's scheme) uses init state
-`k mod 50` and the seed LeRobot passes to `reset` (`--seed` + k).
+`i = k mod 50`, and LangGap's seed rule on the seed LeRobot passes to `reset` (`--seed` + k): env
+seed = that seed + i, as `langgap.gym` does.
 The package `lerobot_env_langgap` (plugins/) imports this module, which registers the type.
 """
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from functools import partial
 
@@ -30,17 +31,15 @@ from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
 from langgap.catalog.task import DEFAULT_STYLE
 from langgap.errors import LangGapError
 from langgap.lerobot_libero import CAMERA_KEYS, FPS, LIBERO_CAMERA_NAMES, robot_state
-from langgap.sim.env import ACTION_DIM, EnvOptions, TaskEnv
 
 
 def _vector(shape: tuple[int, ...]) -> spaces.Box:
     return spaces.Box(low=-np.inf, high=np.inf, shape=shape, dtype=np.float64)
 
 
-class LangGapLiberoEnv(gym.Env):
-    """One LangGap task with LeRobot's LIBERO observations (`pixels` raw, `robot_state` nested)."""
-
-    metadata = {"render_modes": ["rgb_array"], "render_fps": FPS}
+class LangGapLiberoEnv(gym.Wrapper):
+    """One LangGap task (`langgap.gym`'s `LangGapTaskEnv`) with LeRobot's LIBERO observations (`pixels` raw,
+    `robot_state` nested)."""
 
     def __init__(
         self,
@@ -54,17 +53,27 @@ class LangGapLiberoEnv(gym.Env):
         episode_index: int = 0,
         n_envs: int = 1,
     ):
-        super().__init__()
-        task = load_catalog(catalog).get(task_id)
-        self._task = task if episode_length is None else dataclasses.replace(task, max_steps=episode_length)
-        self._catalog = catalog
-        self._options = EnvOptions(cameras=cameras, image_size=image_size, hard_reset=hard_reset)
-        self.task = task.id
-        self.task_description = task.instruction(style)
-        self._max_episode_steps = self._task.max_steps
+        # Imported here: the `lerobot` policy imports this module for `LangGapEnv` (its processors) and must
+        # not pull in the Gymnasium env, which sits above the policy layer (engine).
+        from langgap.gym import LangGapTaskEnv
+
+        super().__init__(
+            LangGapTaskEnv(
+                task_id,
+                catalog=catalog,
+                cameras=cameras,
+                image_size=image_size,
+                style=style,
+                render_mode="rgb_array",
+                max_steps=episode_length,
+                hard_reset=hard_reset,
+            )
+        )
+        self.task = task_id
+        self.task_description = self.env.task.instruction(style)
+        self._max_episode_steps = self.env.task.max_steps
         self._next_init = episode_index
         self._stride = n_envs
-        self._env: TaskEnv | None = None  # built on first reset, inside the (possibly forked) worker
         pixels = {
             CAMERA_KEYS[c]: spaces.Box(0, 255, shape=(image_size, image_size, 3), dtype=np.uint8) for c in cameras
         }
@@ -80,39 +89,26 @@ class LangGapLiberoEnv(gym.Env):
                 ),
             }
         )
-        self.action_space = spaces.Box(-1.0, 1.0, shape=(ACTION_DIM,), dtype=np.float32)
 
-    def _observation(self) -> dict:
-        env = self._env
-        # LeRobot's env hands out the raw render and lets LiberoProcessorStep rotate it; undo TaskEnv's rotation.
-        pixels = {CAMERA_KEYS[c]: np.ascontiguousarray(env.render(c)[::-1, ::-1]) for c in self._options.cameras}
-        ori = env.robosuite_env.robots[0].controller.ee_ori_mat
-        return {"pixels": pixels, "robot_state": robot_state(env.robosuite_observation, ori)}
+    def _observation(self, observation: dict) -> dict:
+        # LeRobot's env hands out the raw render and lets LiberoProcessorStep rotate it; undo the upright rotation.
+        pixels = {CAMERA_KEYS[c]: np.ascontiguousarray(observation[c][::-1, ::-1]) for c in self.env.cameras}
+        sim = self.env.simulator
+        ori = sim.robosuite_env.robots[0].controller.ee_ori_mat
+        return {"pixels": pixels, "robot_state": robot_state(sim.robosuite_observation, ori)}
 
-    def reset(self, seed: int | None = None, options: dict | None = None):
-        """Start the next episode of this sub-env: its next init state, seeded with `seed` (0 if None)."""
-        super().reset(seed=seed)
-        if self._env is None:
-            self._env = TaskEnv(self._task, self._options)
-        init_index = self._next_init % len(self._env.init_states)
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Start the next episode of this sub-env: its next init state, with LangGap's seed rule (`langgap.gym`).
+        LeRobot's own reset options (a new rollout) need nothing here."""
+        init_index = self._next_init % len(self.env.simulator.init_states)
         self._next_init += self._stride
-        self._env.reset(init_index, seed=0 if seed is None else int(seed), render=False)  # shown after settling
-        self._env.settle()
-        return self._observation(), {"is_success": False, "init_index": init_index}
+        observation, info = self.env.reset(seed=seed, options={"init_index": init_index})
+        return self._observation(observation), {"is_success": False, "init_index": init_index, "seed": info["seed"]}
 
     def step(self, action: np.ndarray):
-        success = self._env.step(np.asarray(action, dtype=np.float64))
-        info = {"task": self.task, "is_success": success}
-        return self._observation(), float(success), success, self._env.truncated and not success, info
-
-    def render(self) -> np.ndarray:
-        """The upright agentview image (what LeRobot's LIBERO env shows in videos)."""
-        return self._env.render(self._options.cameras[0])
-
-    def close(self) -> None:
-        if self._env is not None:
-            self._env.close()
-            self._env = None
+        observation, reward, terminated, truncated, info = self.env.step(action)
+        info = {"task": self.task, "is_success": info["is_success"], "outcome": info["outcome"]}
+        return self._observation(observation), reward, terminated, truncated, info
 
 
 @EnvConfig.register_subclass("langgap")

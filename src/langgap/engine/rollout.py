@@ -7,7 +7,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from langgap.goals import Goal, GoalProgress, is_ordered, unordered
+from langgap.engine.watch import SceneWatch
+from langgap.goals import Goal
 from langgap.policies.base import Policy, TaskContext, as_action_chunk, observation_for
 from langgap.sim.env import SETTLE_STEPS, EnvOptions, TaskEnv
 
@@ -68,14 +69,7 @@ def run_episode(
     env.settle(settle_steps)
     if on_start is not None:
         on_start(env)
-    watch = dict(watch or {})
-    at_start = [name for name, goal in watch.items() if env.goal_holds(goal)]
-    # Each watched goal keeps its own history from step 0; the task's goal unordered tells a wrong order.
-    pending = {name: GoalProgress(goal) for name, goal in watch.items() if name not in at_start}
-    ordered = GoalProgress(unordered(env.task.goal)) if is_ordered(env.task.goal) else None
-    for progress in [*pending.values(), *([ordered] if ordered else [])]:
-        progress.observe(0, env.predicate_holds)
-    reached: dict[str, int] = {}
+    scene = SceneWatch(env, watch or {})
     queue: list[np.ndarray] = []
     calls = 0
     success = False
@@ -86,23 +80,18 @@ def run_episode(
             queue = list(chunk[: spec.replan])
         action = queue.pop(0)
         success = env.step(action)
-        for name, progress in pending.items():
-            if progress.observe(env.steps, env.predicate_holds) and name not in reached:
-                reached[name] = env.steps
-        if ordered is not None:
-            ordered.observe(env.steps, env.predicate_holds)
+        scene.observe()
         if on_step is not None:
             on_step(env, env.steps, action)
         if success:
             break
-    at_end = [name for name, goal in watch.items() if env.goal_holds(goal)]
     return RolloutResult(
         success=success,
         steps=env.steps,
         t0_hash=env.t0_hash or "",
         policy_calls=calls,
-        reached=reached,
-        at_start=at_start,
-        at_end=at_end,
-        wrong_order=not success and ordered is not None and ordered.first_held is not None,
+        reached=scene.reached,
+        at_start=scene.at_start,
+        at_end=scene.holding(),
+        wrong_order=scene.wrong_order(success),
     )

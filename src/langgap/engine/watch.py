@@ -1,0 +1,47 @@
+"""The scene goals watched over one episode: which became true and when, and whether an ordered goal's
+parts came in the wrong order. One implementation for every way an episode is driven (the harness's
+`run_episode`, the Gymnasium env)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from langgap.goals import Goal, GoalProgress, is_ordered, unordered
+from langgap.sim.env import TaskEnv
+
+
+class SceneWatch:
+    """Watches `goals` (name -> goal) on `env` from the state the policy first sees (after settling).
+
+    A goal already true at the start is listed in `at_start`, never as reached; every other goal keeps
+    its own history from step 0 (ordered goals), and `reached` maps it to the first step it held.
+    Call `observe()` after every `env.step`.
+    """
+
+    def __init__(self, env: TaskEnv, goals: Mapping[str, Goal]):
+        self._env = env
+        self.goals = dict(goals)
+        self.at_start = self.holding()
+        self._pending = {name: GoalProgress(goal) for name, goal in self.goals.items() if name not in self.at_start}
+        # The task's goal unordered tells a wrong order (all parts held, not in the order asked).
+        self._ordered = GoalProgress(unordered(env.task.goal)) if is_ordered(env.task.goal) else None
+        self.reached: dict[str, int] = {}
+        for progress in [*self._pending.values(), *([self._ordered] if self._ordered else [])]:
+            progress.observe(0, env.predicate_holds)
+
+    def observe(self) -> None:
+        """Record the state after the env's latest step."""
+        step, truth = self._env.steps, self._env.predicate_holds
+        for name, progress in self._pending.items():
+            if progress.observe(step, truth) and name not in self.reached:
+                self.reached[name] = step
+        if self._ordered is not None:
+            self._ordered.observe(step, truth)
+
+    def holding(self) -> list[str]:
+        """The watched goals that hold in the current state, order ignored."""
+        return [name for name, goal in self.goals.items() if self._env.goal_holds(goal)]
+
+    def wrong_order(self, success: bool) -> bool:
+        """Whether an ordered task goal's parts all held at some step without the goal being met."""
+        return not success and self._ordered is not None and self._ordered.first_held is not None
