@@ -267,7 +267,8 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
         Refused(
             (*_COLLECT, "--format", "compact", "--repo-id", "me/demos"),
             "--repo-id",
-            broken=f"{ISSUE}: collect --format compact writes no LeRobot dataset, yet takes --repo-id and ignores it",
+            broken=f"{ISSUE}: collect --repo-id changes nothing (LeRobot keeps a repo id only to upload; with "
+            "--format compact there is not even a dataset)",
         ),
     ),
     "collect --no-progress": (ProvenBy(_COLLECT_CLI),),
