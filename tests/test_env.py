@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pytest
 
@@ -78,6 +80,60 @@ def test_same_actions_same_outcome_and_seed_moves_fixtures(env):
     assert other_seed[0] != first[0]  # fixture placement comes from the seed, not the init state
     env.reset(2, seed=1)
     assert np.array_equal(env.sim_state(), env.init_states[2])
+
+
+def _nudge(array: np.ndarray, index) -> Callable[[], None]:
+    """Add 1e-3 to `array[index]` in place; returns what puts it back."""
+    old = np.array(array[index], copy=True)
+    array[index] += 1e-3
+
+    def undo() -> None:
+        array[index] = old
+
+    return undo
+
+
+def _nudge_time(sim) -> Callable[[], None]:
+    old = sim.data.time
+    sim.data.time = old + 1e-3
+    return lambda: setattr(sim.data, "time", old)
+
+
+def _qpos(sim, joint: str, offset: int = 0) -> int:
+    start = sim.model.get_joint_qpos_addr(joint)
+    return (start[0] if isinstance(start, tuple) else start) + offset
+
+
+def _qvel(sim, joint: str) -> int:
+    start = sim.model.get_joint_qvel_addr(joint)
+    return start[0] if isinstance(start, tuple) else start
+
+
+# Every part of the scene that goes into the t0 hash (`TaskEnv.state_hash`), each changed on its own:
+# the flattened MuJoCo state (time, positions of objects, robot and articulated fixtures, velocities) and
+# the fixtures' placements, which live in the model (LIBERO samples them; no init state holds them).
+_T0_PARTS = {
+    "time": _nudge_time,
+    "object position": lambda sim: _nudge(sim.data.qpos, _qpos(sim, "akita_black_bowl_1_joint0")),
+    "object rotation": lambda sim: _nudge(sim.data.qpos, _qpos(sim, "akita_black_bowl_1_joint0", 4)),
+    "robot arm joint": lambda sim: _nudge(sim.data.qpos, _qpos(sim, "robot0_joint4")),
+    "gripper finger": lambda sim: _nudge(sim.data.qpos, _qpos(sim, "gripper0_finger_joint1")),
+    "fixture joint (drawer)": lambda sim: _nudge(sim.data.qpos, _qpos(sim, "wooden_cabinet_1_top_level")),
+    "velocity": lambda sim: _nudge(sim.data.qvel, _qvel(sim, "plate_1_joint0")),
+    "fixture position": lambda sim: _nudge(sim.model.body_pos, (sim.model.body_name2id("flat_stove_1_main"), 0)),
+    "fixture rotation": lambda sim: _nudge(sim.model.body_quat, (sim.model.body_name2id("flat_stove_1_main"), 3)),
+}
+
+
+@pytest.mark.parametrize("part", list(_T0_PARTS))
+def test_the_t0_hash_covers_each_part_of_the_start(env, part):
+    env.reset(1, seed=3)
+    assert env.t0_hash == env.state_hash()  # the t0 hash is this function of the state reset left
+    undo = _T0_PARTS[part](env.sim)
+    changed = env.state_hash()
+    undo()
+    assert changed != env.t0_hash, f"the t0 hash leaves out the {part}"
+    assert env.state_hash() == env.t0_hash  # only that part had changed
 
 
 def test_soft_reset_leaves_nothing_of_the_previous_episode(catalog):

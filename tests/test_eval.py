@@ -70,6 +70,24 @@ def test_resume_skips_done_and_extend_grows_the_run(short_catalog, tmp_path):
         evaluate(_spec(short_catalog, "random", episodes=2), run, options, resume=True, extend=True)
 
 
+def test_a_resume_keeps_every_condition_s_stored_episodes(short_catalog, tmp_path):
+    """A resume tells episodes apart by their condition too: grown from `given` to `given` + `empty` it runs
+    only the `empty` episodes, and resumed again it neither re-runs nor overwrites any (the store's done keys
+    and the plan's filter hold the condition)."""
+    run = tmp_path / "run"
+    one = dict(episodes=1, tasks="spatial/s0/black-bowl-1-on-plate")
+    options = ExecutionOptions(workers=0, progress=False)
+    _eval(short_catalog, run, **one)
+    both = _spec(short_catalog, conditions=("given", "empty"), **one)
+    grown = evaluate(both, run, options, resume=True, extend=True)
+    assert (grown.planned, grown.skipped, grown.ran) == (2, 1, 1)
+    stored = store_rows(run)
+    assert sorted(r["condition"] for r in stored) == ["empty", "given"]
+    again = evaluate(both, run, options, resume=True)
+    assert (again.planned, again.skipped, again.ran) == (2, 2, 0)
+    assert store_rows(run) == stored  # not one row rewritten (their wall times and finish times included)
+
+
 def test_policy_output_errors_are_policy_failures(short_catalog, tmp_path):
     for name, message in (
         ("NanPolicy", "non-finite"),

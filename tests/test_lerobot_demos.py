@@ -44,6 +44,30 @@ def test_dataset_has_the_lerobot_libero_schema(dataset, catalog):
     assert int(ds[demos[0].length]["episode_index"]) == 1
 
 
+def test_export_lerobot_cli_writes_the_dataset_it_is_told(tiny_collection, tmp_path, capsys):
+    """`--workers 2` renders in worker processes the dataset `--workers 0` renders here; `--no-progress` hides
+    the progress bar the default shows."""
+    from langgap.cli.main import main
+
+    here, there = tmp_path / "here", tmp_path / "there"
+    for root in (here, there):
+        shutil.copytree(tiny_collection, root)
+    assert main(["export-lerobot", str(here), "--workers", "0", "--no-progress"]) == 0
+    quiet = capsys.readouterr().err
+    assert main(["export-lerobot", str(there), "--workers", "2"]) == 0
+    shown = capsys.readouterr().err
+    assert "render:" not in quiet and "render: 100%|" in shown  # our bar (LeRobot's own `Map:` bars show anyway)
+    datasets = [
+        LeRobotDataset("local/langgap_demos", root=root / "lerobot", video_backend="pyav") for root in (here, there)
+    ]
+    assert len(datasets[0]) == len(datasets[1]) > 0
+    for i in (0, len(datasets[0]) - 1):
+        first, second = datasets[0][i], datasets[1][i]
+        assert all(
+            np.array_equal(first[k], second[k]) for k in ("action", "observation.state", *CAMERA_FEATURES.values())
+        )
+
+
 def test_frames_are_oriented_as_lerobots_libero_processor_makes_them(dataset, catalog):
     root, ds = dataset
     demo = load_demo(demo_files(root)[0])

@@ -29,7 +29,7 @@ try:
     import torch
 except ImportError as exc:  # pragma: no cover - depends on the environment
     raise DependencyNotInstalled(
-        f"LeRobot is not installed ({exc.name}); run `./setup.sh --lerobot` and use .venv-lerobot"
+        f"LeRobot is not installed ({exc.name}); run this in .venv-lerobot (./setup.sh makes it)"
     ) from None
 
 

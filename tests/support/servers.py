@@ -34,15 +34,15 @@ def subprocess_env(**extra: str) -> dict[str, str]:
 
 @contextlib.contextmanager
 def running(
-    command: list[str], port: int, env: dict[str, str] | None = None, startup: float = 30
+    command: list[str], port: int, env: dict[str, str] | None = None, startup: float = 30, host: str = "127.0.0.1"
 ) -> Iterator[subprocess.Popen]:
-    """Run a server command, wait up to `startup` seconds until it answers on `port`, and kill it on exit."""
+    """Run a server command, wait up to `startup` seconds until it answers on `host:port`, and kill it on exit."""
     process = subprocess.Popen(
         command, env=env or subprocess_env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
     )
     try:
         try:
-            wait_for_health("127.0.0.1", port, time.monotonic() + startup)
+            wait_for_health(host, port, time.monotonic() + startup)
         except Exception:
             process.kill()
             raise RuntimeError(f"server did not start: {process.communicate(timeout=10)[1][-2000:]}") from None

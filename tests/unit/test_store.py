@@ -85,6 +85,18 @@ def _schema_1_store(directory, version="1"):
     db.close()
 
 
+def test_done_keys_tell_conditions_apart(tmp_path):
+    """Two judged episodes that differ only in their condition are two done keys (a resume skips both)."""
+    with RunStore.create(tmp_path / "run", {}) as store:
+        store.write(record(condition="given"))
+        store.write(record(condition="empty"))
+        store.write(record(init_index=1, condition="empty", status=Status.GAP))
+        assert store.done_keys() == {
+            EpisodeKey("spatial/s0/a", 0, 0, "given"),
+            EpisodeKey("spatial/s0/a", 0, 0, "empty"),
+        }
+
+
 def test_a_schema_1_store_opens_for_reading_and_refuses_writing_in_one_line(tmp_path):
     _schema_1_store(tmp_path / "old")
     with RunStore.open(tmp_path / "old") as store:

@@ -41,7 +41,11 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument("--policy-arg", action="append", metavar="K=V", help="policy argument (repeatable)")
     add_catalog_options(parser)
-    parser.add_argument("--tasks", metavar="SELECTION", help="task selection (default: all tasks of the catalog)")
+    parser.add_argument(
+        "--tasks",
+        metavar="SELECTION",
+        help="task selection (default: feasible, every task the feasibility gate did not reject)",
+    )
     parser.add_argument(
         "--episodes",
         type=int,

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from langgap.errors import LangGapError
+
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
@@ -10,7 +12,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("collection", metavar="DIR", help="a directory written by `langgap collect`")
     parser.add_argument("--out", metavar="OUT", help="output directory (default DIR/hdf5)")
     parser.add_argument("--images", action="store_true", help="also render both cameras by replaying the states (slow)")
-    parser.add_argument("--workers", type=int, default=1, help="rendering processes (0: here)")
+    parser.add_argument("--workers", type=int, help="with --images: rendering processes (default: 1; 0: here)")
     parser.add_argument("--force", action="store_true", help="replace existing HDF5 files")
     parser.add_argument("--no-progress", action="store_true")
     parser.set_defaults(handler=run)
@@ -19,11 +21,13 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     from langgap.demos.hdf5 import write_hdf5
 
+    if args.workers is not None and not args.images:
+        raise LangGapError("--workers sets how many processes render images: it needs --images")
     paths = write_hdf5(
         args.collection,
         out=args.out,
         images=args.images,
-        workers=args.workers,
+        workers=1 if args.workers is None else args.workers,
         progress=not args.no_progress,
         force=args.force,
     )

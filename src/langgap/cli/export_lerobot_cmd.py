@@ -8,7 +8,6 @@ def add_parser(subparsers) -> None:
         "export-lerobot", help="render a collection's demonstrations into a LeRobot v3 dataset (DIR/lerobot)"
     )
     parser.add_argument("collection", metavar="DIR", help="a directory written by `langgap collect`")
-    parser.add_argument("--repo-id", default="local/langgap_demos", help="dataset repo id (nothing is uploaded)")
     parser.add_argument("--workers", type=int, default=1, help="rendering processes (0: here)")
     parser.add_argument("--no-progress", action="store_true")
     parser.set_defaults(handler=run)
@@ -17,8 +16,7 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     from langgap.demos.export import write_lerobot_dataset
 
-    path = write_lerobot_dataset(
-        args.collection, repo_id=args.repo_id, workers=args.workers, progress=not args.no_progress
-    )
+    # No --repo-id: LeRobot keeps a dataset's repo id only to upload it, and nothing is uploaded.
+    path = write_lerobot_dataset(args.collection, workers=args.workers, progress=not args.no_progress)
     print(f"wrote the LeRobot dataset to {path}")
     return 0

@@ -17,6 +17,7 @@ from langgap.catalog.generate import (
 )
 from langgap.catalog.task import DIMENSIONS, Task
 from langgap.cli.validate_cmd import add_gate_options, run_gate
+from langgap.errors import LangGapError
 from langgap.stack import SUITES
 
 
@@ -47,8 +48,11 @@ def add_parser(subparsers) -> None:
         metavar="K",
         help="run the feasibility gate (oracle on the first K init states) on every task and record it",
     )
+    first_gate_option = len(parser._actions)  # argparse lists actions only in this private field
     add_gate_options(parser)
-    parser.set_defaults(handler=run)
+    # The gate's options act only through --gate-inits: `run` refuses any of them set without it.
+    gate_options = {a.dest: (a.option_strings[0], a.default) for a in parser._actions[first_gate_option:]}
+    parser.set_defaults(handler=run, gate_options=gate_options)
 
 
 def summary_lines(tasks: list[Task]) -> list[str]:
@@ -86,7 +90,21 @@ def _counts(tasks: list[Task], key: Callable[[Task], str]) -> dict[str, Counter]
     return counts
 
 
+def _check_gate_options(args) -> None:
+    """Refuse gate options that would change nothing: a negative `--gate-inits`, any gate option without
+    `--gate-inits`, `--resume` without the `--run` it continues."""
+    if args.gate_inits < 0:
+        raise LangGapError(f"--gate-inits must be at least 0, got {args.gate_inits}")
+    if not args.gate_inits:
+        given = [flag for dest, (flag, default) in args.gate_options.items() if getattr(args, dest) != default]
+        if given:
+            raise LangGapError(f"{', '.join(given)} only apply to the feasibility gate (--gate-inits K)")
+    if args.resume and not args.run:
+        raise LangGapError("--resume continues the gate's episodes kept in --run: give --run DIR")
+
+
 def run(args) -> int:
+    _check_gate_options(args)
     if args.catalog == BEYOND_CATALOG:
         from langgap.catalog.beyond import generate_beyond
 

@@ -14,7 +14,7 @@ def add_parser(subparsers) -> None:
     bc = kinds.add_parser("small-bc", help="train the small language-conditioned policy on CPU")
     bc.add_argument("--config", metavar="FILE", help="YAML file with any of the options below (flags override it)")
     bc.add_argument("--data", action="append", metavar="DIR", help="collection directory (repeatable)")
-    bc.add_argument("--catalog", help="catalog for --tasks (default: langgap99)")
+    bc.add_argument("--catalog", help="with --tasks: the catalog it selects from (default: langgap99)")
     bc.add_argument("--tasks", metavar="SELECTION", help="train on these tasks' demonstrations only (default: all)")
     bc.add_argument("--out", metavar="CKPT", help="checkpoint file to write (.safetensors)")
     bc.add_argument("--steps", type=int, help="optimisation steps (default: 3000)")
@@ -48,7 +48,10 @@ def _small_bc_config(args):
 
     values: dict = {}
     if args.config:
-        values = yaml.safe_load(Path(args.config).read_text()) or {}
+        try:
+            values = yaml.safe_load(Path(args.config).read_text()) or {}
+        except (OSError, yaml.YAMLError) as exc:
+            raise LangGapError(f"--config {args.config}: {exc}") from None
         if not isinstance(values, dict):
             raise LangGapError(f"{args.config}: expected a mapping of options")
     options = ("data", "catalog", "tasks", "out", "steps", "batch_size", "lr", "seed", "threads", "loss")
@@ -58,6 +61,8 @@ def _small_bc_config(args):
     unknown = set(values) - {*options, "model"}
     if unknown:
         raise LangGapError(f"unknown small-bc option(s): {', '.join(sorted(unknown))}")
+    if "catalog" in values and "tasks" not in values:
+        raise LangGapError("--catalog only says where --tasks' selection is looked up: give --tasks too")
     for key in ("data", "out"):
         if not values.get(key):
             raise LangGapError(f"small-bc needs --{key}")

@@ -12,7 +12,7 @@ checkpoint's input size (the training data's) unless `image_size` says otherwise
 torch's CPU threads (0: torch's default). Each episode
 reseeds torch and NumPy from the context's seed and init index, so sampling policies are reproducible.
 
-Needs the LeRobot environment (`./setup.sh --lerobot`, then `.venv-lerobot`).
+Needs the LeRobot environment `.venv-lerobot` (`./setup.sh` makes it unless given `--core`).
 """
 
 from __future__ import annotations

@@ -1,0 +1,122 @@
+"""Every flag of every verb reaches its effect: the checks of `tests/support/flag_table.py`, run for real
+(the fast layer's `tests/unit/test_flag_table.py` makes sure every option has one)."""
+
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from langgap.cli.main import main
+from tests.support.flag_table import FLAG_CHECKS, SHORT_TASK, Differs, Refused
+from tests.support.harness import store_rows
+from tests.support.servers import free_port, langgap_serve, running
+
+# Columns of a stored episode that differ between two identical runs.
+_TIMING = ("wall_time_s", "finished_at")
+
+
+def _params() -> list:
+    """One test per `Differs` and `Refused` of the table; a known-broken one is a strict xfail."""
+    params = []
+    for option, checks in FLAG_CHECKS.items():
+        for i, check in enumerate(checks):
+            if isinstance(check, Differs | Refused):
+                marks = [pytest.mark.xfail(strict=True, reason=check.broken)] if check.broken else []
+                params.append(pytest.param(check, id=f"{option} #{i + 1}", marks=marks))
+    return params
+
+
+@pytest.fixture(scope="module")
+def stored_runs(short_catalog, tmp_path_factory) -> dict[str, str]:
+    """`{stored}`, `{same}` (its spec again) and `{reseeded}` (another seed): one-episode `noop` runs."""
+    from langgap.engine.evaluate import evaluate
+    from langgap.engine.spec import ExecutionOptions, RunSpec
+
+    root = tmp_path_factory.mktemp("stored")
+    runs = {"stored": 0, "same": 0, "reseeded": 1}
+    for name, seed in runs.items():
+        spec = RunSpec.create("noop", catalog=short_catalog, tasks=SHORT_TASK, episodes=1, seed=seed)
+        evaluate(spec, root / name, ExecutionOptions(workers=0, progress=False))
+    return {name: str(root / name) for name in runs}
+
+
+class _Invoker:
+    """Runs `langgap ARGV` in this process, each invocation in a fresh directory `{dir}`, and says what it did."""
+
+    def __init__(self, request, tmp_path: Path, capsys, monkeypatch):
+        self.request, self.tmp_path, self.capsys, self.monkeypatch = request, tmp_path, capsys, monkeypatch
+        self.fills = {"catalog": request.getfixturevalue("short_catalog"), "collection": str(tmp_path / "none")}
+        self.count = 0
+
+    def __call__(self, argv: tuple[str, ...], path: str | None = None) -> tuple[int, str, str, Path]:
+        self.count += 1
+        directory = self.tmp_path / f"call{self.count}"
+        directory.mkdir()
+        if any("{stored}" in a or "{same}" in a or "{reseeded}" in a for a in argv):
+            self.fills.update(self.request.getfixturevalue("stored_runs"))
+        args = [a.format(dir=directory, **self.fills) for a in argv]
+        with self.monkeypatch.context() as patch:
+            if path is not None:
+                patch.setenv("PATH", path)
+            try:
+                code = main(args)
+            except SystemExit as exc:  # argparse's own refusals
+                code = exc.code
+        out, err = self.capsys.readouterr()
+        return code, out.replace(str(directory), "{dir}"), err, directory
+
+    def observe(self, argv: tuple[str, ...], path: str | None = None) -> dict:
+        """Everything a flag may change: exit status, stdout, the `error:` line, whether a progress bar showed,
+        the episodes stored in `{dir}/run`, the files written under `{dir}` and what its JSON files hold."""
+        code, out, err, directory = self(argv, path)
+        rows = store_rows(directory / "run") if (directory / "run" / "episodes.sqlite").exists() else []
+        return {
+            "exit": code,
+            "stdout": out,
+            "error": [line for line in err.splitlines() if line.startswith("error:")],
+            "progress bar": "%|" in err,
+            "episodes": [{k: v for k, v in r.items() if k not in _TIMING} for r in rows],
+            "files": sorted(str(p.relative_to(directory)) for p in directory.rglob("*") if p.is_file()),
+            "json written": [p.read_text().replace(str(directory), "{dir}") for p in sorted(directory.rglob("*.json"))],
+        }
+
+
+@pytest.mark.parametrize("check", _params())
+def test_the_flag_reaches_its_effect(check, request, tmp_path, capsys, monkeypatch):
+    invoke = _Invoker(request, tmp_path, capsys, monkeypatch)
+    if isinstance(check, Differs):
+        without = invoke.observe(check.base, check.path)
+        with_flag = invoke.observe((*check.base, *check.added), check.path)
+        assert with_flag != without, f"{' '.join(check.added)} changed nothing: {without}"
+    else:
+        code, out, err, directory = invoke(check.argv)
+        assert code == 2, (out, err)
+        lines = err.splitlines()
+        assert len(lines) == 1 and lines[0].startswith("error: ") and check.message in lines[0], err
+        assert not any(directory.iterdir())  # a refusal writes nothing
+
+
+def test_serve_binds_the_host_and_port_it_is_given():
+    """`--host` and `--port` decide where the policy listens (127.0.0.2 is loopback too, but not the default)."""
+    port = free_port()
+    command = [*langgap_serve(port, "noop"), "--host", "127.0.0.2"]
+    with running(command, port, host="127.0.0.2") as server:
+        listening = subprocess.run(["ss", "-ltnpH"], capture_output=True, text=True, check=True).stdout
+    mine = [line.split()[3] for line in listening.splitlines() if f"pid={server.pid}," in line]
+    assert mine == [f"127.0.0.2:{port}"]
+
+
+def test_small_bc_training_options_reach_the_config(tmp_path):
+    """`--lr`, `--seed` and `--loss` land in the training config, over a `--config` file's values."""
+    from langgap.cli.main import build_parser
+    from langgap.cli.train_cmd import _small_bc_config
+
+    config_file = tmp_path / "bc.yaml"
+    config_file.write_text("lr: 0.5\nseed: 3\nloss: l1\n")
+    base = ["train", "small-bc", "--config", str(config_file), "--data", "d", "--out", "o.safetensors"]
+    from_file, _ = _small_bc_config(build_parser().parse_args(base))
+    assert (from_file.lr, from_file.seed, from_file.loss) == (0.5, 3, "l1")
+    flags, _ = _small_bc_config(build_parser().parse_args([*base, "--lr", "0.01", "--seed", "9", "--loss", "mse"]))
+    assert (flags.lr, flags.seed, flags.loss) == (0.01, 9, "mse")
