@@ -21,10 +21,6 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
 
-# The issue that lists the known-broken flags of verbs other branches rebuild (their checks are strict xfails,
-# so they turn red, to be unmarked, when the fixing branch merges).
-ISSUE = "issue 39 item 4"
-
 
 @dataclass(frozen=True)
 class Differs:
@@ -78,6 +74,8 @@ _VALIDATE_CLI = "tests/test_validate.py::test_cli_validate_writes_report_and_rec
 _GENERATE_GATE = "tests/test_generate.py::test_generate_gates_every_candidate_and_records_how"
 _GENERATE_CLI = "tests/test_generate.py::test_cli_generate_writes_a_loadable_registry_and_prints_counts"
 _COLLECT_CLI = "tests/test_demos.py::test_collect_cli_without_lerobot_writes_compact_form"
+_CLAIMS_EXECUTION = "tests/test_validate.py::test_claims_only_runs_its_probes_on_the_execution_flags"
+_RAY_WORK = "tests/test_ray.py::test_every_kind_of_work_runs_on_a_worker_node_that_sees_another_disk"
 _SMALL_BC_CLI = "tests/test_small_bc.py::test_training_is_deterministic_and_checkpoint_round_trips"
 _HDF5_CLI = "tests/test_hdf5.py::test_cli_refuses_to_overwrite_and_rejects_what_is_not_a_collection"
 _SERVE = "tests/test_flags.py::test_serve_binds_the_host_and_port_it_is_given"
@@ -88,9 +86,12 @@ def _gate_without_inits(flag: tuple[str, ...]) -> Refused:
     return Refused((*_GENERATE, *flag), f"{flag[0]} only apply to the feasibility gate (--gate-inits K)")
 
 
-def _claims_ignore(flag: tuple[str, ...]) -> Refused:
-    why = f"{ISSUE}: validate --claims-only runs no policy, yet takes {flag[0]} and ignores it (validate_cmd.py)"
-    return Refused((*_CLAIMS, *flag), flag[0], broken=why)
+def _claims_refuse(flag: tuple[str, ...]) -> Refused:
+    return Refused(
+        (*_CLAIMS, *flag),
+        f"--claims-only runs no policy: it stores no episodes, records no verdicts and searches nothing "
+        f"(drop {flag[0]})",
+    )
 
 
 FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
@@ -184,7 +185,8 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "report --compare": (Differs(_REPORT, ("--compare", "{same}")),),
     "report --format": (
         Differs(_REPORT, ("--format", "json")),
-        Differs((*_REPORT, "--summary"), ("--format", "json"), broken=f"{ISSUE}: report --summary ignores --format"),
+        Refused((*_REPORT, "--summary", "--format", "json"), "--summary shows the diagnosis as md or latex"),
+        Differs((*_REPORT, "--summary"), ("--format", "latex")),
     ),
     "report --summary": (Differs(_REPORT, ("--summary",)),),
     "report --no-published": (Differs(("report", "{stored}"), ("--no-published",)),),
@@ -193,16 +195,15 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
         Differs(
             (*_REPORT, "--summary", "--compare", "{reseeded}"),
             ("--allow-mismatch",),
-            broken=f"{ISSUE}: report --summary ignores --allow-mismatch",
         ),
     ),
     "report --html": (Differs(_REPORT, ("--html", "{dir}/html")),),
     "report --plots": (Differs(_REPORT, ("--plots", "{dir}/plots")),),
     "report --episodes": (Differs(_REPORT, ("--episodes", "{dir}/episodes.csv")),),
-    # -- validate (validate_cmd.py: another branch rebuilds it) -------------------------------------------
+    # -- validate -------------------------------------------
     "validate --catalog": (ProvenBy(_VALIDATE_CLI),),
     "validate --inits": (ProvenBy(_VALIDATE_CLI),),
-    "validate --policy": (ProvenBy(_VALIDATE_CLI), _claims_ignore(("--policy", "blind"))),
+    "validate --policy": (ProvenBy(_VALIDATE_CLI), _claims_refuse(("--policy", "blind"))),
     "validate --blind": (Differs(_VALIDATE, ("--blind",)),),
     "validate --claims-only": (
         ProvenBy("tests/test_validate.py::test_claims_only_resets_every_task_without_a_policy"),
@@ -211,25 +212,32 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "validate --record": (ProvenBy(_VALIDATE_CLI),),
     "validate --workers": (
         Refused((*_VALIDATE, "--workers", "-1"), "--workers must be at least 0"),
-        _claims_ignore(("--workers", "2")),
+        ProvenBy(_CLAIMS_EXECUTION),
     ),
-    "validate --run": (Differs(_VALIDATE, ("--run", "{dir}/run")), _claims_ignore(("--run", "{dir}/run"))),
+    "validate --run": (Differs(_VALIDATE, ("--run", "{dir}/run")), _claims_refuse(("--run", "{dir}/run"))),
     "validate --resume": (
         Refused(
             (*_VALIDATE, "--resume"),
-            "--resume",
-            broken=f"{ISSUE}: validate --resume without --run resumes a temporary directory, i.e. nothing",
+            "--resume needs --run",
         ),
     ),
     "validate --no-progress": (Differs(_VALIDATE[:-1], ("--no-progress",)),),
     "validate --search-budget": (
         ProvenBy("tests/test_validate.py::test_a_search_budget_that_cannot_take_effect_is_refused"),
-        _claims_ignore(("--search-budget", "3")),
+        _claims_refuse(("--search-budget", "3")),
     ),
-    "validate --stepping": (
-        Differs((*_VALIDATE, "--run", "{dir}/run"), ("--stepping", "fast")),
-        _claims_ignore(("--stepping", "fast")),
+    "validate --stepping": (Differs((*_VALIDATE, "--run", "{dir}/run"), ("--stepping", "fast")),),
+    "validate --backend": (ProvenBy(_RAY_WORK),),
+    "validate --ray-address": (
+        ProvenBy(_RAY_WORK),
+        Refused((*_VALIDATE, "--ray-address", "127.0.0.1:1"), "--ray-address needs --backend ray"),
     ),
+    "validate --timeout": (
+        ProvenBy(_CLAIMS_EXECUTION),
+        Refused((*_VALIDATE, "--timeout", "5"), "--timeout needs worker processes"),
+    ),
+    "validate --max-attempts": (Refused((*_VALIDATE, "--max-attempts", "0"), "--max-attempts must be at least 1"),),
+    "validate --max-failure-streak": (ProvenBy(_CLAIMS_EXECUTION),),
     # -- generate ---------------------------------------------------------------------------------------
     "generate --catalog": (Differs(_GENERATE, ("--catalog", "langgap-beyond")),),
     "generate --out": (ProvenBy(_GENERATE_CLI),),
@@ -244,7 +252,24 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "generate --no-progress": (ProvenBy(_GENERATE_GATE), _gate_without_inits(("--no-progress",))),
     "generate --search-budget": (_gate_without_inits(("--search-budget", "0")),),
     "generate --stepping": (ProvenBy(_GENERATE_GATE), _gate_without_inits(("--stepping", "fast"))),
-    # -- collect (collect_cmd.py: another branch rebuilds it) ---------------------------------------------
+    "generate --backend": (_gate_without_inits(("--backend", "ray")),),
+    "generate --timeout": (_gate_without_inits(("--timeout", "5")),),
+    "generate --max-attempts": (_gate_without_inits(("--max-attempts", "2")),),
+    "generate --max-failure-streak": (_gate_without_inits(("--max-failure-streak", "2")),),
+    "generate --ray-address": (_gate_without_inits(("--ray-address", "127.0.0.1:1")),),
+    "collect --backend": (ProvenBy(_RAY_WORK),),
+    "collect --ray-address": (
+        ProvenBy(_RAY_WORK),
+        Refused((*_COLLECT, "--ray-address", "127.0.0.1:1"), "--ray-address needs --backend ray"),
+    ),
+    "collect --timeout": (Refused((*_COLLECT, "--timeout", "5"), "--timeout needs worker processes"),),
+    "collect --max-task-attempts": (
+        Refused((*_COLLECT, "--max-task-attempts", "0"), "--max-task-attempts must be at least 1"),
+    ),
+    "collect --max-failure-streak": (
+        Refused((*_COLLECT, "--max-failure-streak", "0"), "--max-failure-streak must be at least 1"),
+    ),
+    # -- collect ---------------------------------------------
     "collect --catalog": (Refused((*_COLLECT, "--catalog", "{dir}/nowhere.yaml"), "nowhere.yaml"),),
     "collect --style": (Differs(_COLLECT, ("--style", "paper")),),
     "collect --tasks": (ProvenBy(_COLLECT_CLI),),
@@ -263,14 +288,6 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
         ),  # noqa: E501
     ),
     "collect --format": (ProvenBy(_COLLECT_CLI),),
-    "collect --repo-id": (
-        Refused(
-            (*_COLLECT, "--format", "compact", "--repo-id", "me/demos"),
-            "--repo-id",
-            broken=f"{ISSUE}: collect --repo-id changes nothing (LeRobot keeps a repo id only to upload; with "
-            "--format compact there is not even a dataset)",
-        ),
-    ),
     "collect --no-progress": (ProvenBy(_COLLECT_CLI),),
     # -- verify-demos, export-lerobot, export-hdf5 ---------------------------------------------------------
     "export-lerobot --workers": (ProvenBy(_LEROBOT_EXPORT),),

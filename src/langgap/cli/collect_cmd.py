@@ -32,7 +32,6 @@ def add_parser(subparsers) -> None:
         default="auto",
         help="compact: NPZ only; lerobot: also the LeRobot v3 dataset (needs LeRobot); auto: lerobot if installed",
     )
-    parser.add_argument("--repo-id", default="local/langgap_demos", help="LeRobot dataset repo id (no upload)")
     # A task's collection is one work item: its infrastructure retries have their own flag.
     add_execution_options(parser, attempts_flag="--max-task-attempts")
     parser.set_defaults(handler=run)
@@ -68,9 +67,7 @@ def run(args) -> int:
         print(f"{task_id:<48} {kept:>5} {stats['attempts']:>8} {stats['success_rate']:>8.0%}")
     print(f"wrote the compact form to {args.out}")
     if export:
-        path = write_lerobot_dataset(
-            args.out, repo_id=args.repo_id, workers=args.workers, progress=not args.no_progress
-        )
+        path = write_lerobot_dataset(args.out, workers=args.workers, progress=not args.no_progress)
         print(f"wrote the LeRobot dataset to {path}")
     else:
         print("LeRobot is not installed here: wrote the compact form only (export it with `langgap export-lerobot`)")

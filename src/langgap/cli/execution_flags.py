@@ -6,7 +6,13 @@ from __future__ import annotations
 import argparse
 
 from langgap.engine.pools import BACKENDS
-from langgap.engine.spec import DEFAULT_FAILURE_STREAK, DEFAULT_MAX_ATTEMPTS, DEFAULT_TIMEOUT_S, ExecutionOptions
+from langgap.engine.spec import (
+    DEFAULT_FAILURE_STREAK,
+    DEFAULT_MAX_ATTEMPTS,
+    DEFAULT_TIMEOUT_S,
+    ExecutionOptions,
+    SpecError,
+)
 
 
 def add_execution_options(parser: argparse.ArgumentParser, *, attempts_flag: str = "--max-attempts") -> None:
@@ -49,10 +55,13 @@ def add_execution_options(parser: argparse.ArgumentParser, *, attempts_flag: str
     )
     parser.add_argument("--ray-address", metavar="ADDR", help="Ray cluster to join (default: start a local one)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.set_defaults(attempts_flag=attempts_flag)
 
 
 def execution_options(args: argparse.Namespace, **more) -> ExecutionOptions:
     """The `ExecutionOptions` of the flags `add_execution_options` added, with `more` (a command's own)."""
+    if args.work_attempts < 1:  # checked here, where the flag's name is known (`collect` calls it otherwise)
+        raise SpecError(f"{args.attempts_flag} must be at least 1, got {args.work_attempts}")
     return ExecutionOptions(
         backend=args.backend,
         workers=args.workers,
