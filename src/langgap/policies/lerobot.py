@@ -51,9 +51,8 @@ class LeRobotPolicy:
     def __init__(self, path: str, device: str = "cpu", adapter: str = "", image_size: int = 0, threads: int = 0):
         import torch
         from lerobot.configs.policies import PreTrainedConfig
+        from lerobot.envs.configs import LiberoEnv
         from lerobot.policies.factory import make_policy, make_pre_post_processors
-
-        from langgap.lerobot_env import LangGapEnv
 
         if threads > 0:
             # Several workers on few cores: torch's default (all cores each) makes its threads spin against
@@ -72,7 +71,8 @@ class LeRobotPolicy:
         self.cameras = self._cameras(config)
         size = image_size or self._checkpoint_image_size(config)
         self._check_state_and_action(config)
-        env_features = LangGapEnv(observation_height=size, observation_width=size)
+        # LeRobot's LIBERO features (`--env.type=langgap` declares the same): keys, shapes, image size.
+        env_features = LiberoEnv(observation_height=size, observation_width=size)
         try:
             model = make_policy(config, env_cfg=env_features)
             if adapter:
