@@ -143,8 +143,9 @@ def test_a_plus_language_variant_built_from_its_own_file_starts_where_its_source
     path = short_copy(tmp_path, "libero-plus-language", {variant.source, variant.id})
     run = tmp_path / "run"
     result = run_cli("eval", "--policy", "noop", "--catalog", path, "--tasks", "all",
-                     "--episodes", "1", "--workers", "0", "--run", str(run), "--quiet")  # fmt: skip
+                     "--episodes", "1", "--workers", "0", "--run", str(run))  # fmt: skip
     assert result.returncode == 0, result.stderr
+    assert "| All extended | 1 |" in result.stdout  # the diagnosis table counts the variant
     rows = {r["task_id"]: r for r in store_rows(run)}
     assert rows[variant.id]["instruction"] == variant.instruction()
     assert rows[variant.id]["t0_hash"] == rows[variant.source]["t0_hash"]
