@@ -141,6 +141,7 @@ def test_recording_a_check_replaces_its_own_findings_only(tmp_path):
         ("b", "duplicate goal"),
     ]
     record_audit(registry, "starts", {"inits": 3}, [], ["a"])  # a rerun that finds nothing clears the old finding
+    assert read_audit(registry)[0]["starts"] == {"inits": 3}
     assert sorted((f.task, f.name) for f in read_audit(registry)[1]) == [
         ("a", "duplicate goal"),
         ("b", "duplicate goal"),

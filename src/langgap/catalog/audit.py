@@ -233,7 +233,7 @@ def record_audit(
 ) -> Path:
     """Record what `check` (a key of CHECKS, run as `about` says) found over the tasks `checked`: it replaces
     that check's earlier findings on those tasks and keeps everything else (every checked task gets an entry,
-    an empty list when nothing was found)."""
+    an empty list when nothing was found); `about`'s keys replace the check's keys of the same name."""
     old_about, old = read_audit(registry)
     checked = set(checked)
     kept = [f for f in old if not (f.name in CHECKS[check] and f.task in checked)]
@@ -242,7 +242,10 @@ def record_audit(
     tasks: dict[str, list[dict]] = {task: [] for task in checked | listed}
     for f in sorted(kept + findings, key=lambda f: (f.task, list(FINDINGS).index(f.name), f.detail)):
         tasks[f.task].append({"name": f.name, "detail": f.detail})
-    data = {"about": old_about | {check: about}, "tasks": {k: tasks[k] for k in sorted(tasks)}}
+    data = {
+        "about": old_about | {check: old_about.get(check, {}) | about},
+        "tasks": {k: tasks[k] for k in sorted(tasks)},
+    }
     write_text_atomically(path, json.dumps(data, indent=1, sort_keys=True) + "\n")
     return path
 

@@ -196,12 +196,13 @@ def run_audit(args) -> int:
         from langgap.start_audit import SEED, starts_findings
 
         findings += starts_findings(catalog, tasks, args.starts, progress=lambda line: print(line, flush=True))
-        ran["starts"] = {"inits": args.starts, "seed": SEED}
+        ran["starts"] = {args.tasks: {"inits": args.starts, "seed": SEED}}
         print(f"starts: checked on init states 0..{args.starts - 1} (seed {SEED})")
     elif "starts" in about:
         chosen = set(ids)
         findings += [f for f in recorded if f.name in CHECKS["starts"] and f.task in chosen]
-        print(f"starts: recorded, on init states 0..{about['starts']['inits'] - 1} (rerun: --starts K)")
+        for selection, how in about["starts"].items():
+            print(f"starts: recorded for tasks {selection!r} on init states 0..{how['inits'] - 1} (rerun: --starts K)")
     else:
         print(f"starts: not checked (langgap tasks audit --catalog {args.catalog} --starts 50)")
     unreadable = [f.task for f in findings if f.name == "unreadable"]
