@@ -29,7 +29,15 @@ def _start_group(task: Task) -> tuple[str, str]:
 
 
 def _inits_text(inits: list[int], of: int) -> str:
-    return f"init state(s) {', '.join(map(str, inits))} ({len(inits)} of {of})"
+    """`init state(s) 0–3, 7 (5 of 10)`: runs of consecutive init states as ranges."""
+    runs: list[list[int]] = []
+    for index in inits:
+        if runs and index == runs[-1][-1] + 1:
+            runs[-1].append(index)
+        else:
+            runs.append([index])
+    shown = ", ".join(str(r[0]) if len(r) == 1 else f"{r[0]}–{r[-1]}" for r in runs)
+    return f"init state(s) {shown} ({len(inits)} of {of})"
 
 
 def starts_findings(
