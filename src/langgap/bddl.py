@@ -274,9 +274,24 @@ def rewrite_task_sections(
 
 def strip_task_sections(text: str) -> str:
     """`text` without the three task sections: what must stay byte-identical across same-scene tasks."""
+    return strip_sections(text, (":language", ":obj_of_interest", ":goal"))
+
+
+def strip_sections(text: str, names: tuple[str, ...] | None = None) -> str:
+    """`text` without its top-level sections named in `names` (`(":language",)`; None: all of them)."""
     spans = _section_spans(text)
     out = text
     for key, (start, end) in sorted(spans.items(), key=lambda kv: kv[1][0], reverse=True):
-        if key in (":language", ":obj_of_interest", ":goal"):
+        if names is None or key in names:
             out = out[:start] + out[end:]
     return out
+
+
+def section_texts(text: str) -> dict[str, str]:
+    """Each top-level section of `text` (`":goal"` -> `"(:goal ...)"`), as written."""
+    return {name: text[start:end] for name, (start, end) in _section_spans(text).items()}
+
+
+def read_tree(text: str) -> list:
+    """`text` as nested lists of tokens (for reading forms LangGap's parser refuses)."""
+    return _tree(_tokenize(text))

@@ -73,6 +73,7 @@ _EVAL_FLAGS = "tests/test_eval.py::test_every_flag_of_a_run_reaches_its_effect"
 _VALIDATE_CLI = "tests/test_validate.py::test_cli_validate_writes_report_and_records_verdicts"
 _GENERATE_GATE = "tests/test_generate.py::test_generate_gates_every_candidate_and_records_how"
 _GENERATE_CLI = "tests/test_generate.py::test_cli_generate_writes_a_loadable_registry_and_prints_counts"
+_AUDIT = "tests/test_external.py::test_audit_runs_the_start_check_on_k_init_states_and_records_it_beside_the_registry"
 _COLLECT_CLI = "tests/test_demos.py::test_collect_cli_without_lerobot_writes_compact_form"
 _CLAIMS_EXECUTION = "tests/test_validate.py::test_claims_only_runs_its_probes_on_the_execution_flags"
 _RAY_WORK = "tests/test_ray.py::test_every_kind_of_work_runs_on_a_worker_node_that_sees_another_disk"
@@ -110,6 +111,14 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "tasks gate --catalog": (Differs(("tasks", "gate"), ("--catalog", "{catalog}")),),
     "tasks gate --tasks": (Differs(("tasks", "gate"), ("--tasks", "spatial")),),
     "tasks gate --markdown": (Differs(("tasks", "gate"), ("--markdown",)),),
+    "tasks audit --catalog": (Differs(("tasks", "audit", "--tasks", "spatial/s0/*"), ("--catalog", "libero-pro")),),
+    "tasks audit --tasks": (Differs(("tasks", "audit", "--catalog", "libero-pro"), ("--tasks", "spatial/s0/*")),),
+    "tasks audit --examples": (Differs(("tasks", "audit", "--catalog", "libero-pro"), ("--examples", "0")),),
+    "tasks audit --starts": (
+        ProvenBy(_AUDIT),
+        Refused(("tasks", "audit", "--catalog", "libero-pro", "--starts", "-1"), "--starts must be 0"),
+    ),
+    "tasks audit --record": (ProvenBy(_AUDIT),),
     # -- eval -------------------------------------------------------------------------------------------
     "eval --policy": (Refused(("eval", "--policy", "gpt-robot", "--run", "{dir}/run"), "unknown policy"),),
     "eval --policy-arg": (

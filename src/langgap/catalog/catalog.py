@@ -18,7 +18,7 @@ from pathlib import Path
 import yaml
 
 from langgap.catalog.naming import SUITE_SHORT
-from langgap.catalog.task import DIMENSIONS, KINDS, SPLITS, GateResult, Task
+from langgap.catalog.task import DIMENSIONS, KINDS, SPLITS, GateResult, Origin, Task
 from langgap.catalog.verdicts import read_verdicts, snapshot_verdicts
 from langgap.errors import BddlError, CatalogError, UnknownTaskError
 from langgap.goals import goal_from_strings
@@ -167,7 +167,10 @@ def _task_from_entry(
             # Every task of the paper's own catalog is in it by definition.
             in_langgap99=bool(entry.get("in_langgap99", catalog == DEFAULT_CATALOG)),
             gate=verdicts.get(entry["id"]),
+            origin=Origin(**entry["origin"]) if "origin" in entry else None,
         )
+    except TypeError as exc:  # an origin with missing or unknown fields
+        raise CatalogError(f"catalog {catalog}: task {entry.get('id', '?')}: bad origin: {exc}") from None
     except KeyError as exc:
         raise CatalogError(f"catalog {catalog}: task {entry.get('id', '?')} lacks field {exc}") from None
     except BddlError as exc:

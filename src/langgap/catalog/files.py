@@ -2,14 +2,15 @@
 
 Original tasks run LIBERO's shipped BDDL unchanged. An extended task's BDDL is generated from its
 source's shipped BDDL by replacing `(:language)`, `(:obj_of_interest)` and `(:goal)` only, and is
-written once to the cache directory (`$LANGGAP_CACHE`, default `~/.cache/langgap`).
+written once to the cache directory (`$LANGGAP_CACHE`, default `~/.cache/langgap`). A task read from
+another benchmark's package (`Task.origin`) runs that package's BDDL file and init states as shipped
+(`catalog/packages.py`).
 """
 
 from __future__ import annotations
 
 import functools
 import hashlib
-import os
 from pathlib import Path
 
 import numpy as np
@@ -17,21 +18,18 @@ import numpy as np
 from langgap import stack
 from langgap.atomic import write_text_atomically
 from langgap.bddl import BddlProblem, parse_bddl, rewrite_task_sections, strip_task_sections
+from langgap.catalog import packages
+from langgap.catalog.cache import cache_dir
 from langgap.catalog.task import Task
 from langgap.errors import BddlError
 from langgap.goals import atoms, conjunction
 
 
-def cache_dir() -> Path:
-    """Where generated files go (`$LANGGAP_CACHE`, else `$XDG_CACHE_HOME/langgap`, else `~/.cache/langgap`)."""
-    if os.environ.get("LANGGAP_CACHE"):
-        return Path(os.environ["LANGGAP_CACHE"])
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "langgap"
-
-
 def scene_bddl_path(task: Task) -> Path:
-    """LIBERO's shipped BDDL of the task whose scene `task` uses."""
+    """LIBERO's shipped BDDL of the task whose scene `task` uses (a package's task: its own file, the scene it
+    ships)."""
+    if task.origin is not None:
+        return packages.bddl_path(task.origin)
     return stack.bddl_path(task.suite, task.scene_task)
 
 
@@ -64,6 +62,12 @@ def _scene_key(path: Path) -> str:
 
 def task_bddl_text(task: Task) -> str:
     """The BDDL text of `task`: LIBERO's own for originals, generated for extended tasks."""
+    if task.origin is not None:
+        text = packages.checked_bytes(task.origin).decode("utf-8")
+        shipped = parse_bddl(text, source=task.origin.file)
+        if conjunction(shipped.goal) != task.goal or shipped.language != task.instruction("paper"):
+            raise BddlError(f"task {task.id}: registry goal or instruction differs from {task.origin.file}")
+        return text
     source_text = _read_text(scene_bddl_path(task))
     if task.kind == "original":
         shipped = parse_bddl(source_text, source=str(scene_bddl_path(task)))
@@ -82,7 +86,7 @@ def task_bddl_text(task: Task) -> str:
 
 def task_bddl_path(task: Task) -> Path:
     """A BDDL file for `task` that LIBERO can load; generated files are written atomically once."""
-    if task.kind == "original":
+    if task.kind == "original" or task.origin is not None:
         task_bddl_text(task)  # checks the registry against the shipped file
         return scene_bddl_path(task)
     text = task_bddl_text(task)
@@ -92,10 +96,19 @@ def task_bddl_path(task: Task) -> Path:
     return path
 
 
+def _runs_own_states(task: Task) -> bool:
+    return task.origin is not None and task.origin.init_runs == "own"
+
+
 def init_states_path(task: Task) -> Path:
+    """The file of the init states `task` starts from."""
+    if _runs_own_states(task):  # only LIBERO-PRO's package, installed as LangGap's LIBERO, ships states a task runs
+        return packages.pro_site() / task.origin.init_file
     return stack.init_states_path(task.suite, task.scene_task)
 
 
 def init_states(task: Task) -> np.ndarray:
-    """The fixed init states `task` starts from (its scene task's 50 states)."""
+    """The fixed init states `task` starts from (its scene task's 50 states; a package's task, those it ships)."""
+    if _runs_own_states(task):
+        return packages.own_init_states(task.origin)
     return stack.load_init_states(task.suite, task.scene_task)

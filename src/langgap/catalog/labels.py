@@ -21,6 +21,8 @@ DIMENSION_LABEL = {
     "negation": "Negation",
     "paraphrase": "Paraphrase",
     "attribute_reference": "Attribute Reference",
+    "task": "Task (LIBERO-PRO)",
+    "language": "Language",
 }
 
 SPLIT_ORDER = SPLITS

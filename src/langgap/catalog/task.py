@@ -12,7 +12,10 @@ KINDS = ("original", "extended")
 # The paper's four dimensions, then the four of the `langgap-beyond` catalog (`catalog/beyond.py`).
 PAPER_DIMENSIONS = ("change_object", "change_target", "spatial_description", "drawer_action")
 BEYOND_DIMENSIONS = ("ordering", "negation", "paraphrase", "attribute_reference")
-DIMENSIONS = ("original", *PAPER_DIMENSIONS, *BEYOND_DIMENSIONS)
+# The perturbations of the field's benchmarks read from their packages (`catalog/external.py`): another goal on
+# the same scene (LIBERO-PRO's *task*), and a reworded instruction (LIBERO-PRO's *lan*, LIBERO-Plus's language).
+EXTERNAL_DIMENSIONS = ("task", "language")
+DIMENSIONS = ("original", *PAPER_DIMENSIONS, *BEYOND_DIMENSIONS, *EXTERNAL_DIMENSIONS)
 SPLITS = ("original", "train", "heldout")
 INSTRUCTION_STYLES = ("libero", "paper")
 DEFAULT_STYLE = "libero"
@@ -125,6 +128,27 @@ class GateResult:
 
 
 @dataclass(frozen=True)
+class Origin:
+    """Where a task read from another benchmark's package comes from: its BDDL file inside `package`
+    (`version`) and that file's SHA-256, and the init states file it ships (`init_file`, the SHA-256 of its
+    states array); a task runs that BDDL file unchanged. `init_runs` says which file a run loads: `own` (the
+    package's, an `.npz` inside LangGap's LIBERO package) or `source` (the source's, which the package's file
+    equals array for array; a file LangGap would have to unpickle to read)."""
+
+    package: str
+    version: str
+    file: str
+    sha256: str
+    init_file: str
+    init_sha256: str
+    init_runs: str = "own"
+
+    def __post_init__(self) -> None:
+        if self.init_runs not in ("own", "source"):
+            raise CatalogError(f"origin of {self.file}: init_runs must be own or source, not {self.init_runs!r}")
+
+
+@dataclass(frozen=True)
 class Task:
     """A LangGap task: a goal and an instruction on the scene and init states of a LIBERO task.
 
@@ -151,6 +175,7 @@ class Task:
     notes: tuple[str, ...] = ()
     in_langgap99: bool = False
     gate: GateResult | None = None  # None: not validated by a feasibility gate
+    origin: Origin | None = None  # a task read from another benchmark's package (None: LangGap's own)
 
     def __post_init__(self) -> None:
         checks = {"kind": (self.kind, KINDS), "dimension": (self.dimension, DIMENSIONS), "split": (self.split, SPLITS)}
@@ -219,4 +244,5 @@ class Task:
             "feasible": self.feasible,
             "evidence": self.evidence,
             "gate": None if self.gate is None else {**asdict(self.gate), "rate": self.gate.rate},
+            "origin": None if self.origin is None else asdict(self.origin),
         }

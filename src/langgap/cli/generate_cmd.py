@@ -1,5 +1,6 @@
 """`langgap generate`: enumerate same-scene tasks into a generated registry (`full`, or `langgap-beyond` with
-`--catalog`) and print its counts."""
+`--catalog`) and print its counts; or read another benchmark's tasks from its package (`--catalog libero-pro`,
+`libero-plus-language`), run LangGap's file checks on them and record the findings."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ from collections import Counter
 from collections.abc import Callable
 
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
+from langgap.catalog.external import EXTERNAL
 from langgap.catalog.generate import (
     BEYOND_CATALOG,
     FULL_CATALOG,
@@ -27,9 +29,10 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument(
         "--catalog",
-        choices=list(GENERATED),
+        choices=[*GENERATED, *EXTERNAL],
         default=FULL_CATALOG,
-        help="which catalog to generate: the full task space (default), or the dimensions beyond the paper's",
+        help="which catalog to generate: the full task space (default), the dimensions beyond the paper's, or "
+        "LIBERO-PRO's / LIBERO-Plus's language perturbations read from their packages",
     )
     parser.add_argument(
         "--out", metavar="FILE", help="registry file to write (default: the package's catalog/registry/CATALOG.yaml)"
@@ -105,6 +108,8 @@ def _check_gate_options(args) -> None:
 
 def run(args) -> int:
     _check_gate_options(args)
+    if args.catalog in EXTERNAL:
+        return _run_external(args)
     if args.catalog == BEYOND_CATALOG:
         from langgap.catalog.beyond import generate_beyond
 
@@ -121,4 +126,26 @@ def run(args) -> int:
         rows = run_gate(args, str(path), "all", args.gate_inits, recording=True).rows
         print(gate_summary(rows))
         print(f"recorded verdicts in {record(str(path), rows, inits=args.gate_inits, stepping=args.stepping)}")
+    return 0
+
+
+def _run_external(args) -> int:
+    """Read the catalog from its package, write it, run the file checks and record their findings beside it."""
+    from langgap.catalog.audit import audit_text, record_audit
+    from langgap.catalog.catalog import load_catalog_file
+    from langgap.catalog.external import GENERATORS, files_about, files_findings, write_external
+
+    if args.gate_inits or args.suites != list(SUITES):
+        raise LangGapError(
+            f"--gate-inits and --suites do not apply to {args.catalog}: it is read whole from its package"
+        )
+    generated = GENERATORS[args.catalog]()
+    path = write_external(generated, args.out or default_registry_path(args.catalog), args.catalog)
+    print("\n".join(summary_lines(generated.tasks)))
+    print(f"wrote {path}")
+    catalog = load_catalog_file(path)
+    findings = generated.unreadable + files_findings(catalog, list(catalog))
+    checked = [t.id for t in catalog if t.origin is not None] + [f.task for f in generated.unreadable]
+    print(audit_text(findings, checked))
+    print(f"recorded findings in {record_audit(path, 'files', files_about(catalog), findings, checked)}")
     return 0

@@ -1,4 +1,4 @@
-"""`langgap tasks list`, `langgap tasks show` and `langgap tasks gate`."""
+"""`langgap tasks list`, `langgap tasks show`, `langgap tasks gate` and `langgap tasks audit`."""
 
 from __future__ import annotations
 
@@ -30,7 +30,7 @@ def add_catalog_options(parser) -> None:
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser("tasks", help="list and inspect tasks")
-    verbs = parser.add_subparsers(dest="tasks_verb", required=True, metavar="list|show|gate")
+    verbs = parser.add_subparsers(dest="tasks_verb", required=True, metavar="list|show|gate|audit")
 
     listing = verbs.add_parser("list", help="list tasks, optionally filtered")
     add_catalog_options(listing)
@@ -59,6 +59,25 @@ def add_parser(subparsers) -> None:
     )
     gate.add_argument("--markdown", action="store_true", help="print a Markdown table")
     gate.set_defaults(handler=run_gate)
+
+    audit = verbs.add_parser(
+        "audit", help="LangGap's checks of tasks read from another benchmark's package: each finding, counted"
+    )
+    add_catalog_option(audit)
+    audit.add_argument(
+        "--tasks", metavar="SELECTION", default="all", help="selection expression (default: every task, gated or not)"
+    )
+    audit.add_argument(
+        "--starts",
+        type=int,
+        default=0,
+        metavar="K",
+        help="also run the simulator checks (t0 state equals the source's, goal not true at t0) on init states "
+        "0..K-1 (50: all); without it, the simulator checks' recorded findings are shown",
+    )
+    audit.add_argument("--examples", type=int, default=3, metavar="N", help="examples shown per finding")
+    audit.add_argument("--record", action="store_true", help="record the checks that ran beside the registry")
+    audit.set_defaults(handler=run_audit)
 
 
 def _filtered(args) -> list[Task]:
@@ -103,9 +122,12 @@ def run_show(args) -> int:
     info["init_states"] = {
         "file": str(files.init_states_path(task)),
         "count": int(files.init_states(task).shape[0]),
-        "from": f"LIBERO {task.suite} task {task.scene_index} ({task.scene_task})",
+        "from": f"LIBERO {task.suite} task {task.scene_index} ({task.scene_task})"
+        if task.origin is None or task.origin.init_runs == "source"
+        else f"{task.origin.package} {task.origin.version}, for its perturbation of {task.scene_task}",
     }
     info["siblings"] = [t.id for t in catalog.siblings(task) if t.id != task.id]
+    info["findings"] = _recorded_findings(args.catalog, task.id)
     if args.json:
         print(json.dumps(info, indent=1))
         return 0
@@ -116,7 +138,9 @@ def run_show(args) -> int:
         print(f"{'':<12} {style}: {text!r}")
     print(f"{'goal':<12} {' '.join(info['goal'])}")
     print(f"{'bddl':<12} {info['bddl']}")
-    if task.kind == "extended":
+    if task.origin is not None:
+        print(f"{'read':<12} from {task.origin.package} {task.origin.version}, unchanged")
+    elif task.kind == "extended":
         print(f"{'generated':<12} from {info['scene_bddl']} (only language, obj_of_interest and goal differ)")
     print(f"{'init states':<12} {info['init_states']['count']} from {info['init_states']['from']}")
     print(f"{'':<12} {info['init_states']['file']}")
@@ -128,13 +152,66 @@ def run_show(args) -> int:
     print(f"{'evidence:':<12} {task.evidence}")
     for note in task.notes:
         print(f"{'note':<12} {note}")
+    if task.origin is not None:
+        origin = task.origin
+        print(f"{'origin':<12} {origin.package} {origin.version}: {origin.file} (sha256 {origin.sha256[:16]}…)")
+        print(f"{'':<12} init states shipped: {origin.init_file} (runs: {origin.init_runs})")
+    for finding in info["findings"]:
+        print(f"{'finding':<12} {finding['name']}: {finding['detail']}")
     return 0
 
 
 def run_gate(args) -> int:
     from langgap.catalog.coverage import coverage_table, gate_counts
 
-    print(coverage_table(gate_counts(load_catalog(args.catalog).select(args.tasks)), markdown=args.markdown))
+    tasks = load_catalog(args.catalog).select(args.tasks)
+    print(coverage_table(gate_counts(tasks), markdown=args.markdown))
+    ungated = sum(t.gate is None for t in tasks)
+    if ungated:
+        print(
+            f"{ungated} of {len(tasks)} task(s) not gated: unproven until the gate runs "
+            f"(langgap validate --catalog {args.catalog} --record)"
+        )
+    return 0
+
+
+def run_audit(args) -> int:
+    from langgap.catalog.audit import CHECKS, audit_text, read_audit, record_audit
+    from langgap.catalog.catalog import registry_path
+    from langgap.catalog.external import files_about, files_findings
+    from langgap.errors import CatalogError
+
+    catalog = load_catalog(args.catalog)
+    tasks = [t for t in catalog.select(args.tasks) if t.origin is not None]
+    if not tasks:
+        raise CatalogError(f"catalog {catalog.name}: no selected task was read from a package; nothing to audit")
+    if args.starts < 0:
+        raise CatalogError("--starts must be 0 (recorded findings) or a number of init states")
+    registry = registry_path(args.catalog)
+    about, recorded = read_audit(registry)
+    ids = [t.id for t in tasks]
+    findings = files_findings(catalog, tasks) + [f for f in recorded if f.name == "unreadable"]
+    ran = {"files": files_about(catalog)}
+    if args.starts:
+        from langgap.start_audit import SEED, starts_findings
+
+        findings += starts_findings(catalog, tasks, args.starts, progress=lambda line: print(line, flush=True))
+        ran["starts"] = {args.tasks: {"inits": args.starts, "seed": SEED}}
+        print(f"starts: checked on init states 0..{args.starts - 1} (seed {SEED})")
+    elif "starts" in about:
+        chosen = set(ids)
+        findings += [f for f in recorded if f.name in CHECKS["starts"] and f.task in chosen]
+        for selection, how in about["starts"].items():
+            print(f"starts: recorded for tasks {selection!r} on init states 0..{how['inits'] - 1} (rerun: --starts K)")
+    else:
+        print(f"starts: not checked (langgap tasks audit --catalog {args.catalog} --starts 50)")
+    unreadable = [f.task for f in findings if f.name == "unreadable"]
+    print(audit_text(findings, ids + unreadable, examples=args.examples))
+    if args.record:
+        for check, how in ran.items():
+            mine = [f for f in findings if f.name in CHECKS[check]]
+            path = record_audit(registry, check, how, mine, ids if check == "starts" else ids + unreadable)
+        print(f"recorded findings in {path}")
     return 0
 
 
@@ -158,3 +235,11 @@ def _gate_lines(gate) -> list[str]:
     if gate.made_by:
         lines.append(f"made by: {gate.made_by}")
     return lines
+
+
+def _recorded_findings(catalog: str, task_id: str) -> list[dict]:
+    """What the recorded audit found in one task (empty without an audit)."""
+    from langgap.catalog.audit import read_audit
+    from langgap.catalog.catalog import registry_path
+
+    return [{"name": f.name, "detail": f.detail} for f in read_audit(registry_path(catalog))[1] if f.task == task_id]

@@ -146,10 +146,13 @@ class TaskEnv:
     # -- lifecycle ---------------------------------------------------------------------------
 
     def can_switch_to(self, task: Task) -> bool:
-        """Whether `task` is set in this env's scene with the same init states, so the simulator can be kept."""
-        return (task.suite, task.scene_task) == (self.task.suite, self.task.scene_task) and files.scene_key(
-            task
-        ) == files.scene_key(self.task)
+        """Whether `task` is set in this env's scene with the same init states, so the simulator can be kept
+        (a package's task may ship init states of its own beside its source's: LIBERO-PRO's do)."""
+        return (
+            (task.suite, task.scene_task) == (self.task.suite, self.task.scene_task)
+            and files.scene_key(task) == files.scene_key(self.task)
+            and files.init_states_path(task) == files.init_states_path(self.task)
+        )
 
     def switch_task(self, task: Task) -> None:
         """Evaluate `task` from now on. Same-scene tasks differ only in goal and instruction, which LangGap
