@@ -24,6 +24,7 @@ class Outcome(StrEnum):
     """What an episode achieved (see `classify`)."""
 
     SUCCESS = "success"
+    PERSISTED = "persisted"  # after its instruction changed, the policy achieved the first instruction's goal
     WRONG_ORDER = "wrong_order"  # an ordered task's sub-goals all held, but not in the order asked
     DID_SOURCE_TASK = "did_source_task"  # an extended task's policy did the scene's original task instead
     DID_OTHER_TASK = "did_other_task"
@@ -79,7 +80,7 @@ class EpisodeRecord:
     error: str | None
     steps: int
     policy_calls: int
-    instruction: str
+    instruction: str  # the first instruction sent
     instruction_sha256: str
     t0_hash: str
     reached: dict[str, int] = field(default_factory=dict)  # scene task id -> first step its goal held
@@ -107,10 +108,18 @@ class EpisodeRecord:
     worker: int = 0
     finished_at: str = ""
     video: str | None = None
+    # [policy step, instruction] for every instruction sent, from step 0 (schema 4; see `timeline`)
+    instructions: list = field(default_factory=list)
 
     @property
     def key(self) -> EpisodeKey:
         return EpisodeKey(self.task_id, self.init_index, self.seed, self.condition)
+
+    @property
+    def timeline(self) -> list[tuple[int, str]]:
+        """Every instruction the policy was sent, with the policy step it took effect (a store older than
+        schema 4 kept only the first)."""
+        return [(int(step), text) for step, text in self.instructions] or [(0, self.instruction)]
 
     @property
     def judged(self) -> bool:
@@ -127,15 +136,26 @@ def privilege(records: Iterable[EpisodeRecord]) -> Privilege:
 
 
 def classify(
-    task_id: str, kind: str, source: str, success: bool, reached: Mapping[str, int], *, wrong_order: bool = False
+    task_id: str,
+    kind: str,
+    source: str,
+    success: bool,
+    reached: Mapping[str, int],
+    *,
+    wrong_order: bool = False,
+    switched: tuple[str, int] | None = None,
 ) -> Outcome:
     """What an episode of task `task_id` achieved, from the scene goals that became true during it.
 
     `wrong_order`: the task's goal is ordered and its parts all held at some step, out of order. That
     is named before the source task, which an ordered task built on the source's goal also reaches.
+    `switched`: (the task the first instruction asked for, the step the instruction became the task's own);
+    reaching that first task's goal at or after the switch is `persisted`, named first of the failures.
     """
     if success:
         return Outcome.SUCCESS
+    if switched is not None and reached.get(switched[0], -1) >= switched[1]:
+        return Outcome.PERSISTED
     if wrong_order:
         return Outcome.WRONG_ORDER
     if kind == "extended" and source in reached:

@@ -64,7 +64,9 @@ class ServedPolicy:
             privileged = protocol.privileged_from_message(request[protocol.PRIVILEGED_KEY]) if spec.sees_state else None
         except KeyError as exc:
             raise protocol.ProtocolError(f"request lacks {exc.args[0]!r}, which this policy's spec needs") from None
-        observation = Observation(state=state, images=images, privileged=privileged)
+        prompt = request.get(protocol.PROMPT_KEY)  # the instruction in force: it can change mid-episode
+        instruction = prompt if isinstance(prompt, str) else None
+        observation = Observation(state=state, images=images, privileged=privileged, instruction=instruction)
         return {protocol.ACTIONS_KEY: np.asarray(self.policy.act(observation), dtype=np.float64)}
 
     def reset(self) -> None:

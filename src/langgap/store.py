@@ -34,8 +34,9 @@ from langgap.records import (
 
 # 2: the run's spec is stored whole (meta `spec`, `execution`), episodes say whether the policy was privileged.
 # 3: that one `privileged` column is two, `sees_state` and `sees_goal` (`records.upgraded` reads schema 2's).
-SCHEMA_VERSION = 3
-READABLE_SCHEMAS = (1, 2, 3)
+# 4: the `instructions` timeline (every instruction sent and the step it took effect; older rows: the first only).
+SCHEMA_VERSION = 4
+READABLE_SCHEMAS = (1, 2, 3, 4)
 DB_NAME = "episodes.sqlite"
 LOCK_NAME = ".writer.lock"
 

@@ -99,7 +99,8 @@ def test_achieved_is_the_own_task_else_the_earliest_goal_then_name():
 
 def test_the_outcome_names_are_the_stored_strings():
     assert [o.value for o in Outcome] == [
-        "success", "wrong_order", "did_source_task", "did_other_task", "no_goal_reached", "policy_error", "gap"
+        "success", "persisted", "wrong_order", "did_source_task", "did_other_task", "no_goal_reached",
+        "policy_error", "gap"
     ]  # fmt: skip
     assert Outcome.GAP not in JUDGED_OUTCOMES and len(JUDGED_OUTCOMES) == len(Outcome) - 1
     assert [s.value for s in Status] == ["done", "gap"]
@@ -137,7 +138,7 @@ def test_each_column_has_the_type_and_nullability_of_its_field():
     }
     assert {n: (by_name[n].kind, by_name[n].nullable) for n in expected} == expected
     assert [c.name for c in COLUMNS if c.json] == [
-        "reached", "goals_at_start", "goals_at_end", "cameras", "physics"
+        "reached", "goals_at_start", "goals_at_end", "cameras", "physics", "instructions"
     ]  # fmt: skip
     assert [c.name for c in COLUMNS if c.nullable] == ["failure_kind", "error", "video"]
     assert by_name["success"].ddl() == "success INTEGER NOT NULL"

@@ -45,6 +45,7 @@ def test_what_the_policy_did_instead(summary):
     assert vla_shares["change_target"] == pytest.approx(
         {
             "success": 0.75,
+            "persisted": 0,
             "wrong_order": 0,
             "did_source_task": 0,
             "did_other_task": 0,

@@ -10,7 +10,7 @@ from __future__ import annotations
 from langgap.cli.execution_flags import add_execution_options, execution_options
 from langgap.cli.tasks_cmd import add_catalog_options
 from langgap.engine.filming import DEFAULT_VIDEO, VIDEO_DIR, VIDEO_HELP
-from langgap.engine.plan import CONDITION_HELP, CONDITIONS
+from langgap.engine.plan import CONDITION_HELP
 from langgap.engine.spec import (
     DEFAULT_MAX_BATCH,
     DEFAULT_MAX_WAIT_MS,
@@ -60,7 +60,10 @@ def add_parser(subparsers) -> None:
         help="with --resume: let the run grow (more tasks, episodes or conditions; everything else must match)",
     )
     parser.add_argument(
-        "--condition", action="append", choices=CONDITIONS, help=f"instruction condition(s) ({CONDITION_HELP})"
+        "--condition",
+        action="append",
+        metavar="CONDITION",
+        help=f"instruction condition, repeatable ({CONDITION_HELP})",
     )
     parser.add_argument(
         "--video",

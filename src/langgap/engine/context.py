@@ -16,9 +16,11 @@ def task_context(
     style: str = DEFAULT_STYLE,
     condition: str = "given",
     instruction: str | None = None,
+    instruction_goals: tuple[tuple[str, str], ...] = (),
 ) -> TaskContext:
     """The full context for one episode of `task` (privileged part included: the rollout gives each
-    policy only what its spec allows); `instruction` overrides the catalog sentence (conditions)."""
+    policy only what its spec allows); `instruction` overrides the catalog sentence (conditions);
+    `instruction_goals` names the goals of the episode's instructions that ask for another task's."""
     return TaskContext(
         instruction=task.instruction(style) if instruction is None else instruction,
         suite=task.suite,
@@ -31,5 +33,6 @@ def task_context(
             goal=tuple(str(p) for p in task.bddl_goal),
             source_goal=tuple(str(p) for p in catalog.get(task.source).bddl_goal),
             goal_expression=str(task.goal),
+            instruction_goals=instruction_goals,
         ),
     )

@@ -58,6 +58,13 @@ def _record(planned: PlannedEpisode, task: Task, **values) -> EpisodeRecord:
     )
 
 
+def _switched(planned: PlannedEpisode, instructions: list[tuple[int, str]]) -> tuple[str, int] | None:
+    """(the first instruction's task, the step the instruction changed) of a switch episode that got that far."""
+    if not planned.started_as or len(instructions) < 2:
+        return None
+    return planned.started_as, instructions[1][0]
+
+
 def execute_episode(
     planned: PlannedEpisode,
     task: Task,
@@ -83,6 +90,10 @@ def execute_episode(
         style=style,
         condition=key.condition,
         instruction=planned.instruction,
+        # A switch starts under another task's instruction: a reference that follows it pursues that task's goal.
+        instruction_goals=((planned.instruction, str(catalog.get(planned.started_as).goal)),)
+        if planned.started_as
+        else (),
     )
     started = time.perf_counter()
     common = dict(
@@ -97,7 +108,9 @@ def execute_episode(
         physics=stack.physics_stack(env.options.stepping),
     )
     try:
-        result = run_episode(env, policy, context, watch=scene_goals(task, catalog), on_step=on_step)
+        result = run_episode(
+            env, policy, context, watch=scene_goals(task, catalog), on_step=on_step, changes=planned.changes
+        )
     except PolicyOutputError as exc:
         return _record(
             planned,
@@ -119,7 +132,13 @@ def execute_episode(
         status=Status.DONE,
         success=result.success,
         outcome=classify(
-            task.id, task.kind, task.source, result.success, result.reached, wrong_order=result.wrong_order
+            task.id,
+            task.kind,
+            task.source,
+            result.success,
+            result.reached,
+            wrong_order=result.wrong_order,
+            switched=_switched(planned, result.instructions),
         ),
         failure_kind=None if result.success else FailureKind.POLICY,
         error=None,
@@ -129,6 +148,7 @@ def execute_episode(
         reached=result.reached,
         goals_at_start=result.at_start,
         goals_at_end=result.at_end,
+        instructions=[list(change) for change in result.instructions],
         wall_time_s=time.perf_counter() - started,
         **common,
     )

@@ -10,15 +10,20 @@ import hashlib
 from dataclasses import dataclass
 from typing import ClassVar
 
+import numpy as np
+
 from langgap.catalog.catalog import Catalog
 from langgap.catalog.task import Task
 from langgap.errors import CatalogError, InitStateError
 from langgap.records import EpisodeKey
 
-CONDITIONS = ("given", "empty", "shuffled", "source")
+CONDITIONS = ("given", "empty", "shuffled", "source", "nonsense")
+SWITCH = "switch:"  # `switch:K`: the instruction changes at policy step K (`switch_step`)
 CONDITION_HELP = (
     "given: the task's instruction; empty: an empty string; shuffled: the instruction of another task on the "
-    "same scene; source: the instruction of the task's source (original) task"
+    "same scene; source: the instruction of the task's source (original) task; nonsense: as many words drawn "
+    "from the catalog's vocabulary; switch:K: another task's instruction from the same scene (an extended "
+    "task's source, an original's sibling) until policy step K, then the task's own"
 )
 
 
@@ -30,9 +35,12 @@ class PlannedEpisode:
     size: ClassVar[int] = 1  # one episode's timeout
 
     key: EpisodeKey
-    instruction: str  # the exact string the policy will receive
+    instruction: str  # the exact string the policy will receive first
     scene: str = ""  # the scene it is set in: a worker's environment serves every task of one scene
     film: bool = False  # record a clip of the episode (the run's `--video` chose it)
+    # (policy step, instruction): where the instruction changes mid-episode (condition `switch:K`)
+    changes: tuple[tuple[int, str], ...] = ()
+    started_as: str = ""  # the task whose goal the first instruction asks for, when a change follows
 
     @property
     def task_id(self) -> str:
@@ -58,6 +66,48 @@ def repeat_of(seed: int, init_index: int, run_seed: int) -> int:
     return (seed - init_index - run_seed) // REPEAT_STRIDE
 
 
+def switch_step(condition: str) -> int | None:
+    """K of a valid `switch:K` condition (a positive number of policy steps); None for any other condition."""
+    k = condition.removeprefix(SWITCH)
+    return int(k) if condition.startswith(SWITCH) and k.isdigit() and int(k) >= 1 else None
+
+
+def unknown_conditions(conditions: tuple[str, ...]) -> list[str]:
+    """The conditions that are neither a fixed one (`CONDITIONS`) nor a valid `switch:K`."""
+    return [c for c in conditions if c not in CONDITIONS and switch_step(c) is None]
+
+
+def _pick(pool: list, *salt) -> object:
+    """A deterministic member of `pool`, spread over it by `salt` (a task id, an init index, a seed)."""
+    digest = hashlib.sha256("#".join(str(s) for s in salt).encode()).digest()
+    return pool[int.from_bytes(digest[:8], "big") % len(pool)]
+
+
+def switch_source(task: Task, catalog: Catalog, style: str, seed: int) -> Task:
+    """The task whose instruction a `switch:K` episode of `task` starts under: an extended task's source;
+    for an original, a sibling of its scene with another instruction and goal, chosen from the episode's seed."""
+    if task.kind != "original":
+        return catalog.get(task.source)
+    own = task.instruction(style)
+    pool = [
+        t for t in catalog.scene_mates(task) if t.id != task.id and t.instruction(style) != own and t.goal != task.goal
+    ]
+    if not pool:
+        raise CatalogError(f"switch: {task.id} has no sibling task in its scene to start under")
+    return _pick(pool, task.id, "switch", seed)
+
+
+def nonsense(task: Task, catalog: Catalog, style: str, init_index: int) -> str:
+    """As many words as `task`'s instruction has, drawn (seeded by the task and init index) from the words of
+    every instruction of the catalog: a sentence of the benchmark's words that asks for nothing."""
+    vocabulary = sorted({word for t in catalog for word in t.instruction(style).split()})
+    length = len(task.instruction(style).split())
+    rng = np.random.default_rng(
+        int.from_bytes(hashlib.sha256(f"{task.id}#nonsense#{init_index}".encode()).digest()[:8])
+    )
+    return " ".join(vocabulary[i] for i in rng.integers(len(vocabulary), size=length))
+
+
 def condition_instruction(task: Task, catalog: Catalog, condition: str, style: str, init_index: int) -> str:
     """The instruction a policy receives for `task` under a language `condition`."""
     if condition == "given":
@@ -66,6 +116,8 @@ def condition_instruction(task: Task, catalog: Catalog, condition: str, style: s
         return ""
     if condition == "source":
         return catalog.get(task.source).instruction(style)
+    if condition == "nonsense":
+        return nonsense(task, catalog, style, init_index)
     if condition == "shuffled":
         own = task.instruction(style)
         pool = [t for t in catalog.scene_mates(task) if t.id != task.id and t.instruction(style) != own]
@@ -74,8 +126,7 @@ def condition_instruction(task: Task, catalog: Catalog, condition: str, style: s
         if not pool:
             raise CatalogError(f"no other instruction to shuffle in for {task.id}")
         # Deterministic and spread over the pool: the choice depends on the task and the init index only.
-        digest = hashlib.sha256(f"{task.id}#{init_index}".encode()).digest()
-        return pool[int.from_bytes(digest[:8], "big") % len(pool)].instruction(style)
+        return _pick(pool, task.id, init_index).instruction(style)
     raise CatalogError(f"unknown condition {condition!r} ({CONDITION_HELP})")
 
 
@@ -94,7 +145,7 @@ def build_plan(
     each `repeats` times with its own seed (same init state)."""
     if episodes < 1:
         raise CatalogError(f"--episodes must be at least 1, got {episodes}")
-    unknown = [c for c in conditions if c not in CONDITIONS]
+    unknown = unknown_conditions(conditions)
     if unknown:
         raise CatalogError(f"unknown condition(s) {unknown} ({CONDITION_HELP})")
     from langgap.catalog import files
@@ -109,9 +160,27 @@ def build_plan(
                 "are out of range"
             )
         for condition in conditions:
+            k = switch_step(condition)
             for init_index in range(first_init, first_init + episodes):
-                instruction = condition_instruction(task, catalog, condition, style, init_index)
+                instruction = None if k else condition_instruction(task, catalog, condition, style, init_index)
                 for repeat in range(repeats):
                     key = EpisodeKey(task.id, init_index, episode_seed(seed, init_index, repeat), condition)
-                    plan.append(PlannedEpisode(key, instruction, scene=scene_key(task)))
+                    if k:
+                        plan.append(_switch_episode(key, task, catalog, style, k))
+                    else:
+                        plan.append(PlannedEpisode(key, instruction, scene=scene_key(task)))
     return plan
+
+
+def _switch_episode(key: EpisodeKey, task: Task, catalog: Catalog, style: str, k: int) -> PlannedEpisode:
+    """A `switch:K` episode: under its first task's instruction until policy step K, then the task's own."""
+    from langgap.catalog.files import scene_key
+
+    first = switch_source(task, catalog, style, key.seed)
+    return PlannedEpisode(
+        key,
+        first.instruction(style),
+        scene=scene_key(task),
+        changes=((k, task.instruction(style)),),
+        started_as=first.id,
+    )

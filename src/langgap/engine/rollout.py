@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -26,6 +26,7 @@ class RolloutResult:
     at_start: list[str] = field(default_factory=list)  # watched goals already true after settling
     at_end: list[str] = field(default_factory=list)  # watched goals true when the episode ended
     wrong_order: bool = False  # an ordered goal's parts all held at some step, but not in the order asked
+    instructions: list[tuple[int, str]] = field(default_factory=list)  # (policy step, instruction) sent
 
 
 def env_options_for(policy: Policy, **overrides) -> EnvOptions:
@@ -46,6 +47,7 @@ def run_episode(
     on_start: Callable[[TaskEnv], None] | None = None,
     settle_steps: int = SETTLE_STEPS,
     sampled_start: bool = False,
+    changes: Sequence[tuple[int, str]] = (),
 ) -> RolloutResult:
     """Run one episode of `policy` on `env` and return its outcome.
 
@@ -61,6 +63,9 @@ def run_episode(
     The policy is told the goal only if its spec `sees_goal`, and shown the simulator state only if it
     `sees_state`, whatever `context` and `env` hold. Exceptions from the policy propagate; a malformed
     action (or a chunk longer than the spec's) raises `PolicyOutputError`.
+    Every observation carries the instruction in force: the context's, until policy step K of each
+    (K, instruction) in `changes`, when the new one takes effect and the rest of an action chunk is
+    dropped (the policy is asked again at once, as a person who changed their mind would expect).
     """
     spec = policy.spec
     # The policy first looks after settling: an image of the unsettled start would be thrown away.
@@ -73,9 +78,15 @@ def run_episode(
     queue: list[np.ndarray] = []
     calls = 0
     success = False
+    instructions = [(0, context.instruction)]
+    pending = sorted(changes)
     while not env.truncated:
+        while pending and pending[0][0] <= env.steps:
+            instructions.append((env.steps, pending.pop(0)[1]))
+            queue = []
         if not queue:
-            chunk = as_action_chunk(policy.act(observation_for(env.observe(spec.cameras), spec)), spec)
+            observation = replace(env.observe(spec.cameras), instruction=instructions[-1][1])
+            chunk = as_action_chunk(policy.act(observation_for(observation, spec)), spec)
             calls += 1
             queue = list(chunk[: spec.replan])
         action = queue.pop(0)
@@ -94,4 +105,5 @@ def run_episode(
         at_start=scene.at_start,
         at_end=scene.holding(),
         wrong_order=scene.wrong_order(success),
+        instructions=instructions,
     )

@@ -17,7 +17,7 @@ from langgap import stack
 from langgap.catalog.catalog import DEFAULT_CATALOG, catalog_hash, load_catalog
 from langgap.catalog.task import DEFAULT_STYLE, INSTRUCTION_STYLES
 from langgap.engine.filming import VideoSelection
-from langgap.engine.plan import CONDITION_HELP, CONDITIONS, REPEAT_STRIDE
+from langgap.engine.plan import CONDITION_HELP, REPEAT_STRIDE, unknown_conditions
 from langgap.errors import LangGapError
 from langgap.policies import policy_kwargs
 
@@ -84,7 +84,7 @@ class RunSpec:
         if stepping not in RESULT_STEPPINGS:
             raise SpecError(f"unknown stepping {stepping!r} (known: {', '.join(RESULT_STEPPINGS)})")
         conditions = tuple(dict.fromkeys(conditions))
-        unknown = [c for c in conditions if c not in CONDITIONS]
+        unknown = unknown_conditions(conditions)
         if unknown or not conditions:
             raise SpecError(f"unknown condition(s) {unknown} ({CONDITION_HELP})")
         selected = load_catalog(catalog).select(tasks)

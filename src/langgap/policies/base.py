@@ -5,7 +5,9 @@ whether it is told the goal; action chunking), is `reset` with a `TaskContext` a
 every episode, and `act`s on an `Observation`, returning one action (7,) or a chunk (k, 7) of
 OSC_POSE deltas + gripper in [-1, 1], k <= `chunk`. The evaluator executes the first `replan` actions
 of a chunk before it asks again, and renders only the cameras the spec names, only when it asks.
-Every policy sees the 8-D robot state (proprioception, as on a real robot; it names no task).
+Every policy sees the 8-D robot state (proprioception, as on a real robot; it names no task), and
+every observation carries the instruction in force: it can change mid-episode (condition `switch:K`),
+so a policy reads it from each observation (`current_instruction`), not once at reset.
 
 The two privileges are separate. `sees_state`: observations carry the simulator state
 (`langgap.sim.privileged_schema.PrivilegedState`: object poses, contacts, joints), which a learned
@@ -63,13 +65,22 @@ class PrivilegedContext:
     goal: tuple[str, ...]  # atoms that satisfy the goal (`Task.bddl_goal`): the whole goal for LIBERO-style tasks
     source_goal: tuple[str, ...]
     goal_expression: str  # the goal itself (`langgap.goals`), with any Or, Not and order (Then)
+    # (instruction, goal expression) for the instructions of this episode that ask for another task's goal
+    # (a switch's first instruction): a reference that follows its instruction pursues that goal while it
+    # is in force (`goal_for`), and the task's own under every other instruction.
+    instruction_goals: tuple[tuple[str, str], ...] = ()
+
+    def goal_for(self, instruction: str) -> str:
+        """The goal expression `instruction` asks for in this episode."""
+        return dict(self.instruction_goals).get(instruction, self.goal_expression)
 
 
 @dataclass(frozen=True)
 class TaskContext:
     """What a policy is told at reset.
 
-    `instruction` is the exact string the policy receives (and the one recorded). The other public
+    `instruction` is the exact string the policy receives first (and the one recorded); when it changes
+    mid-episode, each `Observation.instruction` carries the one in force (`current_instruction`). The other public
     fields name no task: the suite, the init state and seed (which select a placement shared by every
     task of the scene) and the step limit. `privileged` is None for every policy whose spec does not
     declare `sees_goal`: the engine removes it before `reset` (`for_policy`), so a policy under test
@@ -87,6 +98,12 @@ class TaskContext:
     def for_policy(self, spec: PolicySpec) -> TaskContext:
         """The context a policy with `spec` may see."""
         return self if spec.sees_goal else replace(self, privileged=None)
+
+
+def current_instruction(observation: Observation, context: TaskContext) -> str:
+    """The instruction in force at `observation`: the observation's (it may change mid-episode), else the
+    one the episode started with."""
+    return context.instruction if observation.instruction is None else observation.instruction
 
 
 def observation_for(observation: Observation, spec: PolicySpec) -> Observation:

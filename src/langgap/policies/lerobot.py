@@ -23,7 +23,7 @@ import numpy as np
 
 from langgap.errors import LangGapError
 from langgap.lerobot_libero import ACTION_KEY, CAMERA_KEYS, IMAGE_PREFIX, STATE_KEY, image_tensor
-from langgap.policies.base import PolicySpec, TaskContext
+from langgap.policies.base import PolicySpec, TaskContext, current_instruction
 from langgap.sim.env import ACTION_DIM, Observation
 
 
@@ -89,6 +89,7 @@ class LeRobotPolicy:
         )
         self._torch = torch
         self._instruction = ""
+        self._context: TaskContext | None = None
         self.spec = PolicySpec(cameras=self.cameras, image_size=size, chunk=1, replan=1)
 
     @staticmethod
@@ -135,6 +136,7 @@ class LeRobotPolicy:
         self.model.reset()
         self.preprocessor.reset()
         self.postprocessor.reset()
+        self._context = context
         self._instruction = context.instruction
 
     def observation_batch(self, observation: Observation) -> dict:
@@ -145,7 +147,12 @@ class LeRobotPolicy:
         return batch
 
     def act(self, observation: Observation) -> np.ndarray:
-        """One action from the policy's `select_action` (which plays out its chunk before replanning)."""
+        """One action from the policy's `select_action` (which plays out its chunk before replanning; when
+        the instruction changes, the chunk planned under the old one is dropped, as the rollout drops its own)."""
+        instruction = current_instruction(observation, self._context)
+        if instruction != self._instruction:
+            self.model.reset()
+            self._instruction = instruction
         batch = self.preprocessor(self.observation_batch(observation))
         with self._torch.inference_mode():
             action = self.model.select_action(batch)

@@ -26,7 +26,7 @@ from websockets.sync.client import ClientConnection, connect
 from langgap.errors import PolicyServerError
 from langgap.imaging import resize_with_pad
 from langgap.policies import protocol
-from langgap.policies.base import PolicySpec, TaskContext
+from langgap.policies.base import PolicySpec, TaskContext, current_instruction
 from langgap.sim.env import CAMERAS, Observation
 
 # openpi's LIBERO example renders at 256 (the training data's resolution) and sends 224.
@@ -211,7 +211,9 @@ class OpenpiPolicy:
         self._connection.close()
 
     def _request(self, observation: Observation) -> dict:
-        request: dict = {protocol.STATE_KEY: observation.state, protocol.PROMPT_KEY: self._context.instruction}
+        # The prompt is the instruction in force at this step: it can change mid-episode.
+        prompt = current_instruction(observation, self._context)
+        request: dict = {protocol.STATE_KEY: observation.state, protocol.PROMPT_KEY: prompt}
         for camera, image in observation.images.items():
             if self.served is None:
                 image = resize_with_pad(image, self.resize_size, self.resize_size)

@@ -134,7 +134,11 @@ def context_from_message(message: Any) -> TaskContext:
     try:
         privileged = message.get("privileged")
         if privileged is not None:
-            goals = {"goal": tuple(privileged["goal"]), "source_goal": tuple(privileged["source_goal"])}
+            goals = {
+                "goal": tuple(privileged["goal"]),
+                "source_goal": tuple(privileged["source_goal"]),
+                "instruction_goals": tuple(tuple(pair) for pair in privileged.get("instruction_goals", ())),
+            }
             privileged = PrivilegedContext(**{**privileged, **goals})
         return TaskContext(**{**message, "privileged": privileged})
     except (KeyError, TypeError) as exc:

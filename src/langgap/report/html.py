@@ -154,6 +154,7 @@ _COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b")
 OUTCOME_COLOURS = {
     Outcome.SUCCESS: "#2ca02c",
     Outcome.DID_SOURCE_TASK: "#ff7f0e",
+    Outcome.PERSISTED: "#8c564b",
     Outcome.WRONG_ORDER: "#9467bd",
     Outcome.DID_OTHER_TASK: "#d62728",
     Outcome.NO_GOAL_REACHED: "#bbbbbb",

@@ -90,8 +90,8 @@ class TaskRow:
 
 
 # The order in which clips are shown: the failures that explain most first, successes last.
-CLIP_ORDER = (Outcome.DID_SOURCE_TASK, Outcome.WRONG_ORDER, Outcome.DID_OTHER_TASK, Outcome.NO_GOAL_REACHED,
-              Outcome.POLICY_ERROR, Outcome.SUCCESS)  # fmt: skip
+CLIP_ORDER = (Outcome.PERSISTED, Outcome.DID_SOURCE_TASK, Outcome.WRONG_ORDER, Outcome.DID_OTHER_TASK,
+              Outcome.NO_GOAL_REACHED, Outcome.POLICY_ERROR, Outcome.SUCCESS)  # fmt: skip
 
 
 @dataclass(frozen=True)

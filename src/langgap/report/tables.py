@@ -15,6 +15,7 @@ from langgap.report.summary import RunResults, Summary, TaskRow, shown_dimension
 SOURCE_LABEL = {"original": "Original (LIBERO)", "extended": "Extended (LangGap)", "total": "Total"}
 OUTCOME_LABEL = {
     Outcome.SUCCESS: "Success %",
+    Outcome.PERSISTED: "Persisted %",
     Outcome.WRONG_ORDER: "Wrong order %",
     Outcome.DID_SOURCE_TASK: "Did source task %",
     Outcome.DID_OTHER_TASK: "Did other task %",
@@ -250,9 +251,12 @@ def spread_table(run: RunResults) -> Table | None:
 
 def outcome_table(run: RunResults) -> Table:
     """What the policy did instead, per dimension (`did source task` is the default-task rate). `wrong order`
-    is shown for runs with ordered tasks (or any episode in that outcome)."""
+    is shown for runs with ordered tasks (or any episode in that outcome), `persisted` where an episode of a
+    switch persisted."""
     ordered = any(o.group == "ordering" or o.shares[Outcome.WRONG_ORDER] for o in run.outcomes)
-    shown = [o for o in JUDGED_OUTCOMES if o is not Outcome.WRONG_ORDER or ordered]
+    switched = any(o.shares[Outcome.PERSISTED] for o in run.outcomes)
+    hidden = {Outcome.WRONG_ORDER: not ordered, Outcome.PERSISTED: not switched}
+    shown = [o for o in JUDGED_OUTCOMES if not hidden.get(o, False)]
     headers = ["Dimension", "Episodes", *(OUTCOME_LABEL[o] for o in shown), "Gaps"]
     rows = [
         [

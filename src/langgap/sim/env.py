@@ -82,6 +82,8 @@ class Observation:
     state: np.ndarray
     images: dict[str, np.ndarray] = field(default_factory=dict)
     privileged: PrivilegedState | None = None  # the simulator state (`EnvOptions.privileged`)
+    # The instruction in force at this step (it may change mid-episode); None: the reset context's stands.
+    instruction: str | None = None
 
 
 def quat_to_axis_angle(quat_xyzw: np.ndarray) -> np.ndarray:

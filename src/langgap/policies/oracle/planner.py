@@ -19,8 +19,9 @@ from langgap import goals
 from langgap.bddl import Predicate
 from langgap.errors import LangGapError
 from langgap.policies.oracle import drawer_press, drawers, hinges, pick_place, pushing
+from langgap.policies.oracle.control import CLOSE, OPEN
 from langgap.policies.oracle.grasps import has_grasp
-from langgap.policies.oracle.motion import Agent, Program, hold
+from langgap.policies.oracle.motion import Agent, Program, actuate, back_off, hold
 from langgap.policies.oracle.placement import spot_on_object, spots_aside, spots_in_region
 from langgap.policies.oracle.predicates import holds, region_box
 from langgap.policies.oracle.scene import Scene
@@ -156,3 +157,29 @@ def program(agent: Agent, goal: goals.Goal) -> Program:
     if not planned:
         raise OracleError(f"the oracle cannot plan goal {goal}: every choice contradicts it or orders it twice")
     return (yield from hold(agent))
+
+
+# A `keep_clear` box no spot falls into: a put-down only needs the table.
+_NOWHERE = np.array([np.inf, np.inf, 0.0, np.inf, np.inf, 0.0])
+
+
+def put_down(agent: Agent) -> Program:
+    """Let go of what the hand holds, midway through another program: set it on the table aside from
+    where it is (where no goal asks for it), else release it where it is; then lift the hand clear."""
+    if agent.grip != CLOSE:
+        return
+    scene = agent.scene
+    held = [e for e in scene.loose() if scene.touches_gripper(e)]
+    spots = spots_aside(scene, held[0], _NOWHERE) if held else []
+    if spots:
+        yield from pick_place.place(agent, held[0], spots[0])
+        return
+    yield from actuate(agent, OPEN)
+    yield from back_off(agent)
+
+
+def replan(agent: Agent, goal: goals.Goal) -> Program:
+    """A new goal midway through the episode (its instruction changed): put down what the hand holds,
+    then the whole program for the new goal from the scene as it is."""
+    yield from put_down(agent)
+    return (yield from program(agent, goal))

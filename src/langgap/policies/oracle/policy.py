@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from langgap.policies.base import PolicySpec, PrivilegedContext, TaskContext, simulator_state
+from langgap.policies.base import PolicySpec, PrivilegedContext, TaskContext, current_instruction, simulator_state
 from langgap.policies.oracle.motion import Agent, Program
-from langgap.policies.oracle.planner import OracleError, parse_goal, program
+from langgap.policies.oracle.planner import OracleError, parse_goal, program, replan
 from langgap.policies.oracle.scene import Scene
 from langgap.policies.oracle.skills import DrawerSkill
 from langgap.sim.env import Observation
@@ -20,6 +20,9 @@ class OraclePolicy:
     Gaussian noise (that standard deviation, in action units) to the six motion components, seeded
     from the episode's seed and init index (and `noise_seed`, for another draw), for diverse
     demonstrations. `drawer` fixes how drawers are opened (`skills.DrawerSkill.parse`).
+    It follows its instruction: when the instruction in force changes to one that asks for another goal
+    (`PrivilegedContext.goal_for`; condition `switch:K`), it puts down what it holds and replans from the
+    current state.
     """
 
     spec = PolicySpec(sees_state=True, sees_goal=True)
@@ -31,6 +34,9 @@ class OraclePolicy:
         self.noise_seed = noise_seed
         self.drawer = DrawerSkill.parse(drawer)
         self._goal: tuple = ()
+        self._goal_strings: tuple[str, ...] = ()
+        self._instruction = ""
+        self._context: TaskContext | None = None
         self._agent = Agent(self.drawer)
         self._program: Program | None = None
         self._rng = np.random.default_rng(0)
@@ -44,14 +50,18 @@ class OraclePolicy:
             config["drawer"] = str(self.drawer)
         return config
 
-    def goal_of(self, context: PrivilegedContext) -> tuple[str, ...]:
-        """The goal this policy pursues: the task's own expression, with any order and negation it states."""
-        return (context.goal_expression,)
+    def goal_of(self, context: PrivilegedContext, instruction: str) -> tuple[str, ...]:
+        """The goal this policy pursues under `instruction`: the expression it asks for in this episode (the
+        task's own, but for a switch's first instruction), with any order and negation it states."""
+        return (context.goal_for(instruction),)
 
     def reset(self, context: TaskContext) -> None:
         if context.privileged is None:
             raise OracleError("the oracle needs the privileged context (the task's goal: PolicySpec.sees_goal)")
-        self._goal = parse_goal(self.goal_of(context.privileged))
+        self._context = context
+        self._instruction = context.instruction
+        self._goal_strings = self.goal_of(context.privileged, context.instruction)
+        self._goal = parse_goal(self._goal_strings)
         self._agent = Agent(self.drawer)
         self._program = None
         noise_key = [context.seed, context.init_index] + ([self.noise_seed] if self.noise_seed else [])
@@ -59,6 +69,13 @@ class OraclePolicy:
 
     def act(self, observation: Observation) -> np.ndarray:
         self._agent.scene = Scene(simulator_state(observation, "the oracle"))
+        instruction = current_instruction(observation, self._context)
+        if instruction != self._instruction:
+            self._instruction = instruction
+            goal_strings = self.goal_of(self._context.privileged, instruction)
+            if goal_strings != self._goal_strings:  # asked for another goal: replan from where the scene is
+                self._goal_strings, self._goal = goal_strings, parse_goal(goal_strings)
+                self._program = replan(self._agent, self._goal) if self._program is not None else None
         if self._program is None:
             self._program = program(self._agent, self._goal)
         action = next(self._program)
@@ -69,7 +86,8 @@ class OraclePolicy:
 
 
 class BlindPolicy(OraclePolicy):
-    """The oracle run on the source task's goal whatever the instruction says: a policy that memorised the scene."""
+    """The oracle run on the source task's goal whatever the instruction says: a policy that memorised the scene
+    (it never follows a switch: it persists by construction)."""
 
-    def goal_of(self, context: PrivilegedContext) -> tuple[str, ...]:
+    def goal_of(self, context: PrivilegedContext, instruction: str) -> tuple[str, ...]:
         return context.source_goal

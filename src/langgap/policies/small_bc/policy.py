@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from langgap.policies.base import PolicySpec, TaskContext, simulator_state
+from langgap.policies.base import PolicySpec, TaskContext, current_instruction, simulator_state
 from langgap.sim.env import Observation
 
 
@@ -32,6 +32,8 @@ class SmallBCPolicy:
         # It reads the simulator state but is never told the goal: a learned policy under test.
         self.spec = PolicySpec(sees_state=True, chunk=chunk, replan=min(replan, chunk))
         self._instruction = None
+        self._text: str | None = None
+        self._context: TaskContext | None = None
         self._names: list[str] | None = None
         self._name_ids = None
 
@@ -39,16 +41,23 @@ class SmallBCPolicy:
         return {"checkpoint": self.checkpoint, "training": self.training}
 
     def reset(self, context: TaskContext) -> None:
-        torch = self._torch
-        ids = self.vocab.encode(context.instruction, self.model.config.max_words)
-        self._instruction = torch.tensor([ids], dtype=torch.int64)
+        self._context = context
+        self._encode(context.instruction)
         self._names = None
+
+    def _encode(self, instruction: str) -> None:
+        ids = self.vocab.encode(instruction, self.model.config.max_words)
+        self._text = instruction
+        self._instruction = self._torch.tensor([ids], dtype=self._torch.int64)
 
     def act(self, observation: Observation) -> np.ndarray:
         from langgap.policies.small_bc import features
 
         torch = self._torch
         privileged = simulator_state(observation, "small-bc")
+        instruction = current_instruction(observation, self._context)
+        if instruction != self._text:  # the instruction changed mid-episode
+            self._encode(instruction)
         if self._names is None:
             self._names = features.entity_names(privileged)
             width = self.model.config.max_name_words
