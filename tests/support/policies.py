@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from langgap.policies.base import PolicySpec
+from langgap.policies.base import PolicySpec, current_instruction
 from langgap.policies.oracle import OraclePolicy
 from langgap.policies.simple import NoopPolicy, RandomPolicy
 from langgap.sim.privileged_schema import PrivilegedState
@@ -210,3 +210,20 @@ class OrderBlindOracle(OraclePolicy):
 
     def goal_of(self, context):
         return context.goal
+
+
+class InstructionLogPolicy(NoopPolicy):
+    """Holds still and appends the instruction in force at each query to a file of its own per episode in
+    `log_dir`, so a test sees what reached the policy in whichever process it ran (worker, server)."""
+
+    def __init__(self, log_dir: str = ""):
+        self.log_dir = Path(log_dir)
+
+    def reset(self, context):
+        self._context = context
+        self._log = self.log_dir / f"{os.getpid()}-{time.monotonic_ns()}.txt"
+
+    def act(self, observation):
+        with self._log.open("a") as log:
+            log.write(current_instruction(observation, self._context) + "\n")
+        return super().act(observation)

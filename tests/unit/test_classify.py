@@ -152,3 +152,20 @@ def test_a_record_as_plain_data():
     assert type(data["status"]) is str and data["status"] == "gap"
     assert type(data["outcome"]) is str and data["outcome"] == "gap"
     assert data["reached"] == {SOURCE: 2} and list(data) == [c.name for c in COLUMNS]
+
+
+@pytest.mark.parametrize(
+    ("success", "reached", "outcome"),
+    [
+        (True, {TASK: 90, SOURCE: 30}, Outcome.SUCCESS),
+        (False, {SOURCE: 30}, Outcome.PERSISTED),  # the first instruction's goal, reached after the switch
+        (False, {SOURCE: 20}, Outcome.PERSISTED),  # at the switch's step: after the policy was told
+        (False, {SOURCE: 12}, Outcome.DID_SOURCE_TASK),  # done before the switch: what it was asked then
+        (False, {}, Outcome.NO_GOAL_REACHED),
+    ],
+)
+def test_classify_a_switch(success, reached, outcome):
+    """switch:20 on an extended task: it starts under its source's instruction, its own from step 20."""
+    assert classify(TASK, "extended", SOURCE, success, reached, switched=(SOURCE, 20)) == outcome
+    if outcome is Outcome.PERSISTED:  # without the switch the same episode did its source task
+        assert classify(TASK, "extended", SOURCE, success, reached) == Outcome.DID_SOURCE_TASK

@@ -142,3 +142,27 @@ def test_a_schema_2_store_reads_its_privileged_flag_as_both_privileges(tmp_path,
     assert privilege([read]) == (Privilege.GOAL if privileged else Privilege.NONE)
     (shown,) = load_runs([directory])  # and it still reports
     assert results(shown).label == ("oracle (old) †" if privileged else "oracle (old)")
+
+
+def test_a_schema_3_store_reads_each_episode_s_one_instruction_as_its_timeline(tmp_path):
+    with RunStore.create(tmp_path / "old", {}) as store:
+        store.write(record())
+    db = sqlite3.connect(tmp_path / "old" / "episodes.sqlite")
+    db.execute("ALTER TABLE episodes DROP COLUMN instructions")  # the schema-3 layout: no timeline
+    db.execute("UPDATE meta SET value = '3' WHERE key = 'schema_version'")
+    db.commit()
+    db.close()
+    with RunStore.open(tmp_path / "old") as store:
+        (old,) = store.records()
+    assert old.instructions == [] and old.timeline == [(0, "put it there")]
+    with pytest.raises(StoreError, match="schema 3"):
+        RunStore.open(tmp_path / "old", write=True)
+
+
+def test_a_switch_s_timeline_round_trips(tmp_path):
+    switched = record(condition="switch:20", instructions=[[0, "put it there"], [20, "put it here"]])
+    with RunStore.create(tmp_path / "run", {}) as store:
+        store.write(switched)
+    with RunStore.open(tmp_path / "run") as store:
+        (stored,) = store.records()
+    assert stored == switched and stored.timeline == [(0, "put it there"), (20, "put it here")]
