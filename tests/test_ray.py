@@ -16,7 +16,10 @@ from tests.support.harness import REPO, TINY_TASK, run_cli, store_rows
 
 pytestmark = pytest.mark.requires(shutil.which("unshare") is not None, "unshare (util-linux) for a network namespace")
 
-KEEP = ("task_id", "init_index", "seed", "condition", "success", "steps", "t0_hash", "reached", "goals_at_end")
+KEEP = (
+    "task_id", "init_index", "seed", "condition", "success", "steps", "t0_hash", "reached", "goals_at_end",
+    "instructions",
+)  # fmt: skip
 
 
 # A network inside the namespace: a non-loopback address with a default route, as on a real
@@ -77,6 +80,10 @@ _POOL_RUN = (
     "given",
     "--condition",
     "shuffled",
+    "--condition",
+    "switch:5",  # the instruction changes mid-episode: its timeline is the same on every pool
+    "--condition",
+    "nonsense",
     "--no-progress",
     "--quiet",
     "--catalog",
