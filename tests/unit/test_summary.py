@@ -6,7 +6,7 @@ import dataclasses
 
 import pytest
 
-from langgap.records import Privilege
+from langgap.records import Outcome, Privilege
 from langgap.report import load_runs, render, summarize
 from tests.support.reports import SOURCE, memoriser, reader, write_run
 
@@ -151,3 +151,31 @@ def test_filmed_episodes_show_did_source_task_first_with_their_instruction(tmp_p
     ]
     assert blind.clips[0].instruction == "do spatial/s0/bowl-on-stove"
     assert blind.clips[0].path == run / "videos" / "spatial_s0_bowl-on-stove.webm"
+
+
+def test_the_switch_table_per_k_and_dimension(tmp_path):
+    """A memoriser keeps doing the source task after its instruction switches; a reader switches with it."""
+    persisted = [
+        dataclasses.replace(r, outcome=Outcome.PERSISTED) if r.kind == "extended" and r.judged else r
+        for r in memoriser(condition="switch:20")
+    ]
+    run = write_run(tmp_path / "run", "my-vla", reader() + persisted + reader(condition="switch:60"))
+    (results,) = summarize(load_runs([run])).runs
+    rows = {(row.k, row.group): row.classes for row in results.switches}
+    assert [key for key in rows if key[0] == 20] == [(20, "change_object"), (20, "change_target"), (20, "extended"),
+                                                     (20, "original")]  # fmt: skip
+    extended = rows[(20, "extended")]
+    assert (extended["persisted"].successes, extended["persisted"].episodes, extended["persisted"].gaps) == (7, 7, 1)
+    assert extended["success"].rate == extended["other"].rate == extended["none"].rate == 0
+    assert rows[(20, "original")]["success"].rate == 1.0
+    stove = rows[(60, "change_target")]  # the reader fails the stove task at init 0: nothing happens
+    assert (stove["success"].successes, stove["none"].successes, stove["success"].episodes) == (3, 1, 4)
+    assert stove["success"].ci == pytest.approx((0.3006, 0.9544), abs=1e-3)
+    markdown = render([run], "md")
+    assert "Instruction switched at step K" in markdown
+    assert "| 20 | All extended | 7 | 0.0 [0.0, 35.4] | 100.0 [64.6, 100.0] |" in markdown
+    assert "given vs switch:20" in markdown  # paired against `given` (McNemar) with the other conditions
+    (exported,) = [
+        s for s in summarize(load_runs([run])).to_dict()["switches"] if (s["k"], s["group"]) == (20, "extended")
+    ]
+    assert exported["persisted"] == 1.0 and exported["episodes"] == 7 and exported["gaps"] == 1

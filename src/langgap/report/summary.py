@@ -15,7 +15,7 @@ from pathlib import Path
 
 from langgap.catalog.labels import ALL_EXTENDED_DIMENSIONS, EXTENDED_DIMENSIONS, SPLIT_ORDER, SUITE_ORDER
 from langgap.catalog.task import BEYOND_DIMENSIONS, GateResult
-from langgap.engine.plan import repeat_of
+from langgap.engine.plan import repeat_of, switch_step
 from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Outcome, Privilege, achieved
 from langgap.report.answer import Answer
 from langgap.report.card import PROTOCOL_ITEMS, protocol_card
@@ -177,6 +177,57 @@ def outcome_row(group: str, records: list[EpisodeRecord]) -> OutcomeRow:
     return OutcomeRow(group, len(judged), len(records) - len(judged), shares)
 
 
+# A switch episode's outcome in four: its own task, the first instruction's, another scene task's, or none.
+SWITCH_CLASSES = {
+    "success": (Outcome.SUCCESS,),
+    "persisted": (Outcome.PERSISTED,),
+    "other": (Outcome.DID_SOURCE_TASK, Outcome.DID_OTHER_TASK, Outcome.WRONG_ORDER),
+    "none": (Outcome.NO_GOAL_REACHED, Outcome.POLICY_ERROR),
+}
+
+
+@dataclass(frozen=True)
+class SwitchRow:
+    """The `switch:K` episodes of one group (a dimension, `extended` or `original`): each class's share as
+    a `Rate` (its successes are the episodes in that class), for its interval."""
+
+    k: int
+    group: str
+    classes: dict[str, Rate]  # `SWITCH_CLASSES` name -> its share
+
+    def as_dict(self) -> dict:
+        first = next(iter(self.classes.values()))
+        shares = {name: r.rate for name, r in self.classes.items()}
+        cis = {f"{name}_ci": list(r.ci) for name, r in self.classes.items()}
+        return {"k": self.k, "group": self.group, "episodes": first.episodes, "gaps": first.gaps, **shares, **cis}
+
+
+def switch_rows(records: list[EpisodeRecord]) -> list[SwitchRow]:
+    """Per K of the run's `switch:K` conditions, per dimension, then all extended and original tasks."""
+    rows = []
+    for k in sorted({k for r in records if (k := switch_step(r.condition)) is not None}):
+        switched = [r for r in records if switch_step(r.condition) == k]
+        extended = [r for r in switched if r.kind == "extended"]
+        groups = [(d, [r for r in extended if r.dimension == d]) for d in ALL_EXTENDED_DIMENSIONS]
+        groups += [("extended", extended), ("original", [r for r in switched if r.kind == "original"])]
+        for group, members in groups:
+            if not members:
+                continue
+            judged = [r for r in members if r.judged]
+            classes = {
+                name: Rate(
+                    group,
+                    len(judged),
+                    sum(r.outcome in outcomes for r in judged),
+                    len(members) - len(judged),
+                    len({r.task_id for r in members}),
+                )
+                for name, outcomes in SWITCH_CLASSES.items()
+            }
+            rows.append(SwitchRow(k, group, classes))
+    return rows
+
+
 def paired(name: str, a: dict[tuple, EpisodeRecord], b: dict[tuple, EpisodeRecord]) -> PairedTest | None:
     """McNemar over the keys judged in both `a` and `b` (None when there are none)."""
     keys = [k for k in a if k in b and a[k].judged and b[k].judged]
@@ -292,6 +343,7 @@ class RunResults:
     against_originals: PairedTest | None  # extended episodes against their sources' (`against_sources`)
     default_task: Rate  # extended episodes that did the scene's original task instead (`default_task`)
     against_blind: PairedTest | None = None  # extended episodes against a compared `blind` run's (`summarize`)
+    switches: list[SwitchRow] = field(default_factory=list)  # `switch:K` episodes per K and dimension
 
     @property
     def label(self) -> str:
@@ -356,6 +408,7 @@ def results(run: Run) -> RunResults:
         gate_source=run.gate_source,
         against_originals=against_sources(given),
         default_task=default_task(extended),
+        switches=switch_rows(run.records),
     )
 
 
@@ -395,7 +448,7 @@ class Summary:
             "per_split": lambda run: run.by_split,
             "per_task": lambda run: [t.rate for t in run.tasks],
         }
-        for section in ("answers", *sections, "outcomes", "conditions", "wording", "spread", "videos"):
+        for section in ("answers", *sections, "outcomes", "conditions", "switches", "wording", "spread", "videos"):
             out[section] = []
         for run in self.runs:
             out["runs"].append(
@@ -418,6 +471,7 @@ class Summary:
             out["answers"].append({"run": run.name, **run.answer.as_dict()})
             out["outcomes"] += [{"run": run.name, **o.as_dict()} for o in run.outcomes]
             out["conditions"] += [{"run": run.name, **t.as_dict()} for t in run.conditions]
+            out["switches"] += [{"run": run.name, **row.as_dict()} for row in run.switches]
             out["wording"] += [{"run": run.name, **t.as_dict()} for t in run.wording]
             out["spread"] += [{"run": run.name, **row.as_dict()} for row in run.spread]
             out["videos"] += [{"run": run.name, **clip.as_dict()} for clip in run.clips]

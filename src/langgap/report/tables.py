@@ -10,7 +10,7 @@ from langgap.records import JUDGED_OUTCOMES, Outcome, Privilege
 from langgap.report.card import CARD_ITEMS
 from langgap.report.published import Published
 from langgap.report.stats import PairedTest, Rate
-from langgap.report.summary import RunResults, Summary, TaskRow, shown_dimensions
+from langgap.report.summary import SWITCH_CLASSES, RunResults, Summary, TaskRow, shown_dimensions
 
 SOURCE_LABEL = {"original": "Original (LIBERO)", "extended": "Extended (LangGap)", "total": "Total"}
 OUTCOME_LABEL = {
@@ -360,6 +360,29 @@ def condition_table(run: RunResults) -> Table | None:
     return _paired_table("Language conditions", run, run.conditions, "Given", "Condition", changed)
 
 
+def switch_table(run: RunResults) -> Table | None:
+    """What the policy did after its instruction changed at step K (`switch:K`), per K and dimension, each
+    share with its 95% interval; None for a run without a switch. Paired against `given` in the conditions."""
+    if not run.switches:
+        return None
+    headers = ["K", "Dimension", "Episodes", *(f"{name.capitalize()} %, 95% CI" for name in SWITCH_CLASSES), "Gaps"]
+    rows = [
+        [
+            str(row.k),
+            label(OUTCOME_GROUP_LABEL, row.group),
+            str(next(iter(row.classes.values())).episodes),
+            *(f"{pct(r.rate)} {ci(r)}" for r in row.classes.values()),
+            str(next(iter(row.classes.values())).gaps),
+        ]
+        for row in run.switches
+    ]
+    title = (
+        f"Instruction switched at step K — {run.label} (persisted: after the switch it did what the first "
+        "instruction asked; other: another scene task)"
+    )
+    return Table(title, headers, rows)
+
+
 def comparison_table(summary: Summary) -> Table | None:
     """The first run against each other run on matched episodes; refused when their protocols differ."""
     if summary.refused:
@@ -414,6 +437,8 @@ def full_report(summary: Summary, published: Published | None = None) -> list[Ta
             tables.append(seeds)
         if (conditions := condition_table(run)) is not None:
             tables.append(conditions)
+        if (switches := switch_table(run)) is not None:
+            tables.append(switches)
         if (wording := wording_table(run)) is not None:
             tables.append(wording)
     if published:
@@ -441,6 +466,8 @@ def diagnosis(summary: Summary, published: Published | None = None) -> list[Tabl
         tables.append(outcome_table(run))
         if (conditions := condition_table(run)) is not None:
             tables.append(conditions)
+        if (switches := switch_table(run)) is not None:
+            tables.append(switches)
         if (wording := wording_table(run)) is not None:
             tables.append(wording)
     return tables
