@@ -251,12 +251,11 @@ def spread_table(run: RunResults) -> Table | None:
 
 def outcome_table(run: RunResults) -> Table:
     """What the policy did instead, per dimension (`did source task` is the default-task rate). `wrong order`
-    is shown for runs with ordered tasks (or any episode in that outcome), `persisted` where an episode of a
-    switch persisted."""
+    is shown for runs with ordered tasks (or any episode in that outcome); `persisted` never (the table holds
+    `given` episodes: only a switch's persist, in `switch_table`)."""
     ordered = any(o.group == "ordering" or o.shares[Outcome.WRONG_ORDER] for o in run.outcomes)
-    switched = any(o.shares[Outcome.PERSISTED] for o in run.outcomes)
-    hidden = {Outcome.WRONG_ORDER: not ordered, Outcome.PERSISTED: not switched}
-    shown = [o for o in JUDGED_OUTCOMES if not hidden.get(o, False)]
+    hidden = {Outcome.PERSISTED, *(() if ordered else (Outcome.WRONG_ORDER,))}
+    shown = [o for o in JUDGED_OUTCOMES if o not in hidden]
     headers = ["Dimension", "Episodes", *(OUTCOME_LABEL[o] for o in shown), "Gaps"]
     rows = [
         [
