@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 
 import pytest
 
 from langgap.records import Outcome, Privilege
 from langgap.report import load_runs, render, summarize
-from tests.support.reports import SOURCE, memoriser, reader, write_run
+from tests.support.reports import SOURCE, TASKS, memoriser, reader, write_run
 
 
 @pytest.fixture
@@ -179,3 +180,16 @@ def test_the_switch_table_per_k_and_dimension(tmp_path):
         s for s in summarize(load_runs([run])).to_dict()["switches"] if (s["k"], s["group"]) == (20, "extended")
     ]
     assert exported["persisted"] == 1.0 and exported["episodes"] == 7 and exported["gaps"] == 1
+
+
+def test_a_switch_s_instructions_reach_the_gallery_caption_and_the_episode_export(tmp_path):
+    from langgap.report.export import episode_rows
+
+    timeline = [[0, "do the first"], [20, "do the second"]]
+    switched = [dataclasses.replace(r, video="videos/a.webm", instructions=timeline) for r in reader(range(1))]
+    run = write_run(tmp_path / "run", "my-vla", switched + reader(range(1), condition="empty", video="videos/b.webm"))
+    clips = summarize(load_runs([run])).runs[0].clips
+    assert {c.instruction for c in clips if c.condition == "given"} == {"do the first → at step 20: do the second"}
+    assert {c.instruction for c in clips if c.condition == "empty"} == {f"do {t}" for t in TASKS}  # one instruction
+    exported = {(r["task_id"], r["condition"]): json.loads(r["instructions"]) for r in episode_rows([run])}
+    assert exported[(SOURCE, "given")] == timeline and exported[(SOURCE, "empty")] == [[0, f"do {SOURCE}"]]

@@ -21,6 +21,8 @@ def episode_rows(paths: list[str | Path]) -> list[dict]:
             data = asdict(record)
             for key in ("reached", "goals_at_start", "goals_at_end", "physics"):
                 data[key] = json.dumps(data[key], sort_keys=True)
+            # Every instruction sent, [[step, instruction], ...] (an older store's: its one instruction at step 0).
+            data["instructions"] = json.dumps(record.timeline)
             rows.append({"run": run.name, **data, "achieved": achieved(record)})
     return rows
 

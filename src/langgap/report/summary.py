@@ -103,7 +103,7 @@ class Clip:
     init_index: int
     seed: int
     outcome: str
-    instruction: str
+    instruction: str  # every instruction it was sent, in order (`timeline_text`)
     path: Path
 
     def as_dict(self) -> dict:
@@ -111,12 +111,19 @@ class Clip:
         return {**data, "path": str(self.path)}
 
 
+def timeline_text(timeline: list[tuple[int, str]]) -> str:
+    """An episode's instructions as one line: the first, then each change with its step (`→ at step K: ...`)."""
+    return " → ".join(text if step == 0 else f"at step {step}: {text}" for step, text in timeline)
+
+
 def clips(run: Run) -> list[Clip]:
     """The run's filmed judged episodes, in `CLIP_ORDER`, then by task, condition and init state."""
     filmed = [r for r in run.records if r.video and r.judged]
     filmed.sort(key=lambda r: (CLIP_ORDER.index(Outcome(r.outcome)), r.task_id, r.condition, r.init_index, r.seed))
     return [
-        Clip(r.task_id, r.condition, r.init_index, r.seed, str(r.outcome), r.instruction, run.path / r.video)
+        Clip(
+            r.task_id, r.condition, r.init_index, r.seed, str(r.outcome), timeline_text(r.timeline), run.path / r.video
+        )
         for r in filmed
     ]
 
