@@ -133,6 +133,24 @@ def test_chunking_follows_checkpoint_and_seed_makes_episodes_reproducible(policy
     assert not np.array_equal(_episode(policy, catalog, init_index=0, seed=2), first)  # diffusion samples noise
 
 
+def test_the_task_string_is_the_instruction_in_force_and_a_switch_drops_the_queued_chunk(policy, catalog):
+    task, switch = short_task(catalog), 3  # before the first chunk of n_action_steps is played out
+    sibling = catalog.get(SIBLING_ID).instruction()
+    tasks, inferences = [], []
+    batch, chunk = policy.observation_batch, policy.model.predict_action_chunk
+    policy.observation_batch = lambda observation: (b := batch(observation)) and tasks.append(b["task"]) or b
+    policy.model.predict_action_chunk = lambda *args, **kwargs: inferences.append(len(tasks)) or chunk(*args, **kwargs)
+    try:
+        with TaskEnv(task, env_options_for(policy)) as env:
+            context = task_context(task, catalog, init_index=0, seed=1, instruction=sibling)
+            result = run_episode(env, policy, context, changes=((switch, task.instruction()),))
+    finally:
+        del policy.observation_batch, policy.model.predict_action_chunk
+    assert result.instructions == [(0, sibling), (switch, task.instruction())]
+    assert tasks == [[sibling]] * switch + [[task.instruction()]] * (STEPS - switch)
+    assert inferences[:2] == [1, switch + 1]  # asked anew at the switch, not after the old chunk ran out
+
+
 def test_lora_adapter_on_top_of_checkpoint(policy, checkpoint, catalog, tmp_path):
     from peft import PeftModel
 
