@@ -208,7 +208,7 @@ class OrderBlindOracle(OraclePolicy):
     """The oracle given only the goal's atoms (its witness), not their order: it reaches every part of an
     ordered goal in its own habitual order (fixtures first), as a policy that skips "first ... then" would."""
 
-    def goal_of(self, context):
+    def goal_of(self, context, instruction):
         return context.goal
 
 

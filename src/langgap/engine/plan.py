@@ -77,7 +77,7 @@ def unknown_conditions(conditions: tuple[str, ...]) -> list[str]:
     return [c for c in conditions if c not in CONDITIONS and switch_step(c) is None]
 
 
-def _pick(pool: list, *salt) -> object:
+def _pick(pool: list[Task], *salt) -> Task:
     """A deterministic member of `pool`, spread over it by `salt` (a task id, an init index, a seed)."""
     digest = hashlib.sha256("#".join(str(s) for s in salt).encode()).digest()
     return pool[int.from_bytes(digest[:8], "big") % len(pool)]
