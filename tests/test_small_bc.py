@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -83,6 +85,11 @@ def test_policy_reads_the_instruction_and_is_deterministic(checkpoint, catalog):
     assert outputs[0].shape == (8, 7) and np.all(np.abs(outputs[0]) <= 1) and set(outputs[0][:, 6]) <= {-1.0, 1.0}
     np.testing.assert_array_equal(outputs[0], outputs[1])
     assert not np.array_equal(outputs[0], outputs[2])  # another sentence, another action
+    # The instruction in force is the observation's: changed mid-episode, it is read at once.
+    policy.reset(task_context(task, catalog, init_index=0, seed=0))
+    switched = dataclasses.replace(observation, instruction="pick up the ramekin and place it on the stove")
+    np.testing.assert_array_equal(policy.act(switched), outputs[2])
+    np.testing.assert_array_equal(policy.act(observation), outputs[0])  # no instruction given: the context's
 
 
 def test_eval_runs_small_bc_in_a_worker(checkpoint, tmp_path):
