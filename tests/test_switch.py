@@ -51,6 +51,18 @@ def test_a_malformed_condition_is_one_error_line(short_catalog, tmp_path, condit
     assert not run.exists()
 
 
+def test_a_switch_after_the_step_limit_is_one_error_line(short_catalog, tmp_path):
+    run = tmp_path / "run"
+    args = ("eval", "--policy", "noop", "--catalog", short_catalog, "--run", str(run))
+    result = run_cli(*args, f"--condition=switch:{SHORT_STEPS}")
+    assert result.returncode != 0 and not run.exists()
+    assert (
+        result.stderr.strip()
+        .splitlines()[-1]
+        .endswith(f"ends at step {SHORT_STEPS}, before its instruction would switch")
+    )
+
+
 def _in_force(timeline: list, steps: int) -> list[str]:
     """The instruction in force at each policy step of an episode, from its stored timeline."""
     return [[text for step, text in timeline if step <= s][-1] for s in range(steps)]

@@ -161,6 +161,10 @@ def build_plan(
             )
         for condition in conditions:
             k = switch_step(condition)
+            if k and k >= task.max_steps:
+                raise CatalogError(
+                    f"{condition}: {task.id} ends at step {task.max_steps}, before its instruction would switch"
+                )
             for init_index in range(first_init, first_init + episodes):
                 instruction = None if k else condition_instruction(task, catalog, condition, style, init_index)
                 for repeat in range(repeats):
