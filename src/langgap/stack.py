@@ -84,7 +84,16 @@ STEPPINGS = ("exact", "fast", "robosuite")
 DEFAULT_STEPPING = "exact"
 
 
+# How an episode starts and when its images are taken (langgap/sim/env.py), recorded with every result so
+# that results made under other conventions never mix with these on resume or in a report.
+# start: MuJoCo's solver warm start is cleared only where a fresh LIBERO environment has it cleared (by the
+# reset, before its forward passes), not at the init state nor after settling. images: rendered at the substep
+# where robosuite samples its observables.
+CONVENTIONS = {"start": "fresh-env", "images": "robosuite-sample"}
+
+
 def physics_stack(stepping: str = DEFAULT_STEPPING) -> dict[str, str | None]:
-    """Installed versions of everything that changes simulation results, and the `fast` stepping if used."""
+    """Installed versions of everything that changes simulation results, the start and image conventions,
+    and the `fast` stepping if used."""
     versions = {name: version_of(name) for name in RECORDED}
-    return versions | ({"stepping": stepping} if stepping == "fast" else {})
+    return versions | CONVENTIONS | ({"stepping": stepping} if stepping == "fast" else {})
