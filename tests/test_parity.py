@@ -12,17 +12,20 @@ from __future__ import annotations
 
 import collections
 import dataclasses
+import json
 
 import numpy as np
 import pytest
 from openpi_client import image_tools
 
 from langgap.catalog import files
+from langgap.catalog.catalog import load_catalog_file
 from langgap.engine.context import task_context
 from langgap.engine.rollout import env_options_for, run_episode
 from langgap.policies import make_policy, protocol
 from langgap.policies.openpi import OpenpiPolicy
 from langgap.sim.env import EnvOptions, TaskEnv, quat_to_axis_angle
+from tests.support.harness import run_cli, store_rows
 from tests.support.servers import free_port, helper_server, running, subprocess_env
 
 TASK_ID = "spatial/s0/black-bowl-1-on-plate"
@@ -173,3 +176,72 @@ def test_images_are_robosuites_camera_observations(catalog, stepping):
         assert env.renders - renders == len(cameras) * 3  # the captured steps rendered, nothing else did
         late = env.render("agentview")  # an uncaptured step's image: rendered after the last substep
         assert not np.array_equal(late, images["agentview"])
+
+
+def example_starts(task, seed: int, episodes: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """openpi's example's starts: one LIBERO env for the task, `env.seed(seed)` once, then per episode `reset()`
+    (a hard reset: LIBERO's default) and `set_init_state(k)`; each start's state and fixture placement."""
+    from libero.libero.envs.env_wrapper import ControlEnv
+
+    env = ControlEnv(
+        bddl_file_name=str(files.task_bddl_path(task)),
+        has_renderer=False,
+        has_offscreen_renderer=False,
+        use_camera_obs=False,
+    )
+    starts = []
+    try:
+        env.seed(seed)
+        for k in range(episodes):
+            env.reset()
+            env.set_init_state(files.init_states(task)[k])
+            model = env.env.sim.model
+            starts.append((env.get_sim_state().copy(), model.body_pos.copy(), model.body_quat.copy()))
+            for _ in range(EXAMPLE_SETTLE):  # the episode runs (stepping draws nothing from the stream)
+                env.step(DUMMY_ACTION)
+    finally:
+        env.close()
+    return starts
+
+
+def test_openpi_seed_scheme_places_fixtures_as_openpis_example(catalog):
+    from langgap.engine.plan import episode_seed
+
+    task, run_seed, episodes = catalog.get(TASK_ID), 7, 3
+    expected = example_starts(task, run_seed, episodes)
+    with TaskEnv(task, EnvOptions(seed_scheme="openpi")) as env:
+        # Any order: a worker may get episode 2 before 0 (a resumed or split run).
+        for k in (2, 0, 1, 2):
+            env.reset(k, seed=episode_seed(run_seed, k), render=False)
+            state, body_pos, body_quat = expected[k]
+            assert np.array_equal(env.sim_state(), state), f"episode {k}: state differs from openpi's"
+            assert np.array_equal(env.sim.model.body_pos, body_pos), f"episode {k}: fixtures differ from openpi's"
+            assert np.array_equal(env.sim.model.body_quat, body_quat)
+            env.settle()
+    # The default scheme seeds each episode on its own: from the second episode on, fixtures sit elsewhere.
+    with TaskEnv(task, EnvOptions()) as env:
+        env.reset(1, seed=episode_seed(run_seed, 1), render=False)
+        assert not np.array_equal(env.sim.model.body_pos, expected[1][1])
+
+
+def test_eval_records_the_openpi_seed_scheme_and_uses_it(short_catalog, tmp_path):
+    from langgap.engine.plan import episode_seed
+
+    hashes = {}
+    for scheme in ("per-episode", "openpi"):
+        run = tmp_path / scheme
+        result = run_cli(
+            "eval", "--policy", "noop", "--catalog", str(short_catalog), "--tasks", TASK_ID, "--episodes", "2",
+            "--seed", "7", "--seed-scheme", scheme, "--run", str(run), "--workers", "1", "--no-progress", "--quiet",
+        )  # fmt: skip
+        assert result.returncode == 0, result.stderr
+        rows = sorted(store_rows(run), key=lambda row: row["init_index"])
+        assert [json.loads(row["physics"]).get("seed_scheme") for row in rows] == [
+            None if scheme == "per-episode" else scheme
+        ] * 2
+        hashes[scheme] = [row["t0_hash"] for row in rows]
+    with TaskEnv(load_catalog_file(short_catalog).get(TASK_ID), EnvOptions(seed_scheme="openpi")) as env:
+        env.reset(1, seed=episode_seed(7, 1), render=False)
+        openpi_t0 = env.t0_hash
+    assert hashes["openpi"][0] == hashes["per-episode"][0]  # episode 0: the stream's first draw, seed 7 either way
+    assert hashes["openpi"][1] == openpi_t0 != hashes["per-episode"][1]

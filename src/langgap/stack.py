@@ -92,8 +92,18 @@ DEFAULT_STEPPING = "exact"
 CONVENTIONS = {"start": "fresh-env", "images": "robosuite-sample"}
 
 
-def physics_stack(stepping: str = DEFAULT_STEPPING) -> dict[str, str | None]:
+# How an episode's seed selects its fixture placement (langgap/sim/env.py, `TaskEnv.reset`): `per-episode` seeds
+# NumPy with the episode's own seed (seed + k for init state k); `openpi` reproduces openpi's LIBERO example, one
+# stream per task seeded once (with seed), episode k drawing after k resets' draws.
+SEED_SCHEMES = ("per-episode", "openpi")
+DEFAULT_SEED_SCHEME = "per-episode"
+
+
+def physics_stack(stepping: str = DEFAULT_STEPPING, seed_scheme: str = DEFAULT_SEED_SCHEME) -> dict[str, str | None]:
     """Installed versions of everything that changes simulation results, the start and image conventions,
-    and the `fast` stepping if used."""
+    and the `fast` stepping and the `openpi` seed scheme where used."""
     versions = {name: version_of(name) for name in RECORDED}
-    return versions | CONVENTIONS | ({"stepping": stepping} if stepping == "fast" else {})
+    chosen = {"stepping": stepping} if stepping == "fast" else {}
+    if seed_scheme != DEFAULT_SEED_SCHEME:
+        chosen["seed_scheme"] = seed_scheme
+    return versions | CONVENTIONS | chosen

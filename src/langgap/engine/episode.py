@@ -93,7 +93,7 @@ def execute_episode(
         image_size=policy.spec.image_size if policy.spec.cameras else 0,
         worker=worker,
         attempts=attempts,
-        physics=stack.physics_stack(env.options.stepping),
+        physics=stack.physics_stack(env.options.stepping, env.options.seed_scheme),
     )
     try:
         result = run_episode(env, policy, context, watch=scene_goals(task, catalog), on_step=on_step)

@@ -39,7 +39,7 @@ from langgap.catalog.task import Task
 from langgap.errors import InitStateError, SimulationError
 from langgap.goals import Goal, GoalProgress, holds_now
 from langgap.sim.privileged_schema import PrivilegedState
-from langgap.stack import DEFAULT_STEPPING, STEPPINGS
+from langgap.stack import DEFAULT_SEED_SCHEME, DEFAULT_STEPPING, SEED_SCHEMES, STEPPINGS
 
 CAMERAS = ("agentview", "robot0_eye_in_hand")
 SETTLE_STEPS = 10
@@ -71,6 +71,8 @@ class EnvOptions:
     # exact: bit-identical to robosuite's stepping, faster; fast: the last bits differ, faster still;
     # robosuite: robosuite's own code (sim/stepping.py)
     stepping: str = DEFAULT_STEPPING
+    # how `reset(init_index, seed)` seeds the fixture placement (langgap.stack.SEED_SCHEMES)
+    seed_scheme: str = DEFAULT_SEED_SCHEME
 
     def __post_init__(self) -> None:
         unknown = [c for c in self.cameras if c not in CAMERAS]
@@ -80,6 +82,8 @@ class EnvOptions:
             raise SimulationError(f"camera listed twice: {list(self.cameras)}")
         if self.stepping not in STEPPINGS:
             raise SimulationError(f"unknown stepping {self.stepping!r} (known: {', '.join(STEPPINGS)})")
+        if self.seed_scheme not in SEED_SCHEMES:
+            raise SimulationError(f"unknown seed scheme {self.seed_scheme!r} (known: {', '.join(SEED_SCHEMES)})")
         if not 16 <= self.image_size <= 1024:
             raise SimulationError(f"image size must be in 16..1024, got {self.image_size}")
 
@@ -124,6 +128,7 @@ class TaskEnv:
         self.steps = 0
         self.renders = 0  # camera images rendered since construction (what benchmarks and tests count)
         self._captured: dict[str, np.ndarray] = {}  # images of the current state, rendered inside its step
+        self._stream: tuple[int, int, tuple] | None = None  # openpi seed scheme: (seed, resets drawn, NumPy state)
         self._raw_obs: dict | None = None
         self._progress = GoalProgress(task.goal)
         self._holds = False  # the task's goal, as of the last observed step
@@ -217,14 +222,23 @@ class TaskEnv:
         `seed`, fixtures included): a fresh start that is none of the fixed init states (demonstrations).
         `render=False` leaves the images out of the returned observation: a caller that settles before
         anyone looks (an episode) saves a render of every camera (about 90 ms each at 256², software GL).
+        With the `openpi` seed scheme, `seed` is the plan's seed (run seed + init index, as in the default
+        scheme) and the placement is the one openpi's example draws in episode `init_index` of a task seeded
+        with the run seed.
         """
         if init_index is not None and not 0 <= init_index < len(self.init_states):
             raise InitStateError(
                 f"init index {init_index} out of range: {self.task.id} has {len(self.init_states)} init states"
             )
+        if self.options.seed_scheme == "openpi" and init_index is not None and seed < init_index:
+            raise SimulationError(f"openpi seed scheme: seed {seed} is below init index {init_index} (run seed + k)")
         # LIBERO samples object and fixture placements (fixtures are not part of an init state) from
         # NumPy's global RNG.
-        np.random.seed(seed)
+        openpi_stream = self.options.seed_scheme == "openpi" and init_index is not None
+        if openpi_stream:
+            self._draw_openpi_stream(seed - init_index, init_index)
+        else:
+            np.random.seed(seed)
         if init_index is None:
             # A soft reset's placement depends on the state it starts from (LIBERO places an object on
             # another where that one was), so a sampled start rebuilds the model: the seed alone decides it.
@@ -235,6 +249,8 @@ class TaskEnv:
                 self._inner.hard_reset = self.options.hard_reset
         else:
             self._raw_obs = self._env.reset()
+            if openpi_stream:
+                self._stream = (seed - init_index, init_index + 1, np.random.get_state())
         # robosuite keeps the gripper's commanded opening across soft resets (only a new model zeroes it);
         # without this, an episode would start with the previous episode's gripper command.
         for robot in self._inner.robots:
@@ -250,6 +266,19 @@ class TaskEnv:
         self._restart_goal()
         self._reapply_render_flags()
         return self.observe(None if render else ())
+
+    def _draw_openpi_stream(self, stream_seed: int, resets: int) -> None:
+        """Put NumPy's global RNG where openpi's LIBERO example has it before episode `resets` of a task: seeded
+        once with `stream_seed`, then `resets` resets' placement draws (a soft reset draws what a hard one
+        does). Episodes run in order continue from the previous one's state instead of redrawing."""
+        seed, drawn, state = self._stream or (None, 0, None)
+        if seed != stream_seed or drawn > resets:
+            np.random.seed(stream_seed)
+            drawn = 0
+        else:
+            np.random.set_state(state)
+        for _ in range(resets - drawn):
+            self._env.reset()
 
     def _apply_init_state(self, init_index: int) -> None:
         state = self.init_states[init_index]
