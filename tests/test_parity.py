@@ -245,3 +245,54 @@ def test_eval_records_the_openpi_seed_scheme_and_uses_it(short_catalog, tmp_path
         openpi_t0 = env.t0_hash
     assert hashes["openpi"][0] == hashes["per-episode"][0]  # episode 0: the stream's first draw, seed 7 either way
     assert hashes["openpi"][1] == openpi_t0 != hashes["per-episode"][1]
+
+
+class LookEveryThree:
+    """Reads both cameras every 3 steps and plays a fixed reach; keeps what it was shown."""
+
+    def __init__(self, steps: int):
+        from langgap.policies.base import PolicySpec
+
+        self.spec = PolicySpec(cameras=("agentview", "robot0_eye_in_hand"), image_size=64, chunk=3, replan=3)
+        rng = np.random.default_rng(0)
+        self.actions = np.concatenate([rng.uniform(-0.6, 0.6, (steps, 6)), -np.ones((steps, 1))], axis=1)
+        self.shown: list[dict[str, np.ndarray]] = []
+
+    def reset(self, context) -> None:
+        self.shown.clear()
+
+    def act(self, observation):
+        start = 3 * len(self.shown)
+        self.shown.append(observation.images)
+        return self.actions[start : start + 3]
+
+
+def test_filmed_frames_are_taken_where_robosuite_samples_rendering_once(short_catalog):
+    """A clip's frames (every 2 steps) are taken where robosuite samples, like the policy's images (every 3
+    steps); a step both read after is rendered once for both."""
+    from langgap.engine.episode import video_hook
+
+    catalog = load_catalog_file(short_catalog)
+    task = catalog.get(TASK_ID)
+    policy = LookEveryThree(task.max_steps)
+    cameras = policy.spec.cameras
+    frames: list[np.ndarray] = []
+    with TaskEnv(task, env_options_for(policy)) as env:
+        hook = video_hook(env, frames, cameras, every=2)
+        result = run_episode(env, policy, task_context(task, catalog, init_index=0, seed=0), on_step=hook)
+        read_after = {0} | {s for s in range(1, result.steps + 1) if s % 2 == 0 or (s % 3 == 0 and s < result.steps)}
+        assert env.renders == len(cameras) * len(read_after)
+        # The reference: the same actions, every step's images captured.
+        env.reset(0, seed=0, render=False)
+        env.settle(capture=cameras)
+        sampled = [env.observe().images]
+        for action in policy.actions[: result.steps]:
+            env.step(action, capture=cameras)
+            sampled.append(env.observe().images)
+    assert len(frames) == result.steps // 2
+    for k, frame in enumerate(frames):
+        expected = np.concatenate([sampled[2 * (k + 1)][c] for c in cameras], axis=1)
+        np.testing.assert_array_equal(frame, expected, err_msg=f"frame after step {2 * (k + 1)}")
+    for k, shown in enumerate(policy.shown):
+        for camera in cameras:
+            np.testing.assert_array_equal(shown[camera], sampled[3 * k][camera])
