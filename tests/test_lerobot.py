@@ -53,11 +53,11 @@ def short_task(catalog, task_id: str = TASK_ID):
 
 
 def lerobot_libero_batch(env: TaskEnv, instruction: str) -> dict:
-    """What `lerobot-eval` gives a policy on LIBERO: LeRobot's own functions on the raw render and robot state."""
-    size = env.options.image_size
+    """What `lerobot-eval` gives a policy on LIBERO: LeRobot's own functions on the raw render (LIBERO's upside-down
+    orientation of the image taken where robosuite samples its observables) and robot state."""
     raw = {
         "pixels": {
-            key: env.sim.render(camera_name=camera, width=size, height=size)[None]
+            key: np.ascontiguousarray(env.render(camera)[::-1, ::-1])[None]
             for camera, key in (("agentview", "image"), ("robot0_eye_in_hand", "image2"))
         },
         "robot_state": robot_state(env.robosuite_observation, env.robosuite_env.robots[0].controller.ee_ori_mat),
@@ -88,7 +88,7 @@ def test_policy_sees_what_lerobot_libero_pipeline_gives(policy, catalog):
     context = task_context(task, catalog, init_index=2, seed=4)
     with TaskEnv(task, env_options_for(policy)) as env:
         env.reset(2, seed=4)
-        env.settle()
+        env.settle(capture=policy.spec.cameras)
         policy.reset(context)
         ours = policy.observation_batch(env.observe(policy.spec.cameras))
         theirs = lerobot_libero_batch(env, context.instruction)
@@ -191,7 +191,7 @@ def test_env_type_applies_init_states_instruction_and_lerobot_orientation(catalo
             for index, seed in enumerate(seeds):
                 # LangGap's seed rule (langgap.gym): env seed = the seed LeRobot passes + the init index
                 reference.reset(2 * batch + index, seed=episode_seed(seed, 2 * batch + index))
-                reference.settle()
+                reference.settle(capture=("agentview",))
                 expected = torch.from_numpy(reference.render("agentview").copy()).permute(2, 0, 1).float() / 255
                 assert torch.equal(seen["observation.images.image"][index], expected)
     finally:

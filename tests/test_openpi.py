@@ -93,13 +93,14 @@ def test_plain_openpi_server_receives_openpi_libero_observations(catalog, tmp_pa
     task = short_task(catalog)
     assert str(first["prompt"]) == task.instruction()
     assert first["observation/state"].shape == (8,)
-    # Orientation: exactly openpi's LIBERO preprocessing of the raw (upside-down) render at t0.
+    # Orientation: exactly openpi's LIBERO preprocessing of the raw (upside-down) render at t0, taken where
+    # robosuite samples (tests/test_parity.py compares whole episodes with openpi's example loop).
     with TaskEnv(task, env_options_for(policy)) as sim_env:
         sim_env.reset(3, seed=7)
-        sim_env.settle()
+        sim_env.settle(capture=tuple(protocol.CAMERA_KEYS))
         np.testing.assert_array_equal(first["observation/state"], sim_env.observe(()).state)
         for camera, key in protocol.CAMERA_KEYS.items():
-            raw = sim_env.sim.render(camera_name=camera, width=256, height=256)
+            raw = np.ascontiguousarray(sim_env.render(camera)[::-1, ::-1])  # as LIBERO renders it
             expected = image_tools.resize_with_pad(np.ascontiguousarray(raw[::-1, ::-1]), 224, 224)
             assert first[key].dtype == np.uint8 and first[key].shape == (224, 224, 3)
             np.testing.assert_array_equal(first[key], expected)

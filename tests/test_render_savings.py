@@ -33,14 +33,15 @@ class Reach:
 
 
 def reference_images(env: TaskEnv, policy: Reach, steps: int) -> list[dict[str, np.ndarray]]:
-    """What the policy must see: a reset that renders, settling, then both cameras at every query step."""
+    """What the policy must see: a reset that renders, settling, then both cameras at every query step (taken
+    where robosuite samples its observables, inside the step before)."""
     env.reset(0, seed=0)
-    env.settle()
+    env.settle(capture=CAMERAS)
     seen = []
     for step in range(steps):
         if step % policy.spec.replan == 0:
             seen.append(env.observe(CAMERAS).images)
-        env.step(policy.actions[step])
+        env.step(policy.actions[step], capture=CAMERAS if (step + 1) % policy.spec.replan == 0 else ())
     return seen
 
 

@@ -84,7 +84,26 @@ STEPPINGS = ("exact", "fast", "robosuite")
 DEFAULT_STEPPING = "exact"
 
 
-def physics_stack(stepping: str = DEFAULT_STEPPING) -> dict[str, str | None]:
-    """Installed versions of everything that changes simulation results, and the `fast` stepping if used."""
+# How an episode starts and when its images are taken (langgap/sim/env.py), recorded with every result so
+# that results made under other conventions never mix with these on resume or in a report.
+# start: MuJoCo's solver warm start is cleared only where a fresh LIBERO environment has it cleared (by the
+# reset, before its forward passes), not at the init state nor after settling. images: rendered at the substep
+# where robosuite samples its observables.
+CONVENTIONS = {"start": "fresh-env", "images": "robosuite-sample"}
+
+
+# How an episode's seed selects its fixture placement (langgap/sim/env.py, `TaskEnv.reset`): `per-episode` seeds
+# NumPy with the episode's own seed (seed + k for init state k); `openpi` reproduces openpi's LIBERO example, one
+# stream per task seeded once (with seed), episode k drawing after k resets' draws.
+SEED_SCHEMES = ("per-episode", "openpi")
+DEFAULT_SEED_SCHEME = "per-episode"
+
+
+def physics_stack(stepping: str = DEFAULT_STEPPING, seed_scheme: str = DEFAULT_SEED_SCHEME) -> dict[str, str | None]:
+    """Installed versions of everything that changes simulation results, the start and image conventions,
+    and the `fast` stepping and the `openpi` seed scheme where used."""
     versions = {name: version_of(name) for name in RECORDED}
-    return versions | ({"stepping": stepping} if stepping == "fast" else {})
+    chosen = {"stepping": stepping} if stepping == "fast" else {}
+    if seed_scheme != DEFAULT_SEED_SCHEME:
+        chosen["seed_scheme"] = seed_scheme
+    return versions | CONVENTIONS | chosen

@@ -145,6 +145,7 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     ),
     "eval --seed": (ProvenBy(_EVAL_FLAGS),),
     "eval --stepping": (ProvenBy("tests/test_stepping.py::test_eval_records_the_fast_stepping_it_ran"),),
+    "eval --seed-scheme": (ProvenBy("tests/test_parity.py::test_eval_records_the_openpi_seed_scheme_and_uses_it"),),
     "eval --repeats": (
         ProvenBy("tests/test_eval.py::test_repeats_run_every_episode_with_more_seeds_and_reports_the_spread"),
         Refused((*_EVAL, "--repeats", "0"), "--repeats must be between 1"),

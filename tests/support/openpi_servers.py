@@ -6,7 +6,9 @@ Modes:
   langgap-record  `openpi-langgap`, also saving every request as it arrived, decoded, to
                   RECORD_DIR/requests.jsonl (arrays as lists: for policies without cameras): the wire.
   openpi-record   openpi's server with plain metadata: a stand-in for an openpi model server that saves
-                  every observation it receives to RECORD_DIR/<n>.npz and answers a (10, 7) chunk.
+                  every observation it receives to RECORD_DIR/<n>.npz and answers a (10, 7) chunk: no-ops
+                  (gripper open), or with REPLY_ACTIONS (an .npy of (N, 7) actions) the next 10 of them,
+                  advancing 5 (openpi's replan_steps) per request.
   garbage         a websocket server that answers every request with bytes that are not msgpack.
   bad-actions     a websocket server that answers `{"actions": "not an array"}`.
 """
@@ -23,15 +25,19 @@ import numpy as np
 class RecordingOpenpiModel:
     """openpi's server-side policy interface: `infer(obs) -> {"actions": ...}`."""
 
-    def __init__(self, directory: pathlib.Path):
+    def __init__(self, directory: pathlib.Path, replies: np.ndarray | None = None):
         self.directory = directory
+        self.replies = replies
         self.calls = 0
 
     def infer(self, obs: dict) -> dict:
         np.savez(self.directory / f"{self.calls:04d}.npz", **{k: np.asarray(v) for k, v in obs.items()})
-        self.calls += 1
         actions = np.zeros((10, 7))
         actions[:, 6] = -1.0
+        if self.replies is not None:
+            chunk = self.replies[5 * self.calls : 5 * self.calls + 10]
+            actions[: len(chunk)] = chunk
+        self.calls += 1
         return {"actions": actions}
 
     def reset(self) -> None:
@@ -85,7 +91,9 @@ def main(mode: str, port: int, *rest: str) -> None:
             served = ServedPolicy(make_policy(name, dict(p.split("=", 1) for p in pairs)), name)
             policy, metadata = _recording(served) if mode == "langgap-record" else served, served.metadata
         else:
-            policy, metadata = RecordingOpenpiModel(pathlib.Path(os.environ["RECORD_DIR"])), {"model": "recorder"}
+            replies = np.load(os.environ["REPLY_ACTIONS"]) if "REPLY_ACTIONS" in os.environ else None
+            policy = RecordingOpenpiModel(pathlib.Path(os.environ["RECORD_DIR"]), replies)
+            metadata = {"model": "recorder"}
         WebsocketPolicyServer(policy, host="127.0.0.1", port=port, metadata=metadata).serve_forever()
     elif mode == "garbage":
         _serve_raw(port, b"\xc1\xc1 not msgpack")

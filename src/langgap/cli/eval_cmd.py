@@ -18,7 +18,7 @@ from langgap.engine.spec import (
     RESULT_STEPPINGS,
 )
 from langgap.errors import LangGapError
-from langgap.stack import DEFAULT_STEPPING
+from langgap.stack import DEFAULT_SEED_SCHEME, DEFAULT_STEPPING, SEED_SCHEMES
 
 EXIT_GAPS = 3
 
@@ -76,6 +76,14 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--seed", type=int, default=0, help="run seed; episode k uses env seed SEED+k")
     add_stepping_option(parser)
     parser.add_argument(
+        "--seed-scheme",
+        choices=SEED_SCHEMES,
+        default=DEFAULT_SEED_SCHEME,
+        help="how seeds select fixture placements: per-episode (episode k seeds SEED+k: independent of order, "
+        "the default) or openpi (one stream per task seeded with SEED, as openpi's LIBERO example; the run "
+        "records it)",
+    )
+    parser.add_argument(
         "--repeats",
         type=int,
         default=1,
@@ -128,6 +136,7 @@ def run(args) -> int:
         conditions=tuple(args.condition or ("given",)),
         style=args.style,
         stepping=args.stepping,
+        seed_scheme=args.seed_scheme,
     )
     options = execution_options(
         args,

@@ -10,7 +10,6 @@ task's policy performed the original task of the scene).
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from datetime import UTC, datetime
 
 import numpy as np
@@ -105,7 +104,7 @@ def execute_episode(
         image_size=policy.spec.image_size if policy.spec.cameras else 0,
         worker=worker,
         attempts=attempts,
-        physics=stack.physics_stack(env.options.stepping),
+        physics=stack.physics_stack(env.options.stepping, env.options.seed_scheme),
     )
     try:
         result = run_episode(
@@ -178,11 +177,22 @@ def gap_record(
     )
 
 
-def video_hook(env: TaskEnv, frames: list[np.ndarray], cameras: tuple[str, ...], every: int = 1) -> Callable:
+class VideoHook:
+    """A step hook that appends one frame (the cameras side by side) every `every` steps; its cameras are
+    rendered inside those steps, where robosuite samples its observables (`cameras_at`)."""
+
+    def __init__(self, env: TaskEnv, frames: list[np.ndarray], cameras: tuple[str, ...], every: int = 1):
+        self.env, self.frames, self.cameras, self.every = env, frames, cameras, every
+
+    def cameras_at(self, step: int) -> tuple[str, ...]:
+        """The cameras this hook reads after policy step `step`."""
+        return self.cameras if step % self.every == 0 else ()
+
+    def __call__(self, _env: TaskEnv, step: int, _action: np.ndarray) -> None:
+        if step % self.every == 0:
+            self.frames.append(np.concatenate([self.env.render(c) for c in self.cameras], axis=1))
+
+
+def video_hook(env: TaskEnv, frames: list[np.ndarray], cameras: tuple[str, ...], every: int = 1) -> VideoHook:
     """A step hook that appends one frame (the cameras side by side) every `every` steps."""
-
-    def hook(_env: TaskEnv, step: int, _action: np.ndarray) -> None:
-        if step % every == 0:
-            frames.append(np.concatenate([env.render(c) for c in cameras], axis=1))
-
-    return hook
+    return VideoHook(env, frames, cameras, every)

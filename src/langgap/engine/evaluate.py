@@ -136,6 +136,7 @@ def evaluate(
         style=spec.style,
         run_dir=str(run),
         stepping=spec.stepping,
+        seed_scheme=spec.seed_scheme,
     )
 
     def run_episodes(todo: list[PlannedEpisode], pool: WorkerPool) -> Iterator[EpisodeRecord]:

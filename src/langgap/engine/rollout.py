@@ -13,6 +13,8 @@ from langgap.policies.base import Policy, TaskContext, as_action_chunk, observat
 from langgap.sim.env import SETTLE_STEPS, EnvOptions, TaskEnv
 
 # Called after every policy step with (env, step_index, action); used for videos and demonstrations.
+# A hook that reads images has a `cameras_at(step)` method naming the cameras it reads after that step:
+# they are rendered inside the step, where robosuite samples its observables (`TaskEnv.step`).
 StepHook = Callable[[TaskEnv, int, np.ndarray], None]
 
 
@@ -35,6 +37,15 @@ def env_options_for(policy: Policy, **overrides) -> EnvOptions:
     options = {"cameras": tuple(spec.cameras), "image_size": spec.image_size, "privileged": spec.sees_state}
     options.update(overrides)
     return EnvOptions(**options)
+
+
+def _cameras_read_after(env: TaskEnv, query: tuple[str, ...], on_step: StepHook | None) -> tuple[str, ...]:
+    """The cameras read after the coming step: the policy's (`query`, when it is asked next; never after
+    the episode's last step) and the hook's."""
+    step = env.steps + 1
+    hook = getattr(on_step, "cameras_at", None)
+    wanted = (*(query if step < env.task.max_steps else ()), *(hook(step) if hook is not None else ()))
+    return tuple(dict.fromkeys(wanted))
 
 
 def run_episode(
@@ -71,7 +82,7 @@ def run_episode(
     # The policy first looks after settling: an image of the unsettled start would be thrown away.
     env.reset(None if sampled_start else context.init_index, seed=context.seed, render=False)
     policy.reset(context.for_policy(spec))  # the goal reaches only policies that declare `sees_goal`
-    env.settle(settle_steps)
+    env.settle(settle_steps, capture=tuple(spec.cameras))
     if on_start is not None:
         on_start(env)
     scene = SceneWatch(env, watch or {})
@@ -90,7 +101,7 @@ def run_episode(
             calls += 1
             queue = list(chunk[: spec.replan])
         action = queue.pop(0)
-        success = env.step(action)
+        success = env.step(action, capture=_cameras_read_after(env, spec.cameras if not queue else (), on_step))
         scene.observe()
         if on_step is not None:
             on_step(env, env.steps, action)

@@ -27,7 +27,7 @@ from langgap.policies import make_policy
 from langgap.policies.base import Policy, config_hash, policy_config
 from langgap.records import EpisodeRecord
 from langgap.sim.env import CAMERAS, EnvOptions, TaskEnv
-from langgap.stack import DEFAULT_STEPPING
+from langgap.stack import DEFAULT_SEED_SCHEME, DEFAULT_STEPPING
 from langgap.video import FRAME_EVERY, VIDEO_SUFFIX
 
 
@@ -49,6 +49,7 @@ class RunnerSetup:
     style: str = DEFAULT_STYLE
     run_dir: str | None = None  # where work writes its files (a filmed episode's clip: its `videos` folder)
     stepping: str = DEFAULT_STEPPING  # how physics substeps are computed (`RunSpec.stepping`)
+    seed_scheme: str = DEFAULT_SEED_SCHEME  # how a seed selects the placement (`RunSpec.seed_scheme`)
     policy_server: PolicyServerHandle | None = None  # a shared policy; None: each runner builds its own
 
 
@@ -147,7 +148,9 @@ class WorkRunner:
             filming = {"cameras": CAMERAS}
             if not self._policy.spec.cameras:
                 filming |= {"image_size": 256, "reflection": False}
-        return env_options_for(self._policy, stepping=self.setup.stepping, **filming)
+        return env_options_for(
+            self._policy, stepping=self.setup.stepping, seed_scheme=self.setup.seed_scheme, **filming
+        )
 
     def _close_env(self) -> None:
         if self._env is not None:

@@ -68,6 +68,7 @@ class RunSpec:
         conditions: tuple[str, ...] = ("given",),
         style: str = DEFAULT_STYLE,
         stepping: str = stack.DEFAULT_STEPPING,
+        seed_scheme: str = stack.DEFAULT_SEED_SCHEME,
     ) -> RunSpec:
         """A validated spec: the policy accepts its arguments, the selection resolves, the options exist.
 
@@ -83,6 +84,8 @@ class RunSpec:
             raise SpecError(f"unknown instruction style {style!r} (known: {', '.join(INSTRUCTION_STYLES)})")
         if stepping not in RESULT_STEPPINGS:
             raise SpecError(f"unknown stepping {stepping!r} (known: {', '.join(RESULT_STEPPINGS)})")
+        if seed_scheme not in stack.SEED_SCHEMES:
+            raise SpecError(f"unknown seed scheme {seed_scheme!r} (known: {', '.join(stack.SEED_SCHEMES)})")
         conditions = tuple(dict.fromkeys(conditions))
         unknown = unknown_conditions(conditions)
         if unknown or not conditions:
@@ -100,13 +103,18 @@ class RunSpec:
             repeats=repeats,
             conditions=conditions,
             style=style,
-            physics=stack.physics_stack(stepping),
+            physics=stack.physics_stack(stepping, seed_scheme),
         )
 
     @property
     def stepping(self) -> str:
         """How the physics substeps are computed (`exact` unless the spec's physics names `fast`)."""
         return self.physics.get("stepping") or stack.DEFAULT_STEPPING
+
+    @property
+    def seed_scheme(self) -> str:
+        """How an episode's seed selects its placement (`per-episode` unless the spec's physics names `openpi`)."""
+        return self.physics.get("seed_scheme") or stack.DEFAULT_SEED_SCHEME
 
     def to_dict(self) -> dict:
         """The spec as JSON data (the form stored with a run)."""

@@ -184,7 +184,7 @@ class LangGapTaskEnv(gym.Env):
         )
         with global_rng_kept():
             sim.reset(init_index, seed=env_seed, render=False)  # shown after settling, as in the harness
-            sim.settle()
+            sim.settle(capture=self.cameras)  # the observation's images, taken where robosuite samples
             self._watch = SceneWatch(sim, self._goals)
         self._done = False
         info = self._info(success=False)
@@ -201,7 +201,7 @@ class LangGapTaskEnv(gym.Env):
             raise ResetNeeded("the episode is over (terminated or truncated); call reset() to start another")
         sim = self._sim
         with global_rng_kept():
-            success = sim.step(np.asarray(action, dtype=np.float64))
+            success = sim.step(np.asarray(action, dtype=np.float64), capture=self.cameras)
             self._watch.observe()
         truncated = sim.truncated and not success
         self._done = success or truncated
@@ -237,7 +237,9 @@ class LangGapTaskEnv(gym.Env):
     # -- rendering and lifetime ----------------------------------------------------------------
 
     def render(self) -> np.ndarray | None:
-        """The upright agentview frame (`render_mode="rgb_array"`); None without a render mode."""
+        """The upright agentview frame (`render_mode="rgb_array"`); None without a render mode. Where agentview
+        is one of `cameras`, the frame is the observation's (taken where robosuite samples its observables);
+        otherwise it is rendered on demand, one physics substep after that."""
         if self.render_mode is None:
             return None
         if self._watch is None:

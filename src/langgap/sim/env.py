@@ -9,7 +9,17 @@ Conventions (the ones public LIBERO checkpoints were trained with; see the docs,
   which is the orientation of the `lerobot/libero` and openpi LIBERO training data.
 * `state` is 8-D float32: end-effector position (3), end-effector orientation as axis-angle (3),
   and the two gripper finger joints (2).
-* Nothing is rendered unless a camera is requested, and then only when `observe()` asks.
+* Images show the state robosuite's observables sample (its camera observables included, the way
+  LIBERO's training data was recorded): after the second-to-last physics substep of a control step,
+  not the last. A caller names the cameras it will read after a step (`step(..., capture=...)`, and
+  `settle` for the first look); they are rendered inside the step at that substep, once each.
+  A camera not captured is rendered when asked, from the state as it is then (right after a reset or
+  a restored state, where robosuite renders the same; one substep late after an uncaptured step).
+* Nothing is rendered unless a camera is requested.
+* An episode starts as in a freshly built LIBERO environment (what openpi's LIBERO example runs):
+  MuJoCo's solver warm start is cleared where a hard reset clears it, by robosuite's reset before its
+  forward passes, and never again: not at the init state, not after settling
+  (`langgap.stack.CONVENTIONS`, recorded in results).
 * Episode length is capped here (`max_steps` policy steps after `settle()`), never by robosuite's
   horizon, which raises on the step after it.
 """
@@ -29,12 +39,15 @@ from langgap.catalog.task import Task
 from langgap.errors import InitStateError, SimulationError
 from langgap.goals import Goal, GoalProgress, holds_now
 from langgap.sim.privileged_schema import PrivilegedState
-from langgap.stack import DEFAULT_STEPPING, STEPPINGS
+from langgap.stack import DEFAULT_SEED_SCHEME, DEFAULT_STEPPING, SEED_SCHEMES, STEPPINGS
 
 CAMERAS = ("agentview", "robot0_eye_in_hand")
 SETTLE_STEPS = 10
 SETTLE_ACTION = np.array([0, 0, 0, 0, 0, 0, -1], dtype=np.float64)
 ACTION_DIM = 7
+# The robosuite observable whose sampling marks the substep at which robosuite samples every observable
+# (its cameras too): the end-effector position, part of the state LangGap sends.
+_SAMPLED_WITH = "robot0_eef_pos"
 # Far above any episode: robosuite's own horizon must never be what ends an episode.
 _ROBOSUITE_HORIZON = 1_000_000
 
@@ -58,6 +71,8 @@ class EnvOptions:
     # exact: bit-identical to robosuite's stepping, faster; fast: the last bits differ, faster still;
     # robosuite: robosuite's own code (sim/stepping.py)
     stepping: str = DEFAULT_STEPPING
+    # how `reset(init_index, seed)` seeds the fixture placement (langgap.stack.SEED_SCHEMES)
+    seed_scheme: str = DEFAULT_SEED_SCHEME
 
     def __post_init__(self) -> None:
         unknown = [c for c in self.cameras if c not in CAMERAS]
@@ -67,6 +82,8 @@ class EnvOptions:
             raise SimulationError(f"camera listed twice: {list(self.cameras)}")
         if self.stepping not in STEPPINGS:
             raise SimulationError(f"unknown stepping {self.stepping!r} (known: {', '.join(STEPPINGS)})")
+        if self.seed_scheme not in SEED_SCHEMES:
+            raise SimulationError(f"unknown seed scheme {self.seed_scheme!r} (known: {', '.join(SEED_SCHEMES)})")
         if not 16 <= self.image_size <= 1024:
             raise SimulationError(f"image size must be in 16..1024, got {self.image_size}")
 
@@ -112,6 +129,8 @@ class TaskEnv:
         self.t0_hash: str | None = None
         self.steps = 0
         self.renders = 0  # camera images rendered since construction (what benchmarks and tests count)
+        self._captured: dict[str, np.ndarray] = {}  # images of the current state, rendered inside its step
+        self._stream: tuple[int, int, tuple] | None = None  # openpi seed scheme: (seed, resets drawn, NumPy state)
         self._raw_obs: dict | None = None
         self._progress = GoalProgress(task.goal)
         self._holds = False  # the task's goal, as of the last observed step
@@ -205,14 +224,23 @@ class TaskEnv:
         `seed`, fixtures included): a fresh start that is none of the fixed init states (demonstrations).
         `render=False` leaves the images out of the returned observation: a caller that settles before
         anyone looks (an episode) saves a render of every camera (about 90 ms each at 256², software GL).
+        With the `openpi` seed scheme, `seed` is the plan's seed (run seed + init index, as in the default
+        scheme) and the placement is the one openpi's example draws in episode `init_index` of a task seeded
+        with the run seed.
         """
         if init_index is not None and not 0 <= init_index < len(self.init_states):
             raise InitStateError(
                 f"init index {init_index} out of range: {self.task.id} has {len(self.init_states)} init states"
             )
+        if self.options.seed_scheme == "openpi" and init_index is not None and seed < init_index:
+            raise SimulationError(f"openpi seed scheme: seed {seed} is below init index {init_index} (run seed + k)")
         # LIBERO samples object and fixture placements (fixtures are not part of an init state) from
         # NumPy's global RNG.
-        np.random.seed(seed)
+        openpi_stream = self.options.seed_scheme == "openpi" and init_index is not None
+        if openpi_stream:
+            self._draw_openpi_stream(seed - init_index, init_index)
+        else:
+            np.random.seed(seed)
         if init_index is None:
             # A soft reset's placement depends on the state it starts from (LIBERO places an object on
             # another where that one was), so a sampled start rebuilds the model: the seed alone decides it.
@@ -223,18 +251,36 @@ class TaskEnv:
                 self._inner.hard_reset = self.options.hard_reset
         else:
             self._raw_obs = self._env.reset()
+            if openpi_stream:
+                self._stream = (seed - init_index, init_index + 1, np.random.get_state())
         # robosuite keeps the gripper's commanded opening across soft resets (only a new model zeroes it);
         # without this, an episode would start with the previous episode's gripper command.
         for robot in self._inner.robots:
             robot.gripper.current_action = np.zeros(robot.gripper.dof)
         if init_index is not None:
             self._apply_init_state(init_index)
-        self._forget_solver_history()
+        # MuJoCo's solver warm start is not touched here: robosuite's reset (mj_resetData, or a new MjData on a
+        # hard reset) zeroed it before its own forward passes, so it is what a fresh LIBERO environment has at
+        # this init state, whatever ran before (clearing it again would depart from a fresh environment).
+        self._captured = {}
         self.t0_hash = self.state_hash()
         self.steps = 0
         self._restart_goal()
         self._reapply_render_flags()
         return self.observe(None if render else ())
+
+    def _draw_openpi_stream(self, stream_seed: int, resets: int) -> None:
+        """Put NumPy's global RNG where openpi's LIBERO example has it before episode `resets` of a task: seeded
+        once with `stream_seed`, then `resets` resets' placement draws (a soft reset draws what a hard one
+        does). Episodes run in order continue from the previous one's state instead of redrawing."""
+        seed, drawn, state = self._stream or (None, 0, None)
+        if seed != stream_seed or drawn > resets:
+            np.random.seed(stream_seed)
+            drawn = 0
+        else:
+            np.random.set_state(state)
+        for _ in range(resets - drawn):
+            self._env.reset()
 
     def _apply_init_state(self, init_index: int) -> None:
         state = self.init_states[init_index]
@@ -252,15 +298,14 @@ class TaskEnv:
         qpos = self.sim_state()[1 : 1 + nq]
         return float(np.abs(self.init_states[:, 1 : 1 + nq] - qpos).max(axis=1).min())
 
-    def settle(self, steps: int = SETTLE_STEPS) -> None:
+    def settle(self, steps: int = SETTLE_STEPS, *, capture: tuple[str, ...] = ()) -> None:
         """The no-op steps (gripper open) that let objects come to rest; not counted, not shown to policies.
 
-        Afterwards the gripper command is saturated open and the solver history cleared, so an episode
-        started from the settled state (or from a copy of it, see `set_sim_state`) runs the same way.
+        The solver's warm start is left as the steps leave it, as in a fresh LIBERO environment.
+        `capture`: the cameras the first look after settling reads, rendered inside the last step (see `step`).
         """
-        for _ in range(steps):
-            self._raw_obs, _, _, _ = self._env.step(SETTLE_ACTION)
-        self._forget_solver_history()
+        for i in range(steps):
+            self._raw_obs = self._step_sim(SETTLE_ACTION, capture if i == steps - 1 else ())
         self._restart_goal()
 
     def _restart_goal(self) -> None:
@@ -275,17 +320,49 @@ class TaskEnv:
         # tolerance, enough to flip a grasp) on whatever ran before it in the same process.
         self.sim.data.qacc_warmstart[:] = 0.0
 
-    def step(self, action: np.ndarray) -> bool:
-        """Apply one 7-D action (OSC_POSE delta + gripper); returns whether the task goal holds now."""
+    def step(self, action: np.ndarray, *, capture: tuple[str, ...] = ()) -> bool:
+        """Apply one 7-D action (OSC_POSE delta + gripper); returns whether the task goal holds now.
+
+        `capture`: the cameras the caller will read before the next step, rendered inside this step at
+        the substep where robosuite samples its observables (`observe` and `render` then return them).
+        """
         if self.steps >= self.task.max_steps:
             raise SimulationError(f"{self.task.id}: episode is over ({self.task.max_steps} steps)")
         action = np.asarray(action, dtype=np.float64)
         if action.shape != (ACTION_DIM,) or not np.all(np.isfinite(action)):
             raise SimulationError(f"action must be 7 finite numbers, got shape {action.shape}")
-        self._raw_obs, _, _, _ = self._env.step(action)
+        self._raw_obs = self._step_sim(action, capture)
         self.steps += 1
         self._holds = self._progress.observe(self.steps, self.predicate_holds)
         return self._holds
+
+    def _step_sim(self, action: np.ndarray, capture: tuple[str, ...]) -> dict:
+        """One control step through robosuite; renders `capture` at the substep its observables sample."""
+        self._captured = {}
+        missing = [c for c in capture if c not in self.options.cameras]
+        if missing:
+            raise SimulationError(f"camera(s) {missing} were not enabled for this env")
+        if not capture:
+            return self._env.step(action)[0]
+        inner = self._inner
+        sample = inner._update_observables
+        captured: dict[str, np.ndarray] = {}
+
+        def update_observables(force: bool = False) -> None:
+            before = inner._obs_cache.get(_SAMPLED_WITH)
+            sample(force)
+            if inner._obs_cache.get(_SAMPLED_WITH) is not before:  # robosuite sampled at this substep
+                captured.update((camera, self._render_now(camera)) for camera in capture)
+
+        inner._update_observables = update_observables
+        try:
+            obs = self._env.step(action)[0]
+        finally:
+            del inner._update_observables  # back to robosuite's method
+        if len(captured) != len(capture):
+            raise SimulationError(f"robosuite sampled no observation in this step ({_SAMPLED_WITH} unchanged)")
+        self._captured = captured
+        return obs
 
     @property
     def truncated(self) -> bool:
@@ -332,7 +409,12 @@ class TaskEnv:
         return Observation(state=state_from_robosuite(self._raw_obs), images=images, privileged=privileged)
 
     def render(self, camera: str) -> np.ndarray:
-        """One upright uint8 image (H, W, 3) from `camera`."""
+        """One upright uint8 image (H, W, 3) from `camera`: the one captured in the last step if it was,
+        else rendered now."""
+        captured = self._captured.get(camera)
+        return captured if captured is not None else self._render_now(camera)
+
+    def _render_now(self, camera: str) -> np.ndarray:
         size = self.options.image_size
         self.renders += 1
         self._make_render_context_current()
@@ -366,6 +448,7 @@ class TaskEnv:
         """Restore a flattened state recorded from this scene (e.g. to replay a demonstration)."""
         self._raw_obs = self._env.set_init_state(np.asarray(state, dtype=np.float64))
         self._forget_solver_history()
+        self._captured = {}
         self._restart_goal()
 
     def state_hash(self) -> str:
