@@ -74,9 +74,7 @@ def _batched(tree):
 
 def test_checkpoint_loads_with_its_processors_and_libero_spec(policy, checkpoint):
     assert policy.spec.cameras == ("agentview", "robot0_eye_in_hand")
-    assert (
-        policy.spec.image_size == IMAGE_SIZE and policy.spec.state and (policy.spec.chunk, policy.spec.replan) == (1, 1)
-    )
+    assert policy.spec.image_size == IMAGE_SIZE and (policy.spec.chunk, policy.spec.replan) == (1, 1)
     assert policy.config()["type"] == "diffusion" and policy.config()["n_action_steps"] == N_ACTION_STEPS
     assert policy.config()["path"] == str(checkpoint)
     with pytest.raises(CheckpointError, match="no LeRobot checkpoint"):
