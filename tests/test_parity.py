@@ -25,6 +25,7 @@ from langgap.policies import make_policy, protocol
 from langgap.policies.openpi import OpenpiPolicy
 from langgap.sim.env import EnvOptions, TaskEnv, quat_to_axis_angle
 from tests.support.harness import run_cli, store_rows
+from tests.support.policies import Reach
 from tests.support.servers import free_port, helper_server, running, subprocess_env
 
 TASK_ID = "spatial/s0/black-bowl-1-on-plate"
@@ -262,26 +263,6 @@ def test_eval_records_the_openpi_seed_scheme_and_uses_it(short_catalog, tmp_path
     assert hashes["openpi"][1] == openpi_t0 != hashes["per-episode"][1]
 
 
-class LookEveryThree:
-    """Reads both cameras every 3 steps and plays a fixed reach; keeps what it was shown."""
-
-    def __init__(self, steps: int):
-        from langgap.policies.base import PolicySpec
-
-        self.spec = PolicySpec(cameras=("agentview", "robot0_eye_in_hand"), image_size=64, chunk=3, replan=3)
-        rng = np.random.default_rng(0)
-        self.actions = np.concatenate([rng.uniform(-0.6, 0.6, (steps, 6)), -np.ones((steps, 1))], axis=1)
-        self.shown: list[dict[str, np.ndarray]] = []
-
-    def reset(self, context) -> None:
-        self.shown.clear()
-
-    def act(self, observation):
-        start = 3 * len(self.shown)
-        self.shown.append(observation.images)
-        return self.actions[start : start + 3]
-
-
 def test_filmed_frames_are_taken_where_robosuite_samples_rendering_once(short_catalog):
     """A clip's frames (every 2 steps) are taken where robosuite samples, like the policy's images (every 3
     steps); a step both read after is rendered once for both."""
@@ -289,7 +270,7 @@ def test_filmed_frames_are_taken_where_robosuite_samples_rendering_once(short_ca
 
     catalog = load_catalog_file(short_catalog)
     task = catalog.get(TASK_ID)
-    policy = LookEveryThree(task.max_steps)
+    policy = Reach(3, task.max_steps, image_size=64)
     cameras = policy.spec.cameras
     frames: list[np.ndarray] = []
     with TaskEnv(task, env_options_for(policy)) as env:

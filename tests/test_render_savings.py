@@ -8,28 +8,10 @@ import pytest
 from langgap.catalog.catalog import load_catalog_file
 from langgap.engine.context import task_context
 from langgap.engine.rollout import env_options_for, run_episode
-from langgap.policies.base import PolicySpec
 from langgap.sim.env import CAMERAS, TaskEnv
+from tests.support.policies import Reach
 
 TASK_ID = "spatial/s0/black-bowl-1-on-plate"
-
-
-class Reach:
-    """Looks through both cameras every `replan` steps and plays a fixed reach; keeps what it was shown."""
-
-    def __init__(self, replan: int, steps: int):
-        self.spec = PolicySpec(cameras=CAMERAS, image_size=96, chunk=replan, replan=replan)
-        rng = np.random.default_rng(0)
-        self.actions = np.concatenate([rng.uniform(-0.6, 0.6, (steps, 6)), -np.ones((steps, 1))], axis=1)
-        self.shown: list[dict[str, np.ndarray]] = []
-
-    def reset(self, context) -> None:
-        self.shown.clear()
-
-    def act(self, observation):
-        start = len(self.shown) * self.spec.replan
-        self.shown.append(observation.images)
-        return self.actions[start : start + self.spec.chunk]
 
 
 def reference_images(env: TaskEnv, policy: Reach, steps: int) -> list[dict[str, np.ndarray]]:

@@ -227,3 +227,23 @@ class InstructionLogPolicy(NoopPolicy):
         with self._log.open("a") as log:
             log.write(current_instruction(observation, self._context) + "\n")
         return super().act(observation)
+
+
+class Reach:
+    """Looks through both cameras every `replan` steps and plays a fixed reach; keeps what it was shown."""
+
+    def __init__(self, replan: int, steps: int, image_size: int = 96):
+        self.spec = PolicySpec(
+            cameras=("agentview", "robot0_eye_in_hand"), image_size=image_size, chunk=replan, replan=replan
+        )
+        rng = np.random.default_rng(0)
+        self.actions = np.concatenate([rng.uniform(-0.6, 0.6, (steps, 6)), -np.ones((steps, 1))], axis=1)
+        self.shown: list[dict[str, np.ndarray]] = []
+
+    def reset(self, context) -> None:
+        self.shown.clear()
+
+    def act(self, observation):
+        start = len(self.shown) * self.spec.replan
+        self.shown.append(observation.images)
+        return self.actions[start : start + self.spec.chunk]
