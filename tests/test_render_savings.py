@@ -42,3 +42,32 @@ def test_an_episode_renders_each_camera_once_per_query_and_the_same_pixels(short
             np.testing.assert_array_equal(shown[camera], reference[camera], err_msg=f"query {step}, {camera}")
     # The arm moves: a stale image (one render reused across queries) would fail the comparison above.
     assert not np.array_equal(expected[0]["robot0_eye_in_hand"], expected[-1]["robot0_eye_in_hand"])
+
+
+def test_the_query_at_an_instruction_switch_sees_images_taken_where_robosuite_samples(short_catalog):
+    """A switch mid-chunk asks the policy at once: its images are taken inside the step before, as every
+    other query's are (not rendered on demand one substep late)."""
+    catalog = load_catalog_file(short_catalog)
+    task = catalog.get(TASK_ID)
+    policy, switch = Reach(5, 2 * task.max_steps), 3  # the switch asks once more: actions to spare
+    executed: list[np.ndarray] = []
+    with TaskEnv(task, env_options_for(policy)) as env:
+        run_episode(
+            env,
+            policy,
+            task_context(task, catalog, init_index=0, seed=0),
+            changes=((switch, "put the bowl somewhere else"),),
+            on_step=lambda _e, _i, action: executed.append(np.array(action)),
+        )
+        queries = {0, *range(switch, len(executed), 5)}
+        env.reset(0, seed=0)
+        env.settle(capture=CAMERAS)
+        expected = []
+        for step, action in enumerate(executed):
+            if step in queries:
+                expected.append(env.observe(CAMERAS).images)
+            env.step(action, capture=CAMERAS if step + 1 in queries else ())
+    assert len(policy.shown) == len(expected)
+    for query, (shown, reference) in enumerate(zip(policy.shown, expected, strict=True)):
+        for camera in CAMERAS:
+            np.testing.assert_array_equal(shown[camera], reference[camera], err_msg=f"query {query}, {camera}")

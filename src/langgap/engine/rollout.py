@@ -101,7 +101,9 @@ def run_episode(
             calls += 1
             queue = list(chunk[: spec.replan])
         action = queue.pop(0)
-        success = env.step(action, capture=_cameras_read_after(env, spec.cameras if not queue else (), on_step))
+        # The policy is asked after this step when its chunk runs out or the instruction switches there.
+        asked_next = not queue or bool(pending and pending[0][0] <= env.steps + 1)
+        success = env.step(action, capture=_cameras_read_after(env, spec.cameras if asked_next else (), on_step))
         scene.observe()
         if on_step is not None:
             on_step(env, env.steps, action)
