@@ -95,7 +95,10 @@ def test_the_catalogs_work_with_tasks_list_show_gate_audit_and_bddl(catalog):
     checked = run_cli("bddl", info["bddl"])
     assert checked.returncode == 0 and info["goal"][0] in checked.stdout
     gate = run_cli("tasks", "gate", "--catalog", catalog)
-    assert gate.returncode == 0 and "unproven until the gate runs" in gate.stdout
+    ungated = (
+        "80 of 120 task(s) not gated" if catalog == "libero-pro" else "2040 of 2040 verdict(s) taken from 40 task(s)"
+    )
+    assert gate.returncode == 0 and ungated in gate.stdout
     audit = run_cli("tasks", "audit", "--catalog", catalog, "--tasks", "spatial/s0/*")
     assert audit.returncode == 0, audit.stderr
     assert "tasks:" in audit.stdout.splitlines()[-1]
@@ -165,3 +168,48 @@ def test_audit_runs_the_start_check_on_k_init_states_and_records_it_beside_the_r
     assert "starts elsewhere" in recorded.read_text()
     again = run_cli(*audit)  # the recorded start check is shown without running it
     assert "starts: recorded for tasks 'spatial/s0/pro-lan' on init states 0..0" in again.stdout
+
+
+def test_a_variant_that_repeats_its_sources_trial_takes_its_verdict_and_is_not_rerun(tmp_path):
+    """The oracle reads the goal, not the sentence: a language variant with its source's file outside
+    (:language), init states, goal and step limit takes the source's LangGap-99 verdict; one with init states of
+    its own (LIBERO-PRO's) or another goal does not."""
+    import dataclasses
+
+    from langgap.catalog.catalog import gate_snapshot, load_catalog, registry_path
+    from langgap.catalog.external import _same_trial
+    from langgap.catalog.files import task_bddl_text
+
+    source = load_catalog("langgap99").get("spatial/s0/black-bowl-1-on-plate")
+    pro = load_catalog("libero-pro")
+    assert pro.get(source.id).gate_from == f"langgap99:{source.id}"
+    assert pro.get(source.id).gate == dataclasses.replace(source.gate, inherited_from=f"langgap99:{source.id}")
+    assert pro.get("spatial/s0/pro-lan").gate_from is None and pro.get("spatial/s0/pro-lan").gate is None
+    assert pro.get("spatial/s0/pro-task").gate_from is None
+
+    text = task_bddl_text(source)
+    reworded = dataclasses.replace(pro.get("spatial/s0/pro-lan"), origin=dataclasses.replace(
+        pro.get("spatial/s0/pro-lan").origin, init_runs="source"))  # fmt: skip
+    assert _same_trial(reworded, source, text.replace("(:language", "(:language Do it;")) == f"langgap99:{source.id}"
+    assert _same_trial(reworded, source, text.replace("(:fixtures", "(:fixtures\n    extra_table - table")) is None
+    assert _same_trial(pro.get("spatial/s0/pro-lan"), source, text) is None  # its own init states
+    assert _same_trial(dataclasses.replace(reworded, goal=pro.get("spatial/s0/pro-task").goal), source, text) is None
+    assert _same_trial(dataclasses.replace(reworded, max_steps=source.max_steps + 1), source, text) is None
+
+    # A run's snapshot holds the taken verdict and the hash of the file it was read from.
+    snapshot = gate_snapshot("libero-pro", [source.id, "spatial/s0/pro-lan"])
+    assert snapshot["tasks"][source.id]["inherited_from"] == f"langgap99:{source.id}"
+    assert "spatial/s0/pro-lan" not in snapshot["tasks"]
+    langgap99_gate = registry_path("langgap99").with_name("langgap99.gate.json")
+    import hashlib
+
+    assert hashlib.sha256(langgap99_gate.read_bytes()).hexdigest() in snapshot["sha256"]
+
+    shown = run_cli("tasks", "show", "--catalog", "libero-pro", source.id)
+    assert f"the verdict of langgap99:{source.id}" in shown.stdout
+    out = tmp_path / "gate.json"
+    ran = run_cli("validate", source.id, "--catalog", "libero-pro", "--inits", "1", "--run", str(tmp_path / "r"),
+                  "--out", str(out))  # fmt: skip
+    assert ran.returncode == 0, ran.stderr
+    assert "1 selected task(s) take the verdict of a task with the same scene file" in ran.stdout
+    assert not (tmp_path / "r").exists() and not out.exists()

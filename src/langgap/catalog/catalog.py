@@ -7,6 +7,7 @@ reports) is derived from it.
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import fnmatch
 import functools
@@ -168,6 +169,7 @@ def _task_from_entry(
             in_langgap99=bool(entry.get("in_langgap99", catalog == DEFAULT_CATALOG)),
             gate=verdicts.get(entry["id"]),
             origin=Origin(**entry["origin"]) if "origin" in entry else None,
+            gate_from=entry.get("gate_from"),
         )
     except TypeError as exc:  # an origin with missing or unknown fields
         raise CatalogError(f"catalog {catalog}: task {entry.get('id', '?')}: bad origin: {exc}") from None
@@ -185,7 +187,23 @@ def load_catalog_file(path: str | Path) -> Catalog:
         data = yaml.load(path.read_text(encoding="utf-8"), Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
     except (OSError, yaml.YAMLError) as exc:
         raise CatalogError(f"cannot read catalog {path}: {exc}") from None
-    return catalog_from_data(data, source=str(path), verdicts=read_verdicts(path))
+    return catalog_from_data(data, source=str(path), verdicts=read_verdicts(path) | inherited_verdicts(data))
+
+
+def inherited_verdicts(data: dict) -> dict[str, GateResult]:
+    """The verdicts registry `data`'s tasks take by `gate_from`, read from their source catalogs' current
+    verdict files (so a re-gate of the source reaches them), each marked with where it comes from."""
+    found: dict[str, GateResult] = {}
+    files: dict[str, dict[str, GateResult]] = {}
+    for entry in data.get("tasks", ()):
+        if "gate_from" not in entry:
+            continue
+        catalog, _, task_id = entry["gate_from"].partition(":")
+        if catalog not in files:
+            files[catalog] = read_verdicts(registry_path(catalog))
+        if task_id in files[catalog]:
+            found[entry["id"]] = dataclasses.replace(files[catalog][task_id], inherited_from=entry["gate_from"])
+    return found
 
 
 def registry_path(name: str) -> Path:
@@ -226,8 +244,15 @@ def catalog_hash(name: str) -> str:
 
 def gate_snapshot(name: str, task_ids: Iterable[str], previous: dict | None = None) -> dict:
     """The gate verdicts of `task_ids` in catalog `name` with their file's SHA-256, as a run stores them
-    (`snapshot_verdicts`; `previous` keeps a run's earlier snapshot and adds only tasks it lacks)."""
-    return snapshot_verdicts(registry_path(name), task_ids, previous)
+    (`snapshot_verdicts`; `previous` keeps a run's earlier snapshot and adds only tasks it lacks). A task with
+    `gate_from` gets that task's verdict, from its catalog's file."""
+    task_ids = list(task_ids)
+    catalog = load_catalog(name)
+    inherited = {}
+    for task_id in task_ids:
+        if (taken := catalog.get(task_id).gate_from) is not None:
+            inherited[task_id] = (registry_path(taken.partition(":")[0]), taken)
+    return snapshot_verdicts(registry_path(name), task_ids, previous, inherited)
 
 
 @functools.cache

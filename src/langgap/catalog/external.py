@@ -32,7 +32,7 @@ from langgap.catalog.audit import (
     instruction_findings,
     scene_findings,
 )
-from langgap.catalog.catalog import Catalog
+from langgap.catalog.catalog import DEFAULT_CATALOG, Catalog
 from langgap.catalog.generate import source_tasks
 from langgap.catalog.naming import SUITE_SHORT
 from langgap.catalog.registry_writer import registry_text
@@ -69,28 +69,45 @@ class Generated:
 def _variant(catalog: str, source: Task, task_id: str, dimension: str, origin: Origin, generated: Generated) -> None:
     """Add the variant read from `origin`'s BDDL file to `generated` (or, when it does not parse, a finding)."""
     try:
-        problem = parse_bddl(packages.checked_bytes(origin).decode("utf-8"), source=origin.file)
-        generated.tasks.append(
-            dataclasses.replace(
-                source,
-                id=task_id,
-                catalog=catalog,
-                kind="extended",
-                dimension=dimension,
-                split="heldout",
-                source=source.id,
-                goal=conjunction(problem.goal),
-                obj_of_interest=problem.obj_of_interest,
-                instructions={"libero": problem.language, "paper": problem.language},
-                paper_id=None,
-                notes=(),
-                in_langgap99=False,
-                gate=None,
-                origin=origin,
-            )
+        text = packages.checked_bytes(origin).decode("utf-8")
+        problem = parse_bddl(text, source=origin.file)
+        variant = dataclasses.replace(
+            source,
+            id=task_id,
+            catalog=catalog,
+            kind="extended",
+            dimension=dimension,
+            split="heldout",
+            source=source.id,
+            goal=conjunction(problem.goal),
+            obj_of_interest=problem.obj_of_interest,
+            instructions={"libero": problem.language, "paper": problem.language},
+            paper_id=None,
+            notes=(),
+            in_langgap99=False,
+            gate=None,
+            origin=origin,
         )
+        generated.tasks.append(dataclasses.replace(variant, gate_from=_same_trial(variant, source, text)))
     except (BddlError, CatalogError) as exc:
         generated.unreadable.append(Finding("unreadable", task_id, str(exc)))
+
+
+def _same_trial(task: Task, source: Task, text: str) -> str | None:
+    """`langgap99:<source id>` when `task`'s gate trial would repeat its source's exactly (`SAME_TRIAL`): its file
+    differs from the source's only in `(:language)`, it starts from the source's init states, and its goal and
+    step limit are the source's. None otherwise: the task needs its own verdict."""
+    same = (
+        task.origin is not None
+        and task.origin.init_runs == "source"
+        and task.goal == source.goal
+        and task.max_steps == source.max_steps
+        and not any(
+            f.name == "changes the scene"
+            for f in scene_findings(task.id, "language", text, files.task_bddl_text(source))
+        )
+    )
+    return f"{DEFAULT_CATALOG}:{source.id}" if same else None
 
 
 def _scene_prefix(source: Task) -> str:
@@ -99,7 +116,8 @@ def _scene_prefix(source: Task) -> str:
 
 
 def _original(source: Task, catalog: str) -> Task:
-    return dataclasses.replace(source, catalog=catalog, gate=None)
+    """LangGap-99's original `source` in `catalog`: the same task, so it takes LangGap-99's verdict."""
+    return dataclasses.replace(source, catalog=catalog, gate=None, gate_from=f"{DEFAULT_CATALOG}:{source.id}")
 
 
 def generate_pro() -> Generated:

@@ -47,6 +47,9 @@ _EXTERNAL_HEADER = """\
 #   origin        the package and version the task was read from, its BDDL file there and that file's SHA-256
 #                 (a run checks it), and the init states it ships (`init_sha256`: SHA-256 of the states array;
 #                 `init_runs`: own = a run loads that file, source = it equals the source's, which a run loads).
+#   gate_from     the LangGap-99 task whose gate trial this one's would repeat exactly: the same scene file
+#                 outside (:language), init states, goal and step limit (checked by the generator); the task
+#                 takes that task's feasibility verdict, and `langgap validate` does not re-run it.
 # A task runs its package's BDDL file unchanged. What LangGap's checks found in each task (`langgap tasks
 # audit --catalog {name}`) is kept beside this file in {name}.audit.json.
 """
@@ -103,6 +106,8 @@ def _entry(task: Task, default_steps: int) -> dict:
         entry["notes"] = list(task.notes)
     if task.origin is not None:
         entry["origin"] = asdict(task.origin)
+    if task.gate_from is not None:
+        entry["gate_from"] = task.gate_from
     return entry
 
 

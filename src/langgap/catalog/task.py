@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import asdict, dataclass, field
 
 from langgap.bddl import Predicate
@@ -25,6 +26,9 @@ DEFAULT_STYLE = "libero"
 # unless a proof shows it infeasible).
 CEILING_TARGET = 0.95
 INFEASIBLE = "infeasible (proof)"  # how a task with a proof of impossibility reads wherever it is shown
+# Why a task may take another's verdict: the gate's oracle reads the goal, never the instruction, so two tasks
+# with the same scene file outside `(:language)`, the same init states, goal and step limit get the same episodes.
+SAME_TRIAL = "the same scene file outside (:language), init states, goal and step limit"
 
 
 def unproven(successes: int, episodes: int) -> str:
@@ -59,6 +63,8 @@ class GateResult:
     proof: str = ""
     demonstration: str = ""
     demonstrated_inits: tuple[int, ...] = ()  # init states the oracle failed that a searched episode did
+    # `catalog:task id` whose verdict this is, by identity (the task's `gate_from`); empty: the task's own.
+    inherited_from: str = ""
 
     def __post_init__(self) -> None:
         if not 0 <= self.successes <= self.episodes:
@@ -103,7 +109,10 @@ class GateResult:
     @property
     def evidence(self) -> str:
         """How the verdict is shown: by the oracle's episodes, a searched demonstration, a proof of
-        impossibility, or not at all (unproven)."""
+        impossibility, or not at all (unproven); an inherited verdict says whose it is."""
+        if self.inherited_from:
+            own = dataclasses.replace(self, inherited_from="").evidence
+            return f"{own} — the verdict of {self.inherited_from}: {SAME_TRIAL}"
         if self.proof:
             return f"proof of impossibility: {self.proof}"
         if self.feasible:
@@ -176,6 +185,9 @@ class Task:
     in_langgap99: bool = False
     gate: GateResult | None = None  # None: not validated by a feasibility gate
     origin: Origin | None = None  # a task read from another benchmark's package (None: LangGap's own)
+    # `catalog:task id` of a task whose gate trial this task's would repeat exactly (`SAME_TRIAL`), shown by
+    # the generator; the task takes that task's verdict and the gate never re-runs it. None: its own verdict.
+    gate_from: str | None = None
 
     def __post_init__(self) -> None:
         checks = {"kind": (self.kind, KINDS), "dimension": (self.dimension, DIMENSIONS), "split": (self.split, SPLITS)}
@@ -245,4 +257,5 @@ class Task:
             "evidence": self.evidence,
             "gate": None if self.gate is None else {**asdict(self.gate), "rate": self.gate.rate},
             "origin": None if self.origin is None else asdict(self.origin),
+            "gate_from": self.gate_from,
         }

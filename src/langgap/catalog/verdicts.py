@@ -12,9 +12,9 @@ import fcntl
 import hashlib
 import json
 import os
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 
 from langgap.atomic import write_text_atomically
@@ -84,20 +84,38 @@ def record_verdicts(registry: str | Path, verdicts: dict[str, GateResult], about
     return path
 
 
-def snapshot_verdicts(registry: str | Path, task_ids: Iterable[str], previous: dict | None = None) -> dict:
+def snapshot_verdicts(
+    registry: str | Path,
+    task_ids: Iterable[str],
+    previous: dict | None = None,
+    inherited: Mapping[str, tuple[Path, str]] | None = None,
+) -> dict:
     """What a run relies on from the gate, stored with it so that a re-gate never changes its report: the
-    verdicts of `task_ids` (each whole, with its per-init results) and the SHA-256 of the verdict file they
-    were read from (none: the catalog has no verdict file). `previous`, a run's earlier snapshot, is kept as it is:
-    only tasks it lacks (a run grown with `--extend`) get verdicts, and their file's hash is added."""
-    path = verdicts_path(registry)
-    content = _read_bytes(path) if path.is_file() else None
-    verdicts = _parse(path, content) if content is not None else {}
-    digest = hashlib.sha256(content).hexdigest() if content is not None else None
-    snapshot = previous or {"file": path.name, "sha256": [], "tasks": {}}
-    added = {t: asdict(verdicts[t]) for t in task_ids if t in verdicts and t not in snapshot["tasks"]}
+    verdicts of `task_ids` (each whole, with its per-init results) and the SHA-256 of each verdict file they
+    were read from (none: the catalog has no verdict file). `inherited` maps a task that takes another's
+    verdict to that task's registry and `catalog:id`; its verdict is read from there. `previous`, a run's
+    earlier snapshot, is kept as it is: only tasks it lacks (a run grown with `--extend`) get verdicts, and
+    their files' hashes are added."""
+    inherited = dict(inherited or {})
+    snapshot = previous or {"file": verdicts_path(registry).name, "sha256": [], "tasks": {}}
     hashes = list(snapshot["sha256"])
-    if digest is not None and digest not in hashes and (added or previous is None):
-        hashes.append(digest)
+    added: dict[str, dict] = {}
+    wanted = [t for t in task_ids if t not in snapshot["tasks"]]
+    sources: dict[Path, dict[str, tuple[str, str]]] = {verdicts_path(registry): {}}
+    for task_id in wanted:
+        if task_id in inherited:
+            source_registry, label = inherited[task_id]
+            sources.setdefault(verdicts_path(source_registry), {})[task_id] = (label.partition(":")[2], label)
+        else:
+            sources[verdicts_path(registry)][task_id] = (task_id, "")
+    for path, takers in sources.items():
+        content = _read_bytes(path) if path.is_file() else None
+        verdicts = _parse(path, content) if content is not None else {}
+        found = {t: (verdicts[src], label) for t, (src, label) in takers.items() if src in verdicts}
+        added |= {t: asdict(replace(v, inherited_from=label)) for t, (v, label) in found.items()}
+        digest = hashlib.sha256(content).hexdigest() if content is not None else None
+        if digest is not None and digest not in hashes and (found or previous is None):
+            hashes.append(digest)
     return {**snapshot, "sha256": hashes, "tasks": {**snapshot["tasks"], **added}}
 
 

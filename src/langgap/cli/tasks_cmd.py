@@ -6,7 +6,16 @@ import json
 from collections import Counter
 
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
-from langgap.catalog.task import DEFAULT_STYLE, DIMENSIONS, INFEASIBLE, INSTRUCTION_STYLES, KINDS, SPLITS, Task
+from langgap.catalog.task import (
+    DEFAULT_STYLE,
+    DIMENSIONS,
+    INFEASIBLE,
+    INSTRUCTION_STYLES,
+    KINDS,
+    SAME_TRIAL,
+    SPLITS,
+    Task,
+)
 from langgap.stack import SUITES
 
 
@@ -171,6 +180,13 @@ def run_gate(args) -> int:
         print(
             f"{ungated} of {len(tasks)} task(s) not gated: unproven until the gate runs "
             f"(langgap validate --catalog {args.catalog} --record)"
+        )
+    taken = [t for t in tasks if t.gate is not None and t.gate.inherited_from]
+    if taken:
+        sources = {t.gate.inherited_from for t in taken}
+        print(
+            f"{len(taken)} of {len(tasks)} verdict(s) taken from {len(sources)} task(s) of another catalog, with "
+            f"{SAME_TRIAL} (the oracle column counts a source's episodes once per task that takes its verdict)"
         )
     return 0
 

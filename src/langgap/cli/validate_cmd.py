@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from langgap.catalog.task import INFEASIBLE, unproven
+from langgap.catalog.task import INFEASIBLE, SAME_TRIAL, unproven
 from langgap.cli.eval_cmd import add_stepping_option
 from langgap.cli.execution_flags import add_execution_options, execution_options
 from langgap.cli.tasks_cmd import add_catalog_option
@@ -107,6 +107,13 @@ def run(args) -> int:
         return _claims_only(args)
     policy = args.policy or DEFAULT_POLICY
     found = run_gate(args, args.catalog, args.tasks, args.inits, policy, blind=args.blind, recording=args.record)
+    if found.inherited:
+        print(
+            f"{len(found.inherited)} selected task(s) take the verdict of a task with {SAME_TRIAL} "
+            f"(langgap tasks show ID names it): not run"
+        )
+    if not found.rows:
+        return 0
     print(table_text(found.rows))
     _print_claims(found, args.out)
     if args.record:

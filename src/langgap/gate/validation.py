@@ -21,7 +21,7 @@ extended task whose goal differs. A claim that fails is a release blocker.
 from __future__ import annotations
 
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from langgap.catalog.catalog import load_catalog
@@ -44,6 +44,7 @@ class Validation:
 
     rows: list[TaskValidation]
     claims: list[Claim]
+    inherited: list[str] = field(default_factory=list)  # selected tasks that take another task's verdict
 
     @property
     def passed(self) -> bool:
@@ -72,9 +73,14 @@ def validate(
     (a directory; the run's, or a temporary one, when None), replayed from there and counted.
 
     Every part (the episodes, the searches, the settle probes) is work for the engine's scheduler, run
-    as `options` say (backend, workers, retries, timeouts, progress)."""
+    as `options` say (backend, workers, retries, timeouts, progress). A task with `gate_from` takes that task's
+    verdict (its trial would repeat that one's exactly) and is not run: it is listed in `inherited`."""
     catalog = load_catalog(catalog_name)
-    tasks = catalog.select(selection)
+    selected = catalog.select(selection)
+    tasks = [t for t in selected if t.gate_from is None]
+    inherited = [t.id for t in selected if t.gate_from is not None]
+    if not tasks:
+        return Validation([], [], inherited)
     options = options or ExecutionOptions()
 
     def episodes(policy_name: str, directory: Path) -> list[EpisodeRecord]:
@@ -112,4 +118,4 @@ def validate(
         if row.demonstrated_inits:
             row.demonstration = beside_registry(where / task.id, catalog_name)
         rows.append(row)
-    return Validation(rows, benchmark_claims(catalog, records, blind_records))
+    return Validation(rows, benchmark_claims(catalog, records, blind_records), inherited)
