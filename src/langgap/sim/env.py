@@ -39,6 +39,7 @@ from langgap.catalog.task import Task
 from langgap.errors import InitStateError, SimulationError
 from langgap.goals import Goal, GoalProgress, holds_now
 from langgap.sim.privileged_schema import PrivilegedState
+from langgap.sim.resting import moved_and_resting, start_positions
 from langgap.stack import DEFAULT_SEED_SCHEME, DEFAULT_STEPPING, SEED_SCHEMES, STEPPINGS
 
 CAMERAS = ("agentview", "robot0_eye_in_hand")
@@ -136,6 +137,7 @@ class TaskEnv:
         self._holds = False  # the task's goal, as of the last observed step
         self._truth: dict[Predicate, bool] = {}  # atoms read in the state `_truth_of` names
         self._truth_of: tuple | None = None
+        self._start_pos: np.ndarray | None = None  # body origins at step 0, what `(Moved o)` measures from
         bddl = files.task_bddl_path(task)
         configure_rendering()
         # Imported here: robosuite and MuJoCo load only when an environment is built (after the GL choice).
@@ -310,7 +312,9 @@ class TaskEnv:
 
     def _restart_goal(self) -> None:
         # The goal's history (when each part of an ordered goal first held) starts at the state the
-        # policy first sees: step 0, after settling (or a restored state).
+        # policy first sees: step 0, after settling (or a restored state); so does where things started.
+        self._start_pos = start_positions(self._inner)
+        self._truth_of = None  # atoms read before (a `Moved` among them) measured from another start
         self._progress = GoalProgress(self.task.goal)
         self._holds = self._progress.observe(0, self.predicate_holds)
 
@@ -379,16 +383,24 @@ class TaskEnv:
         return holds_now(goal, self.predicate_holds)
 
     def predicate_holds(self, predicate: Predicate) -> bool:
-        """Whether one atom holds in the current state (LIBERO's predicate). Each atom is read once per
-        state: the task's goal and every scene goal watched beside it share atoms."""
+        """Whether one atom holds in the current state (LIBERO's predicate; `Moved`, LangGap's, from where
+        things were at step 0: `langgap.sim.resting`). Each atom is read once per state: the task's goal
+        and every scene goal watched beside it share atoms."""
         data = self.sim.data._data
         state = (id(data), data.time, data.qpos.tobytes())
         if state != self._truth_of:
             self._truth, self._truth_of = {}, state
         value = self._truth.get(predicate)
         if value is None:
-            value = self._truth[predicate] = bool(self._inner._eval_predicate(predicate.as_libero()))
+            value = self._truth[predicate] = self._evaluate(predicate)
         return value
+
+    def _evaluate(self, predicate: Predicate) -> bool:
+        if predicate.libero:
+            return bool(self._inner._eval_predicate(predicate.as_libero()))
+        if self._start_pos is None:
+            raise SimulationError(f"{predicate}: no step 0 to measure from before reset()")
+        return moved_and_resting(self._inner, predicate.args[0], self._start_pos)
 
     # -- observations ------------------------------------------------------------------------
 
