@@ -55,9 +55,10 @@ TEMPLATES = {
     ),
     "both": Template(
         "put both the alphabet soup and the tomato sauce in the basket",
-        "both parts hold at the end, in any order",
+        "both parts hold at the end",
         "(And A B): both hold",
-        "agree",
+        "agree (where the sentence orders them, 'put the bowl in the drawer and close it', the other order cannot "
+        "end in that state: a closed drawer takes nothing)",
     ),
     "ordering": Template(
         "first turn on the stove, then put the bowl on the plate",
