@@ -71,7 +71,7 @@ TEMPLATES = {
         "pick up the black bowl … and place it anywhere but on the plate",
         "X set down anywhere (on another receiver, in a drawer, on the bare table) except on Y",
         "(And (Or <X on each other receiver that takes it> (Moved X)) (Not (On X Y)))",
-        "agree once the `Or` holds `(Moved X)`: X away from where it started and resting out of the hand; "
+        "agree once the `Or` holds `(Moved X)`: X moved by the hand, away from where it started, resting out of it; "
         "the receivers are LIBERO's placements (the witness the BDDL file states, the oracle's aim)",
     ),
     "not-what": Template(

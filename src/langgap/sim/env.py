@@ -39,7 +39,7 @@ from langgap.catalog.task import Task
 from langgap.errors import InitStateError, SimulationError
 from langgap.goals import Goal, GoalProgress, holds_now
 from langgap.sim.privileged_schema import PrivilegedState
-from langgap.sim.resting import moved_and_resting, start_positions
+from langgap.sim.resting import Placements
 from langgap.stack import DEFAULT_SEED_SCHEME, DEFAULT_STEPPING, SEED_SCHEMES, STEPPINGS
 
 CAMERAS = ("agentview", "robot0_eye_in_hand")
@@ -137,7 +137,6 @@ class TaskEnv:
         self._holds = False  # the task's goal, as of the last observed step
         self._truth: dict[Predicate, bool] = {}  # atoms read in the state `_truth_of` names
         self._truth_of: tuple | None = None
-        self._start_pos: np.ndarray | None = None  # body origins at step 0, what `(Moved o)` measures from
         bddl = files.task_bddl_path(task)
         configure_rendering()
         # Imported here: robosuite and MuJoCo load only when an environment is built (after the GL choice).
@@ -163,6 +162,7 @@ class TaskEnv:
             raise SimulationError(f"cannot build env for {task.id}: {type(exc).__name__}: {exc}") from exc
         self._inner = self._env.env
         ContactIndex.install(self._inner)
+        self._placements = Placements(self._inner)  # what `(Moved o)` reads: step 0's places, what the hand moved
         if self.options.stepping != "robosuite":
             FastStepping.install(self._inner, fast=self.options.stepping == "fast")
 
@@ -313,7 +313,7 @@ class TaskEnv:
     def _restart_goal(self) -> None:
         # The goal's history (when each part of an ordered goal first held) starts at the state the
         # policy first sees: step 0, after settling (or a restored state); so does where things started.
-        self._start_pos = start_positions(self._inner)
+        self._placements.restart()
         self._truth_of = None  # atoms read before (a `Moved` among them) measured from another start
         self._progress = GoalProgress(self.task.goal)
         self._holds = self._progress.observe(0, self.predicate_holds)
@@ -337,6 +337,7 @@ class TaskEnv:
             raise SimulationError(f"action must be 7 finite numbers, got shape {action.shape}")
         self._raw_obs = self._step_sim(action, capture)
         self.steps += 1
+        self._placements.observe()
         self._holds = self._progress.observe(self.steps, self.predicate_holds)
         return self._holds
 
@@ -398,9 +399,7 @@ class TaskEnv:
     def _evaluate(self, predicate: Predicate) -> bool:
         if predicate.libero:
             return bool(self._inner._eval_predicate(predicate.as_libero()))
-        if self._start_pos is None:
-            raise SimulationError(f"{predicate}: no step 0 to measure from before reset()")
-        return moved_and_resting(self._inner, predicate.args[0], self._start_pos)
+        return self._placements.moved(predicate.args[0])
 
     # -- observations ------------------------------------------------------------------------
 
