@@ -102,7 +102,9 @@ def test_the_catalogs_work_with_tasks_list_show_gate_audit_and_bddl(catalog):
     audit = run_cli("tasks", "audit", "--catalog", catalog, "--tasks", "spatial/s0/*")
     assert audit.returncode == 0, audit.stderr
     assert "tasks:" in audit.stdout.splitlines()[-1]
-    nothing = run_cli("tasks", "audit", "--catalog", "langgap99", "--tasks", "spatial/s0/*")
+    own = run_cli("tasks", "audit", "--catalog", "langgap99", "--tasks", "spatial/s0/*")  # LangGap's sentences
+    assert own.returncode == 0 and "sentence: " in own.stdout and "with findings" in own.stdout
+    nothing = run_cli("tasks", "audit", "--catalog", "langgap99", "--tasks", "spatial/s0/*", "--starts", "1")
     assert nothing.returncode == 2 and nothing.stderr.startswith("error: ") and "from a package" in nothing.stderr
 
 

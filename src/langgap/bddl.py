@@ -13,9 +13,13 @@ from pathlib import Path
 
 from langgap.errors import BddlError
 
-# Goal predicates LangGap understands, with their arity. Spelled as LIBERO's BDDL files spell them.
+# Goal predicates LIBERO evaluates (and LangGap reads), with their arity. Spelled as LIBERO's BDDL files spell them.
 PREDICATE_ARITY = {"On": 2, "In": 2, "Open": 1, "Close": 1, "Turnon": 1, "Turnoff": 1}
-_CANONICAL = {name.lower(): name for name in PREDICATE_ARITY}
+# Predicates only LangGap evaluates (`langgap.sim.resting`): a goal may use them, a BDDL file never states them.
+# (Moved o): `o` lies away from where it was at step 0 and rests there, out of the hand ("anywhere but ...").
+LANGGAP_PREDICATES = {"Moved": 1}
+_ARITY = PREDICATE_ARITY | LANGGAP_PREDICATES
+_CANONICAL = {name.lower(): name for name in _ARITY}
 
 
 @dataclass(frozen=True)
@@ -40,14 +44,21 @@ class Predicate:
     def of(cls, name: str, args: list[str] | tuple[str, ...]) -> Predicate:
         canonical = _CANONICAL.get(name.lower())
         if canonical is None:
-            known = ", ".join(PREDICATE_ARITY)
+            known = ", ".join(_ARITY)
             raise BddlError(f"unknown predicate {name!r} (known: {known})")
-        if len(args) != PREDICATE_ARITY[canonical]:
-            raise BddlError(f"predicate {canonical} takes {PREDICATE_ARITY[canonical]} argument(s), got {list(args)}")
+        if len(args) != _ARITY[canonical]:
+            raise BddlError(f"predicate {canonical} takes {_ARITY[canonical]} argument(s), got {list(args)}")
         return cls(canonical, tuple(args))
+
+    @property
+    def libero(self) -> bool:
+        """Whether LIBERO evaluates this predicate (else only LangGap does: `LANGGAP_PREDICATES`)."""
+        return self.name in PREDICATE_ARITY
 
     def as_libero(self) -> tuple[str, ...]:
         """The lower-cased tuple form LIBERO's parser produces (`('on', 'a', 'b')`)."""
+        if not self.libero:
+            raise BddlError(f"{self}: LIBERO does not evaluate {self.name} (only LangGap does)")
         return (self.name.lower(), *self.args)
 
 
@@ -224,7 +235,10 @@ def _parse(text: str) -> BddlProblem:
 def _predicate_from_tree(node) -> Predicate:
     if not isinstance(node, list) or not node or any(isinstance(x, list) for x in node):
         raise BddlError(f"goal conjunct is not a ground predicate: {node!r}")
-    return Predicate.of(node[0], node[1:])
+    predicate = Predicate.of(node[0], node[1:])
+    if not predicate.libero:
+        raise BddlError(f"goal conjunct {predicate}: LIBERO does not evaluate {predicate.name}, no BDDL file states it")
+    return predicate
 
 
 def read_bddl(path: str | Path) -> BddlProblem:

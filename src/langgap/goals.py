@@ -7,10 +7,12 @@ put the bowl on the plate" can be judged on the same scenes:
     (On akita_black_bowl_1 plate_1)                      an atom (a BDDL predicate)
     (And G ...)   (Or G ...)   (Not G)                   conjunction, disjunction, negation
     (Then G1 G2 ...)                                     G1 first held before G2 first held, ..., and all hold now
+    (Moved akita_black_bowl_1)                           LangGap's own atom: away from its step-0 place, at rest
 
 A registry stores a goal as a list of expressions, read as their conjunction; a list of atoms is a
 LIBERO goal, so every existing registry entry reads as before. A task's BDDL file keeps a plain
-conjunction LIBERO can parse: the goal's `witness`, a final state that satisfies it.
+conjunction LIBERO can parse: the goal's `witness`, a final state that satisfies it, of LIBERO's atoms
+only (`Moved`, which LIBERO does not evaluate, stands in an `Or` after a part LIBERO can state).
 
 `Then` needs the past: `GoalProgress` evaluates a goal step by step and remembers the first step
 each sub-goal held. In a single state (`holds_now`) order is ignored: `Then` means all its parts hold.
@@ -202,12 +204,15 @@ def witness(goal: Goal) -> tuple[Predicate, ...]:
 
     For a LIBERO goal, its atoms; an `Or` contributes its first part. This is what a task's BDDL file
     states as its goal, and what a scripted policy can aim for (with `stages` for the order).
-    BddlError if that state does not satisfy the goal (e.g. `(Not X)` with X in the witness).
+    BddlError if that state does not satisfy the goal (e.g. `(Not X)` with X in the witness), or names an
+    atom LIBERO does not evaluate (`Moved`: no BDDL file can state it, no scripted placement aims at it).
     """
     chosen = _witness(goal)
     unique = tuple(dict.fromkeys(chosen))
     if not unique or not holds_now(goal, lambda p: p in unique):
         raise BddlError(f"goal {goal} has no witness of atoms (its first alternatives contradict it)")
+    if unstated := [str(p) for p in unique if not p.libero]:
+        raise BddlError(f"goal {goal}: its witness needs {', '.join(unstated)}, which LIBERO does not evaluate")
     return unique
 
 
@@ -250,7 +255,8 @@ def choices(goal: Goal) -> Iterator[Goal]:
 
 def plans(goal: Goal) -> Iterator[tuple[tuple[Predicate, ...], ...]]:
     """The `stages` of every choice of `goal` that can be met, in `choices`' order (a choice that
-    contradicts one of its `Not`s, or orders more than one part, has none and is left out)."""
+    contradicts one of its `Not`s, orders more than one part, or needs an atom only LangGap evaluates,
+    has none and is left out)."""
     for choice in choices(goal):
         try:
             yield stages(choice)

@@ -172,3 +172,32 @@ def test_plans_are_the_stages_of_the_choices_that_can_be_met():
     ordered = Then((Atom(OPEN_DRAWER), Atom(BOWL_ON_PLATE)))
     assert list(plans(ordered)) == [stages(ordered)]
     assert list(plans(And((Atom(BOWL_ON_PLATE), Not(Atom(BOWL_ON_PLATE)))))) == []
+
+
+def test_moved_is_langgaps_own_atom_never_a_witness_nor_a_bddl_goal():
+    from langgap.bddl import parse_bddl, rewrite_task_sections
+    from langgap.stack import bddl_path
+
+    text = "(And (Or (On bowl_1 stove_1) (Moved bowl_1)) (Not (On bowl_1 plate_1)))"
+    goal = parse_goal(text)
+    assert str(goal) == text and Predicate.of("moved", ["bowl_1"]) in atoms(goal)
+    moved = Predicate.of("Moved", ["bowl_1"])
+    assert not moved.libero and Predicate.of("On", ["bowl_1", "stove_1"]).libero
+    with pytest.raises(BddlError, match="LIBERO does not evaluate Moved"):
+        moved.as_libero()
+    # the BDDL file states the first alternative; the oracle's plans leave the `Moved` choice out
+    assert witness(goal) == (Predicate.of("On", ["bowl_1", "stove_1"]),)
+    assert list(plans(goal)) == [((Predicate.of("On", ["bowl_1", "stove_1"]),),)]
+    assert holds_now(goal, lambda p: p == moved)  # set down anywhere else: the goal holds
+    assert not holds_now(goal, lambda p: p in (moved, Predicate.of("On", ["bowl_1", "plate_1"])))
+    with pytest.raises(BddlError, match="LIBERO does not evaluate"):
+        witness(parse_goal("(And (Moved bowl_1) (Not (On bowl_1 plate_1)))"))
+    source = bddl_path("libero_spatial", "pick_up_the_black_bowl_on_the_stove_and_place_it_on_the_plate").read_text()
+    stated = rewrite_task_sections(
+        source,
+        language="x",
+        obj_of_interest=("akita_black_bowl_1",),
+        goal=(Predicate.of("Moved", ["akita_black_bowl_1"]),),
+    )
+    with pytest.raises(BddlError, match="no BDDL file states it"):
+        parse_bddl(stated)

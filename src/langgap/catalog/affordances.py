@@ -189,6 +189,22 @@ def placements(scene: BddlProblem) -> list[Predicate]:
     return out
 
 
+def placements_onto(target: str, scene: BddlProblem) -> list[Predicate]:
+    """Every object receiver `target` takes, as a placement onto it that is not true at t0, in BDDL order.
+
+    Unlike `placements`, an object holding another at t0 counts: a sentence that allows "anything" onto
+    `target` allows lifting what stands on it off first (no generated single goal asks for that)."""
+    rule = dict(receivers(scene)).get(target)
+    if rule is None:
+        return []
+    facts = _init_facts(scene)
+    return [
+        Predicate.of(rule.predicate, (obj, target))
+        for obj, cat in scene.objects.items()
+        if obj != target and cat in rule.takes and (rule.predicate.lower(), obj, target) not in facts
+    ]
+
+
 def articulations(scene: BddlProblem) -> list[Predicate]:
     """For each articulated part, the one action that changes its :init state (open a closed drawer, ...)."""
     facts = _init_facts(scene)

@@ -1,10 +1,11 @@
-"""LangGap's checks of tasks read from other benchmarks' packages, each failure a named finding.
+"""LangGap's checks of tasks, each failure a named finding.
 
 The checks here read files only: a task's BDDL against its source's, its goal against what LIBERO
 evaluates and the scene holds, its instruction's form, the init states it ships against its source's, and
-duplicates within a scene. The checks that need the simulator (the t0 state, the goal at t0) are in
-`langgap.start_audit`. Findings are kept beside the registry in `<catalog>.audit.json`, with which checks
-made them, so the gate and the docs read the same list.
+duplicates within a scene (tasks read from other benchmarks' packages). The checks that need the simulator
+(the t0 state, the goal at t0) are in `langgap.start_audit`; whether a goal accepts what its sentence allows
+(LangGap's own, generated tasks) in `langgap.catalog.sentences`. Findings are kept beside the registry in
+`<catalog>.audit.json`, with which checks made them, so the gate and the docs read the same list.
 """
 
 from __future__ import annotations
@@ -37,12 +38,18 @@ FINDINGS = {
     "instruction is a file name": "the instruction is the BDDL file's name, not the sentence its (:language) has",
     "instruction carries an id": "the instruction carries a perturbation id or a number suffix",
     "instruction is not about the task": "the instruction is an LLM's preamble or commentary, not a request",
+    "goal narrower than its sentence": "the goal rejects a state its sentence allows (sentence check)",
+    "goal wider than its sentence": "the goal accepts a state its sentence does not allow (sentence check)",
 }
 # The checks, by what they need: `files` reads the packages' files (here), `starts` runs the simulator
-# (`langgap.start_audit`); each makes the findings listed.
+# (`langgap.start_audit`), `sentence` reads a generated task's goal and scene (`langgap.catalog.sentences`);
+# each makes the findings listed.
+_STARTS = ("starts elsewhere", "goal holds at t0")
+_SENTENCE = ("goal narrower than its sentence", "goal wider than its sentence")
 CHECKS = {
-    "files": tuple(name for name in FINDINGS if name not in ("starts elsewhere", "goal holds at t0")),
-    "starts": ("starts elsewhere", "goal holds at t0"),
+    "files": tuple(name for name in FINDINGS if name not in _STARTS + _SENTENCE),
+    "starts": _STARTS,
+    "sentence": _SENTENCE,
 }
 # Sections a variant may change, by dimension; every other byte must be its source's.
 MAY_CHANGE = {"language": (":language",), "task": (":language", ":obj_of_interest", ":goal")}

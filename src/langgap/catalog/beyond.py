@@ -8,9 +8,9 @@ Each original task (a *source*) gets, on its own scene and init states:
   articulation source, each pick-and-place goal of the scene's other originals), or the two parts of
   a two-part source. Both end in the same state; only the order tells them apart.
 * **negation** — the source's sentence with its destination or object negated ("… anywhere but on
-  the plate", "anything but the ketchup …"): the object on another receiver it can take (an `Or` over
-  them) and not on the negated one (`Not`), or another object on the same receiver. A policy that
-  skips "but" does the source task.
+  the plate", "anything but the ketchup …"): the object on another receiver it can take or set down
+  anywhere else (an `Or` over them and `Moved`) and not on the negated one (`Not`), or any other object
+  on the same receiver. A policy that skips "but" does the source task.
 * **paraphrase** — the source's goal in each template of `rewording.PARAPHRASES`.
 * **attribute_reference** — the source's goal with its object named by an attribute the scene makes
   unique ("the black one", "the container of ketchup").
@@ -157,23 +157,29 @@ def _ordering(source: Task, scene: BddlProblem, sources: list[Task], max_steps: 
 
 
 def negation_goal(predicate: Predicate, scene: BddlProblem, part: str) -> Goal | None:
-    """The goal of `predicate` with its destination (`where`) or object (`what`) negated: the object on
-    another receiver that takes it (or another object on the receiver), and not `predicate`; None
-    when the scene offers no alternative. A pushed object's alternatives are pushed too (the plate
-    slides to another spot on the table; it cannot be pushed up onto the stove)."""
+    """The goal of `predicate` with its destination (`where`) or object (`what`) negated, and not `predicate`;
+    None when the scene offers no named alternative (one is what the task's BDDL file states and the oracle
+    aims at).
+
+    "X anywhere but on Y": X on another receiver that takes it, or `(Moved X)` (set down anywhere else, the
+    bare table included). A pushed object's named alternatives are pushed too (the plate slides to another
+    spot on the table; it cannot be pushed up onto the stove). "anything but X on Y": every other object Y
+    takes on Y, one that holds another at t0 included."""
     obj, target = predicate.args
     if part == "where":
         pushed = affordances.is_push(predicate, scene)  # the sentence's verb binds its alternatives too
         alternatives = [
-            p
+            Atom(p)
             for p in affordances.placements(scene)
             if p.args[0] == obj and p.args[1] != target and affordances.is_push(p, scene) == pushed
         ]
+        anywhere = [Atom(Predicate.of("Moved", (obj,)))]
     else:
-        alternatives = [p for p in affordances.placements(scene) if p.args[1] == target and p.args[0] != obj]
+        alternatives = [Atom(p) for p in affordances.placements_onto(target, scene) if p.args[0] != obj]
+        anywhere = []
     if not alternatives:
         return None
-    return And((Or(tuple(Atom(p) for p in alternatives)), Not(Atom(predicate))))
+    return And((Or((*alternatives, *anywhere)), Not(Atom(predicate))))
 
 
 def _negation(source: Task, scene: BddlProblem) -> list[Task]:

@@ -70,7 +70,9 @@ def add_parser(subparsers) -> None:
     gate.set_defaults(handler=run_gate)
 
     audit = verbs.add_parser(
-        "audit", help="LangGap's checks of tasks read from another benchmark's package: each finding, counted"
+        "audit",
+        help="LangGap's checks of a catalog's tasks (a package's files, their starts; LangGap's own sentences against "
+        "their goals): each finding, counted",
     )
     add_catalog_option(audit)
     audit.add_argument(
@@ -198,37 +200,68 @@ def run_audit(args) -> int:
     from langgap.errors import CatalogError
 
     catalog = load_catalog(args.catalog)
-    tasks = [t for t in catalog.select(args.tasks) if t.origin is not None]
-    if not tasks:
-        raise CatalogError(f"catalog {catalog.name}: no selected task was read from a package; nothing to audit")
+    selected = catalog.select(args.tasks)
+    tasks = [t for t in selected if t.origin is not None]
+    # A catalog of LangGap's own sentences (LIBERO's originals and generated tasks) gets the sentence check; a
+    # package's catalog, the checks of its files (its originals are LIBERO's, checked with langgap99).
+    own = [] if any(t.origin is not None for t in catalog) else selected
     if args.starts < 0:
         raise CatalogError("--starts must be 0 (recorded findings) or a number of init states")
+    if not tasks and not own:
+        raise CatalogError(f"catalog {catalog.name}: no selected task was read from a package; nothing to audit")
+    if not tasks and args.starts:
+        raise CatalogError(f"catalog {catalog.name}: --starts checks tasks read from a package; none is selected")
     registry = registry_path(args.catalog)
     about, recorded = read_audit(registry)
     ids = [t.id for t in tasks]
-    findings = files_findings(catalog, tasks) + [f for f in recorded if f.name == "unreadable"]
-    ran = {"files": files_about(catalog)}
+    findings, ran = _sentence_check(own) if own else ([], {})
+    if tasks:
+        findings += files_findings(catalog, tasks) + [f for f in recorded if f.name == "unreadable"]
+        ran["files"] = files_about(catalog)
+        findings += _starts_check(args, catalog, tasks, about, recorded, ran)
+    unreadable = [f.task for f in findings if f.name == "unreadable"]
+    own_ids = [t.id for t in own]
+    print(audit_text(findings, ids + unreadable + own_ids, examples=args.examples))
+    if args.record:
+        checked = {"files": ids + unreadable, "starts": ids, "sentence": own_ids}
+        for check, how in ran.items():
+            mine = [f for f in findings if f.name in CHECKS[check]]
+            path = record_audit(registry, check, how, mine, checked[check])
+        print(f"recorded findings in {path}")
+    return 0
+
+
+def _starts_check(args, catalog, tasks: list[Task], about: dict, recorded: list, ran: dict) -> list:
+    """The simulator checks' findings on package tasks: run now (`--starts K`, added to `ran`), else as recorded."""
+    from langgap.catalog.audit import CHECKS
+
     if args.starts:
         from langgap.start_audit import SEED, starts_findings
 
-        findings += starts_findings(catalog, tasks, args.starts, progress=lambda line: print(line, flush=True))
+        found = starts_findings(catalog, tasks, args.starts, progress=lambda line: print(line, flush=True))
         ran["starts"] = {args.tasks: {"inits": args.starts, "seed": SEED}}
         print(f"starts: checked on init states 0..{args.starts - 1} (seed {SEED})")
-    elif "starts" in about:
-        chosen = set(ids)
-        findings += [f for f in recorded if f.name in CHECKS["starts"] and f.task in chosen]
+        return found
+    if "starts" in about:
         for selection, how in about["starts"].items():
             print(f"starts: recorded for tasks {selection!r} on init states 0..{how['inits'] - 1} (rerun: --starts K)")
-    else:
-        print(f"starts: not checked (langgap tasks audit --catalog {args.catalog} --starts 50)")
-    unreadable = [f.task for f in findings if f.name == "unreadable"]
-    print(audit_text(findings, ids + unreadable, examples=args.examples))
-    if args.record:
-        for check, how in ran.items():
-            mine = [f for f in findings if f.name in CHECKS[check]]
-            path = record_audit(registry, check, how, mine, ids if check == "starts" else ids + unreadable)
-        print(f"recorded findings in {path}")
-    return 0
+        chosen = {t.id for t in tasks}
+        return [f for f in recorded if f.name in CHECKS["starts"] and f.task in chosen]
+    print(f"starts: not checked (langgap tasks audit --catalog {args.catalog} --starts 50)")
+    return []
+
+
+def _sentence_check(tasks: list[Task]) -> tuple[list, dict]:
+    """The sentence check over `tasks` (LangGap's own sentences): its findings, and how many tasks each
+    template phrased (printed with what each template's sentence allows and its goal checks)."""
+    from langgap.catalog import files
+    from langgap.catalog.sentences import sentence_findings, template_counts, templates_text
+
+    counts = template_counts(tasks, files.scene_problem)
+    print(f"sentence: {len(tasks)} task(s) by template")
+    print(templates_text(counts))
+    findings = [f for t in tasks for f in sentence_findings(t, files.scene_problem(t))]
+    return findings, {"sentence": {"templates": counts}}
 
 
 def _gate_lines(gate) -> list[str]:

@@ -62,3 +62,9 @@ class ContactIndex:
             return bool((in_first_1 | in_first_2).any())
         second = self._geom_ids(geoms_2)
         return bool(((in_first_1 & np.isin(self._geom2, second)) | (np.isin(self._geom1, second) & in_first_2)).any())
+
+    def partners(self, geoms) -> np.ndarray:
+        """The ids of the geoms touching any of `geoms` (a name, names or a model) in the current state."""
+        self._refresh()
+        first = self._geom_ids(geoms)
+        return np.concatenate([self._geom2[np.isin(self._geom1, first)], self._geom1[np.isin(self._geom2, first)]])

@@ -39,6 +39,7 @@ from langgap.catalog.task import Task
 from langgap.errors import InitStateError, SimulationError
 from langgap.goals import Goal, GoalProgress, holds_now
 from langgap.sim.privileged_schema import PrivilegedState
+from langgap.sim.resting import Placements
 from langgap.stack import DEFAULT_SEED_SCHEME, DEFAULT_STEPPING, SEED_SCHEMES, STEPPINGS
 
 CAMERAS = ("agentview", "robot0_eye_in_hand")
@@ -161,6 +162,7 @@ class TaskEnv:
             raise SimulationError(f"cannot build env for {task.id}: {type(exc).__name__}: {exc}") from exc
         self._inner = self._env.env
         ContactIndex.install(self._inner)
+        self._placements = Placements(self._inner)  # what `(Moved o)` reads: step 0's places, what the hand moved
         if self.options.stepping != "robosuite":
             FastStepping.install(self._inner, fast=self.options.stepping == "fast")
 
@@ -310,7 +312,9 @@ class TaskEnv:
 
     def _restart_goal(self) -> None:
         # The goal's history (when each part of an ordered goal first held) starts at the state the
-        # policy first sees: step 0, after settling (or a restored state).
+        # policy first sees: step 0, after settling (or a restored state); so does where things started.
+        self._placements.restart()
+        self._truth_of = None  # atoms read before (a `Moved` among them) measured from another start
         self._progress = GoalProgress(self.task.goal)
         self._holds = self._progress.observe(0, self.predicate_holds)
 
@@ -333,6 +337,7 @@ class TaskEnv:
             raise SimulationError(f"action must be 7 finite numbers, got shape {action.shape}")
         self._raw_obs = self._step_sim(action, capture)
         self.steps += 1
+        self._placements.observe()
         self._holds = self._progress.observe(self.steps, self.predicate_holds)
         return self._holds
 
@@ -379,16 +384,22 @@ class TaskEnv:
         return holds_now(goal, self.predicate_holds)
 
     def predicate_holds(self, predicate: Predicate) -> bool:
-        """Whether one atom holds in the current state (LIBERO's predicate). Each atom is read once per
-        state: the task's goal and every scene goal watched beside it share atoms."""
+        """Whether one atom holds in the current state (LIBERO's predicate; `Moved`, LangGap's, from where
+        things were at step 0: `langgap.sim.resting`). Each atom is read once per state: the task's goal
+        and every scene goal watched beside it share atoms."""
         data = self.sim.data._data
         state = (id(data), data.time, data.qpos.tobytes())
         if state != self._truth_of:
             self._truth, self._truth_of = {}, state
         value = self._truth.get(predicate)
         if value is None:
-            value = self._truth[predicate] = bool(self._inner._eval_predicate(predicate.as_libero()))
+            value = self._truth[predicate] = self._evaluate(predicate)
         return value
+
+    def _evaluate(self, predicate: Predicate) -> bool:
+        if predicate.libero:
+            return bool(self._inner._eval_predicate(predicate.as_libero()))
+        return self._placements.moved(predicate.args[0])
 
     # -- observations ------------------------------------------------------------------------
 

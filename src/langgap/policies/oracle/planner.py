@@ -50,7 +50,10 @@ def parse_goal(expressions: tuple[str, ...] | list[str]) -> goals.Goal:
 def check_goal(scene: Scene, goal: tuple[Predicate, ...]) -> None:
     """Raise OracleError unless every predicate names things this scene has, in a role the oracle handles."""
     for predicate in goal:
-        if predicate.name in ("On", "In"):
+        if not predicate.libero:  # `Moved`: what the oracle never aims at (`goals.plans` leaves it out)
+            if not scene.has_entity(predicate.args[0]):
+                raise OracleError(f"goal {predicate}: no object {predicate.args[0]!r} in this scene")
+        elif predicate.name in ("On", "In"):
             obj, target = predicate.args
             if not scene.has_entity(obj):
                 raise OracleError(f"goal {predicate}: no object {obj!r} in this scene")
