@@ -18,6 +18,7 @@ from pathlib import Path
 import yaml
 
 from langgap.catalog.naming import SUITE_SHORT
+from langgap.catalog.switch_verdicts import snapshot_switch_verdicts
 from langgap.catalog.task import DIMENSIONS, KINDS, SPLITS, GateResult, Origin, Task
 from langgap.catalog.verdicts import read_verdicts, snapshot_verdicts
 from langgap.errors import BddlError, CatalogError, UnknownTaskError
@@ -226,8 +227,11 @@ def catalog_hash(name: str) -> str:
 
 def gate_snapshot(name: str, task_ids: Iterable[str], previous: dict | None = None) -> dict:
     """The gate verdicts of `task_ids` in catalog `name` with their file's SHA-256, as a run stores them
-    (`snapshot_verdicts`; `previous` keeps a run's earlier snapshot and adds only tasks it lacks)."""
-    return snapshot_verdicts(registry_path(name), task_ids, previous)
+    (`snapshot_verdicts`; `previous` keeps a run's earlier snapshot and adds only tasks it lacks), and under
+    `switch` the same of its switch verdicts (`switch_verdicts`)."""
+    task_ids, registry = list(task_ids), registry_path(name)
+    snapshot = snapshot_verdicts(registry, task_ids, previous)
+    return {**snapshot, "switch": snapshot_switch_verdicts(registry, task_ids, (previous or {}).get("switch"))}
 
 
 @functools.cache

@@ -12,10 +12,11 @@ import fcntl
 import hashlib
 import json
 import os
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import asdict
 from pathlib import Path
+from typing import Any
 
 from langgap.atomic import write_text_atomically
 from langgap.catalog.task import GateResult
@@ -32,10 +33,10 @@ def read_verdicts(registry: str | Path) -> dict[str, GateResult]:
     path = verdicts_path(registry)
     if not path.is_file():
         return {}
-    return _parse(path, _read_bytes(path))
+    return _parse(path, read_bytes(path))
 
 
-def _read_bytes(path: Path) -> bytes:
+def read_bytes(path: Path) -> bytes:
     try:
         return path.read_bytes()
     except OSError as exc:
@@ -60,7 +61,7 @@ def _verdict(fields: dict) -> GateResult:
 
 
 @contextmanager
-def _exclusive(directory: Path) -> Iterator[None]:
+def exclusive(directory: Path) -> Iterator[None]:
     """Hold an exclusive lock on `directory` (the verdict file itself is replaced, so cannot hold one)."""
     directory.mkdir(parents=True, exist_ok=True)
     fd = os.open(directory, os.O_RDONLY)
@@ -75,7 +76,7 @@ def record_verdicts(registry: str | Path, verdicts: dict[str, GateResult], about
     """Merge `verdicts` into the registry's verdict file (atomically); `about` describes how they were made
     (None keeps the file's)."""
     path = verdicts_path(registry)
-    with _exclusive(path.parent):  # read, merge and write as one step: a concurrent recording is not lost
+    with exclusive(path.parent):  # read, merge and write as one step: a concurrent recording is not lost
         merged = read_verdicts(registry) | verdicts
         if about is None:
             about = json.loads(path.read_text(encoding="utf-8")).get("about", {}) if path.is_file() else {}
@@ -89,12 +90,23 @@ def snapshot_verdicts(registry: str | Path, task_ids: Iterable[str], previous: d
     verdicts of `task_ids` (each whole, with its per-init results) and the SHA-256 of the verdict file they
     were read from (none: the catalog has no verdict file). `previous`, a run's earlier snapshot, is kept as it is:
     only tasks it lacks (a run grown with `--extend`) get verdicts, and their file's hash is added."""
-    path = verdicts_path(registry)
-    content = _read_bytes(path) if path.is_file() else None
-    verdicts = _parse(path, content) if content is not None else {}
+    return snapshot_file(verdicts_path(registry), task_ids, previous, _parse, asdict)
+
+
+def snapshot_file(
+    path: Path,
+    task_ids: Iterable[str],
+    previous: dict | None,
+    parse: Callable[[Path, bytes], dict[str, Any]],
+    dump: Callable[[Any], Any],
+) -> dict:
+    """`snapshot_verdicts` of any verdict file: `parse` reads its content (task id -> verdict), `dump` turns
+    one task's verdict into the data stored."""
+    content = read_bytes(path) if path.is_file() else None
+    verdicts = parse(path, content) if content is not None else {}
     digest = hashlib.sha256(content).hexdigest() if content is not None else None
     snapshot = previous or {"file": path.name, "sha256": [], "tasks": {}}
-    added = {t: asdict(verdicts[t]) for t in task_ids if t in verdicts and t not in snapshot["tasks"]}
+    added = {t: dump(verdicts[t]) for t in task_ids if t in verdicts and t not in snapshot["tasks"]}
     hashes = list(snapshot["sha256"])
     if digest is not None and digest not in hashes and (added or previous is None):
         hashes.append(digest)
