@@ -114,7 +114,8 @@ def validate_switch(
         evaluate(spec, directory, options or ExecutionOptions(), resume=resume, extend=resume)
         with RunStore.open(directory) as store:
             records = store.records()
-    return switch_rows(records)
+    # A resumed run may hold other conditions' episodes too (one grown with --extend): only the switches count.
+    return switch_rows([r for r in records if r.condition in conditions])
 
 
 def record_switch(
