@@ -232,7 +232,7 @@ def needs_rest(scene: Scene, part: str, state: str, goal: goals.Goal) -> bool:
     goal negates its leaving that state, or — where the goal does not mention the part — the part as it
     sticks out now overhangs a place the goal's hand must reach (an open drawer above the one to open, or
     above an object to move)."""
-    restore, leave = _REST[state]
+    leave = _REST[state][1]
     if any(p.name == leave and _same_part(scene, p.args[0], part) for p in _negated(goal)):
         return True
     mentioned = goals.atoms(goal)
