@@ -32,6 +32,7 @@ def test_recording_merges_per_task_and_k_and_leaves_the_plain_verdicts_alone(tmp
     assert {t: sorted(by_k) for t, by_k in found.items()} == {"a": ["switch:20", "switch:60"], "b": ["switch:20"]}
     assert accepted(found, "a", "switch:20") and not accepted(found, "a", "switch:60")
     assert not accepted(found, "b", "switch:20") and not accepted(found, "a", "switch:5")  # none: not accepted
+    assert accepted(found, "a", "switch:20", [0, 1]) and not accepted(found, "a", "switch:20", [0, 2])  # inits 0-1
     record_switch_verdicts(registry, {"a": {"switch:60": _verdict(2)}}, {})  # re-recorded: replaced
     assert accepted(read_switch_verdicts(registry), "a", "switch:60")
     assert plain.read_text() == '{"about": {}, "tasks": {}}'

@@ -14,6 +14,7 @@ that re-recording the plain verdicts never touches them, and the other way round
 from __future__ import annotations
 
 import json
+from collections.abc import Iterable
 from dataclasses import asdict
 from pathlib import Path
 
@@ -77,7 +78,8 @@ def snapshot_switch_gates(snapshot: dict) -> SwitchVerdicts:
     return {task: _per_k(by_k) for task, by_k in snapshot["tasks"].items()}
 
 
-def accepted(verdicts: SwitchVerdicts, task_id: str, condition: str) -> bool:
-    """Whether the oracle's switch gate accepted `task_id` under `condition` (`switch:K`)."""
+def accepted(verdicts: SwitchVerdicts, task_id: str, condition: str, inits: Iterable[int] = ()) -> bool:
+    """Whether the oracle's switch gate accepted `task_id` under `condition` (`switch:K`) on a gate that ran
+    every init state of `inits` (a verdict made on init states 0–4 says nothing about init state 10)."""
     verdict = verdicts.get(task_id, {}).get(condition)
-    return verdict is not None and verdict.feasible
+    return verdict is not None and verdict.feasible and all(i < verdict.inits for i in inits)

@@ -236,9 +236,12 @@ def switch_rows(records: list[EpisodeRecord], verdicts: SwitchVerdicts | None = 
                 )
                 for name, outcomes in SWITCH_CLASSES.items()
             }
-            ids = sorted({r.task_id for r in members})
-            unproven = tuple(t for t in ids if not accepted(verdicts or {}, t, f"{SWITCH}{k}"))
-            rows.append(SwitchRow(k, group, classes, len(ids), unproven))
+            inits: dict[str, set[int]] = defaultdict(set)
+            for r in members:
+                inits[r.task_id].add(r.init_index)
+            condition = f"{SWITCH}{k}"
+            unproven = tuple(t for t in sorted(inits) if not accepted(verdicts or {}, t, condition, inits[t]))
+            rows.append(SwitchRow(k, group, classes, len(inits), unproven))
     return rows
 
 
