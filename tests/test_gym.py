@@ -204,3 +204,45 @@ def test_docs_examples_run_as_shown(tmp_path):
     assert outputs[0][0].split()[2:4] == ["(128,", "128,"]
     assert outputs[1][0].split()[0] == "True"  # the oracle succeeds through the gym door
     assert "spatial/s0/black-bowl-1-on-plate" in outputs[2][1]
+
+
+def test_a_switch_changes_the_observed_instruction_at_step_k_and_info_says_persisted(catalog):
+    """`blind` through the env under `switch:56` on an extended task: the instruction the policy sees is the
+    source's until step 56, then the task's own; blind does the source's task anyway, after the switch."""
+    task = catalog.get(SIBLING)
+    env = gym.make("LangGap/Task-v0", task=SIBLING, privileged=True)
+    blind = make_policy("blind")
+    try:
+        obs, info = env.reset(seed=0, options={"init_index": 0, "condition": "switch:56"})
+        first = catalog.get(task.source).instruction()
+        assert info["instructions"] == [(0, first)]
+        blind.reset(info["context"])
+        seen = []
+        while True:
+            seen.append(obs["instruction"])
+            obs, _, terminated, truncated, info = env.step(blind.act(policy_observation(obs)))
+            if terminated or truncated:
+                break
+        assert seen[:56] == [first] * 56 and set(seen[56:]) == {task.instruction()}
+        assert info["instructions"] == [(0, first), (56, task.instruction())]
+        assert info["outcome"] == "persisted" and not info["is_success"] and info["reached"][task.source] >= 56
+    finally:
+        env.close()
+
+
+def test_nonsense_and_malformed_switches_at_reset(short_catalog):
+    from langgap.catalog.catalog import load_catalog
+    from langgap.engine.plan import condition_instruction
+
+    catalog = load_catalog(short_catalog)
+    env = LangGapTaskEnv(TINY_TASK, catalog=short_catalog)
+    try:
+        obs, info = env.reset(seed=0, options={"init_index": 1, "condition": "nonsense"})
+        assert obs["instruction"] == condition_instruction(catalog.get(TINY_TASK), catalog, "nonsense", "libero", 1)
+        assert info["instructions"] == [(0, obs["instruction"])] and obs["instruction"] != env.task.instruction()
+        with pytest.raises(LangGapError, match="unknown condition 'switch:x'"):
+            env.reset(options={"condition": "switch:x"})
+        with pytest.raises(LangGapError, match=f"ends at step {SHORT_STEPS}, before its instruction would switch"):
+            env.reset(options={"condition": f"switch:{SHORT_STEPS}"})
+    finally:
+        env.close()

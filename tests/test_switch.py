@@ -133,3 +133,16 @@ def test_blind_persists_by_construction(switched_references, catalog):
     source = catalog.get(EXTENDED).source
     assert row["outcome"] == "persisted" and not row["success"]
     assert json.loads(row["reached"])[source] >= 56  # the first instruction's goal, reached after the switch
+
+
+def test_the_oracle_closes_the_drawer_it_opened_when_the_new_goal_needs_it(tmp_path, catalog):
+    """Under `open the middle drawer` the oracle has the middle drawer open by step 120; the switch asks for the
+    bottom drawer, whose handle the open middle drawer overhangs: it pushes the middle one shut, then opens
+    the bottom one (left open, the bottom drawer is never reached in the 300 steps)."""
+    task = catalog.get("goal/s0/open-cabinet-bottom-drawer")
+    spec = RunSpec.create("oracle", catalog="langgap99", tasks=task.id, episodes=1, conditions=("switch:120",))
+    evaluate(spec, tmp_path / "run", ExecutionOptions(workers=0, progress=False))
+    (row,) = store_rows(tmp_path / "run")
+    assert json.loads(row["reached"])[task.source] < 120  # it had opened the middle drawer before the switch
+    assert row["outcome"] == "success"
+    assert json.loads(row["goals_at_end"]) == [task.id]  # the middle drawer is closed again

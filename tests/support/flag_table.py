@@ -76,6 +76,7 @@ _GENERATE_CLI = "tests/test_generate.py::test_cli_generate_writes_a_loadable_reg
 _AUDIT = "tests/test_external.py::test_audit_runs_the_start_check_on_k_init_states_and_records_it_beside_the_registry"
 _COLLECT_CLI = "tests/test_demos.py::test_collect_cli_without_lerobot_writes_compact_form"
 _CLAIMS_EXECUTION = "tests/test_validate.py::test_claims_only_runs_its_probes_on_the_execution_flags"
+_SWITCH_GATE = "tests/test_switch_gate.py::test_the_switch_gate_records_counts_and_marks_verdicts_per_task_and_k"
 _RAY_WORK = "tests/test_ray.py::test_every_kind_of_work_runs_on_a_worker_node_that_sees_another_disk"
 _SMALL_BC_CLI = "tests/test_small_bc.py::test_training_is_deterministic_and_checkpoint_round_trips"
 _HDF5_CLI = "tests/test_hdf5.py::test_cli_refuses_to_overwrite_and_rejects_what_is_not_a_collection"
@@ -111,6 +112,7 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "tasks gate --catalog": (Differs(("tasks", "gate"), ("--catalog", "{catalog}")),),
     "tasks gate --tasks": (Differs(("tasks", "gate"), ("--tasks", "spatial")),),
     "tasks gate --markdown": (Differs(("tasks", "gate"), ("--markdown",)),),
+    "tasks gate --condition": (Differs(("tasks", "gate"), ("--condition", "switch:20")), ProvenBy(_SWITCH_GATE)),
     "tasks audit --catalog": (Differs(("tasks", "audit", "--tasks", "spatial/s0/*"), ("--catalog", "libero-pro")),),
     "tasks audit --tasks": (Differs(("tasks", "audit", "--catalog", "libero-pro"), ("--tasks", "spatial/s0/*")),),
     "tasks audit --examples": (Differs(("tasks", "audit", "--catalog", "libero-pro"), ("--examples", "0")),),
@@ -219,6 +221,11 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
         ProvenBy("tests/test_validate.py::test_claims_only_resets_every_task_without_a_policy"),
     ),
     "validate --out": (ProvenBy(_VALIDATE_CLI),),
+    "validate --condition": (
+        ProvenBy(_SWITCH_GATE),
+        Refused((*_VALIDATE, "--condition", "given"), "validate --condition takes switch:K only"),
+        _claims_refuse(("--condition", "switch:5")),
+    ),
     "validate --record": (ProvenBy(_VALIDATE_CLI),),
     "validate --workers": (
         Refused((*_VALIDATE, "--workers", "-1"), "--workers must be at least 0"),

@@ -19,6 +19,7 @@ from pathlib import Path
 import yaml
 
 from langgap.catalog.naming import SUITE_SHORT
+from langgap.catalog.switch_verdicts import snapshot_switch_verdicts
 from langgap.catalog.task import DIMENSIONS, KINDS, SPLITS, GateResult, Origin, Task
 from langgap.catalog.verdicts import read_verdicts, snapshot_verdicts
 from langgap.errors import BddlError, CatalogError, UnknownTaskError
@@ -244,15 +245,17 @@ def catalog_hash(name: str) -> str:
 
 def gate_snapshot(name: str, task_ids: Iterable[str], previous: dict | None = None) -> dict:
     """The gate verdicts of `task_ids` in catalog `name` with their file's SHA-256, as a run stores them
-    (`snapshot_verdicts`; `previous` keeps a run's earlier snapshot and adds only tasks it lacks). A task with
-    `gate_from` gets that task's verdict, from its catalog's file."""
-    task_ids = list(task_ids)
+    (`snapshot_verdicts`; `previous` keeps a run's earlier snapshot and adds only tasks it lacks), and under
+    `switch` the same of its switch verdicts (`switch_verdicts`). A task with `gate_from` gets that task's
+    verdict, from its catalog's file."""
+    task_ids, registry = list(task_ids), registry_path(name)
     catalog = load_catalog(name)
     inherited = {}
     for task_id in task_ids:
         if (taken := catalog.get(task_id).gate_from) is not None:
             inherited[task_id] = (registry_path(taken.partition(":")[0]), taken)
-    return snapshot_verdicts(registry_path(name), task_ids, previous, inherited)
+    snapshot = snapshot_verdicts(registry, task_ids, previous, inherited)
+    return {**snapshot, "switch": snapshot_switch_verdicts(registry, task_ids, (previous or {}).get("switch"))}
 
 
 @functools.cache

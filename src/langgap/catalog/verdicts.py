@@ -12,10 +12,11 @@ import fcntl
 import hashlib
 import json
 import os
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import asdict, replace
 from pathlib import Path
+from typing import Any
 
 from langgap.atomic import write_text_atomically
 from langgap.catalog.task import GateResult
@@ -32,10 +33,10 @@ def read_verdicts(registry: str | Path) -> dict[str, GateResult]:
     path = verdicts_path(registry)
     if not path.is_file():
         return {}
-    return _parse(path, _read_bytes(path))
+    return _parse(path, read_bytes(path))
 
 
-def _read_bytes(path: Path) -> bytes:
+def read_bytes(path: Path) -> bytes:
     try:
         return path.read_bytes()
     except OSError as exc:
@@ -60,7 +61,7 @@ def _verdict(fields: dict) -> GateResult:
 
 
 @contextmanager
-def _exclusive(directory: Path) -> Iterator[None]:
+def exclusive(directory: Path) -> Iterator[None]:
     """Hold an exclusive lock on `directory` (the verdict file itself is replaced, so cannot hold one)."""
     directory.mkdir(parents=True, exist_ok=True)
     fd = os.open(directory, os.O_RDONLY)
@@ -75,7 +76,7 @@ def record_verdicts(registry: str | Path, verdicts: dict[str, GateResult], about
     """Merge `verdicts` into the registry's verdict file (atomically); `about` describes how they were made
     (None keeps the file's)."""
     path = verdicts_path(registry)
-    with _exclusive(path.parent):  # read, merge and write as one step: a concurrent recording is not lost
+    with exclusive(path.parent):  # read, merge and write as one step: a concurrent recording is not lost
         merged = read_verdicts(registry) | verdicts
         if about is None:
             about = json.loads(path.read_text(encoding="utf-8")).get("about", {}) if path.is_file() else {}
@@ -97,25 +98,39 @@ def snapshot_verdicts(
     earlier snapshot, is kept as it is: only tasks it lacks (a run grown with `--extend`) get verdicts, and
     their files' hashes are added."""
     inherited = dict(inherited or {})
-    snapshot = previous or {"file": verdicts_path(registry).name, "sha256": [], "tasks": {}}
+    own = [t for t in task_ids if t not in inherited]
+    snapshot = snapshot_file(verdicts_path(registry), own, previous, _parse, asdict)
+    labels_by_file: dict[Path, dict[str, str]] = {}
+    for task_id, (source_registry, label) in inherited.items():
+        labels_by_file.setdefault(verdicts_path(source_registry), {})[task_id] = label
+    for path, labels in labels_by_file.items():
+
+        def taken(path: Path, content: bytes, labels: dict[str, str] = labels) -> dict[str, GateResult]:
+            verdicts = _parse(path, content)
+            sources = {task_id: label.partition(":")[2] for task_id, label in labels.items()}
+            return {t: replace(verdicts[s], inherited_from=labels[t]) for t, s in sources.items() if s in verdicts}
+
+        snapshot = snapshot_file(path, labels, snapshot, taken, asdict)
+    return snapshot
+
+
+def snapshot_file(
+    path: Path,
+    task_ids: Iterable[str],
+    previous: dict | None,
+    parse: Callable[[Path, bytes], dict[str, Any]],
+    dump: Callable[[Any], Any],
+) -> dict:
+    """`snapshot_verdicts` of any verdict file: `parse` reads its content (task id -> verdict), `dump` turns
+    one task's verdict into the data stored."""
+    content = read_bytes(path) if path.is_file() else None
+    verdicts = parse(path, content) if content is not None else {}
+    digest = hashlib.sha256(content).hexdigest() if content is not None else None
+    snapshot = previous or {"file": path.name, "sha256": [], "tasks": {}}
+    added = {t: dump(verdicts[t]) for t in task_ids if t in verdicts and t not in snapshot["tasks"]}
     hashes = list(snapshot["sha256"])
-    added: dict[str, dict] = {}
-    wanted = [t for t in task_ids if t not in snapshot["tasks"]]
-    sources: dict[Path, dict[str, tuple[str, str]]] = {verdicts_path(registry): {}}
-    for task_id in wanted:
-        if task_id in inherited:
-            source_registry, label = inherited[task_id]
-            sources.setdefault(verdicts_path(source_registry), {})[task_id] = (label.partition(":")[2], label)
-        else:
-            sources[verdicts_path(registry)][task_id] = (task_id, "")
-    for path, takers in sources.items():
-        content = _read_bytes(path) if path.is_file() else None
-        verdicts = _parse(path, content) if content is not None else {}
-        found = {t: (verdicts[src], label) for t, (src, label) in takers.items() if src in verdicts}
-        added |= {t: asdict(replace(v, inherited_from=label)) for t, (v, label) in found.items()}
-        digest = hashlib.sha256(content).hexdigest() if content is not None else None
-        if digest is not None and digest not in hashes and (found or previous is None):
-            hashes.append(digest)
+    if digest is not None and digest not in hashes and (added or previous is None):
+        hashes.append(digest)
     return {**snapshot, "sha256": hashes, "tasks": {**snapshot["tasks"], **added}}
 
 

@@ -67,6 +67,12 @@ def add_parser(subparsers) -> None:
         "--tasks", metavar="SELECTION", default="all", help="selection expression (default: every task, gated or not)"
     )
     gate.add_argument("--markdown", action="store_true", help="print a Markdown table")
+    gate.add_argument(
+        "--condition",
+        action="append",
+        metavar="switch:K",
+        help="count the switch gate's verdicts at K instead (repeatable; `langgap validate --condition switch:K`)",
+    )
     gate.set_defaults(handler=run_gate)
 
     audit = verbs.add_parser(
@@ -176,6 +182,8 @@ def run_gate(args) -> int:
     from langgap.catalog.coverage import coverage_table, gate_counts
 
     tasks = load_catalog(args.catalog).select(args.tasks)
+    if args.condition:
+        return _switch_gate_counts(args, tasks)
     print(coverage_table(gate_counts(tasks), markdown=args.markdown))
     ungated = sum(t.gate is None for t in tasks)
     if ungated:
@@ -190,6 +198,29 @@ def run_gate(args) -> int:
             f"{len(taken)} of {len(tasks)} verdict(s) taken from {len(sources)} task(s) of another catalog, with "
             f"{SAME_TRIAL} (the oracle column counts a source's episodes once per task that takes its verdict)"
         )
+    return 0
+
+
+def _switch_gate_counts(args, tasks: list[Task]) -> int:
+    """`tasks gate --condition switch:K`: the switch verdicts at each K, counted as the plain ones are."""
+    import dataclasses
+
+    from langgap.catalog.catalog import registry_path
+    from langgap.catalog.coverage import coverage_table, gate_counts
+    from langgap.catalog.switch_verdicts import read_switch_verdicts
+    from langgap.gate.switch import switch_conditions
+
+    verdicts = read_switch_verdicts(registry_path(args.catalog))
+    for index, condition in enumerate(switch_conditions(args.condition)):
+        at_k = [dataclasses.replace(t, gate=verdicts.get(t.id, {}).get(condition)) for t in tasks]
+        print(("\n" if index else "") + f"{condition}:")
+        print(coverage_table(gate_counts(at_k), markdown=args.markdown))
+        ungated = sum(t.gate is None for t in at_k)
+        if ungated:
+            print(
+                f"{ungated} of {len(tasks)} task(s) not gated at {condition}: unproven until the switch gate runs "
+                f"(langgap validate --catalog {args.catalog} --condition {condition} --record)"
+            )
     return 0
 
 

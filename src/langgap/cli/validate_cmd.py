@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import asdict
 from pathlib import Path
 
 from langgap.catalog.task import INFEASIBLE, SAME_TRIAL, unproven
@@ -51,6 +52,14 @@ def add_parser(subparsers) -> None:
         "every task's own environment reset to each init state (with --stepping, on the execution flags' "
         "workers), no policy run",
     )
+    parser.add_argument(
+        "--condition",
+        action="append",
+        metavar="switch:K",
+        help="the switch gate instead (repeatable): per task and K, the oracle must follow an instruction switched "
+        "at policy step K on 95%% of the init states, else the task is unproven at that K; --record keeps the "
+        "verdicts in <registry>.switch-gate.json",
+    )
     parser.add_argument("--out", metavar="FILE", help="write the report as JSON (a row per task, the claims)")
     parser.add_argument(
         "--record",
@@ -59,6 +68,11 @@ def add_parser(subparsers) -> None:
     )
     add_gate_options(parser)
     parser.set_defaults(handler=run)
+
+
+def _check_resume(args) -> None:
+    if args.resume and args.run is None:
+        raise LangGapError("--resume needs --run (the directory of the validation to continue)")
 
 
 def run_gate(
@@ -72,8 +86,7 @@ def run_gate(
 ):
     """Run the feasibility gate with the options of `add_gate_options`; returns its `Validation`. Searched
     demonstrations go beside the catalog's registry when `recording` (the verdicts will name them)."""
-    if args.resume and args.run is None:
-        raise LangGapError("--resume needs --run (the directory of the validation to continue)")
+    _check_resume(args)
     budget = args.search_budget
     if budget is not None and budget < 0:
         raise LangGapError(f"--search-budget must be >= 0, got {budget}")
@@ -105,6 +118,8 @@ def run(args) -> int:
 
     if args.claims_only:
         return _claims_only(args)
+    if args.condition:
+        return _switch_gate(args)
     policy = args.policy or DEFAULT_POLICY
     found = run_gate(args, args.catalog, args.tasks, args.inits, policy, blind=args.blind, recording=args.record)
     if found.inherited:
@@ -129,6 +144,40 @@ def run(args) -> int:
     return 0 if found.passed else 1
 
 
+def _switch_gate(args) -> int:
+    """The switch gate (`langgap.gate.switch`): the oracle under each `switch:K`; its flags that vary or add to
+    the plain gate's episodes are refused."""
+    from langgap.gate.switch import record_switch, switch_conditions, switch_table_text, validate_switch
+
+    plain_only = {"--blind": args.blind, "--search-budget": args.search_budget is not None}
+    given = [flag for flag, present in plain_only.items() if present]
+    if given:
+        raise LangGapError(f"--condition runs the switch gate, which has no {' or '.join(given)}")
+    _check_resume(args)
+    policy = args.policy or DEFAULT_POLICY
+    conditions = switch_conditions(args.condition)
+    rows = validate_switch(
+        args.catalog,
+        args.tasks,
+        conditions,
+        inits=args.inits,
+        options=execution_options(args),
+        run=args.run,
+        resume=args.resume,
+        policy=policy,
+        stepping=args.stepping,
+    )
+    print(switch_table_text(rows))
+    if args.out:
+        data = [{**asdict(r), "feasible": r.feasible, "reason": r.reason} for r in rows]
+        Path(args.out).write_text(json.dumps({"switch": data}, indent=1) + "\n", encoding="utf-8")
+        print(f"wrote {args.out}")
+    if args.record:
+        path = record_switch(args.catalog, rows, inits=args.inits, policy=policy, stepping=args.stepping)
+        print(f"recorded switch verdicts in {path}")
+    return 0 if all(r.feasible for r in rows) else 1
+
+
 def _claims_only(args) -> int:
     """The claims about starts alone; the flags of a gate that runs a policy are refused."""
     from langgap.catalog.catalog import load_catalog
@@ -143,6 +192,7 @@ def _claims_only(args) -> int:
         "--run": args.run is not None,
         "--resume": args.resume,
         "--search-budget": args.search_budget is not None,
+        "--condition": bool(args.condition),
     }
     given = [flag for flag, present in policy_flags.items() if present]
     if given:

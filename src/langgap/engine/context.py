@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from langgap.catalog.catalog import Catalog
 from langgap.catalog.task import DEFAULT_STYLE, Task
+from langgap.engine.plan import PlannedEpisode
 from langgap.policies.base import PrivilegedContext, TaskContext
 
 
@@ -35,4 +36,22 @@ def task_context(
             goal_expression=str(task.goal),
             instruction_goals=instruction_goals,
         ),
+    )
+
+
+def planned_context(planned: PlannedEpisode, task: Task, catalog: Catalog, style: str) -> TaskContext:
+    """The context of one planned episode of `task`: its init state, seed, condition and first instruction;
+    a switch's first instruction asks for its first task's goal (what a reference that follows it pursues)."""
+    key = planned.key
+    return task_context(
+        task,
+        catalog,
+        init_index=key.init_index,
+        seed=key.seed,
+        style=style,
+        condition=key.condition,
+        instruction=planned.instruction,
+        instruction_goals=((planned.instruction, str(catalog.get(planned.started_as).goal)),)
+        if planned.started_as
+        else (),
     )

@@ -18,7 +18,7 @@ from langgap import stack
 from langgap.catalog.catalog import Catalog
 from langgap.catalog.files import scene_key
 from langgap.catalog.task import Task
-from langgap.engine.context import task_context
+from langgap.engine.context import planned_context
 from langgap.engine.plan import PlannedEpisode
 from langgap.engine.rollout import StepHook, run_episode
 from langgap.goals import Goal
@@ -80,20 +80,7 @@ def execute_episode(
 ) -> EpisodeRecord:
     """Run one planned episode. A malformed action is a policy failure (recorded); any other exception
     propagates, for the caller to treat as an infrastructure error."""
-    key = planned.key
-    context = task_context(
-        task,
-        catalog,
-        init_index=key.init_index,
-        seed=key.seed,
-        style=style,
-        condition=key.condition,
-        instruction=planned.instruction,
-        # A switch starts under another task's instruction: a reference that follows it pursues that task's goal.
-        instruction_goals=((planned.instruction, str(catalog.get(planned.started_as).goal)),)
-        if planned.started_as
-        else (),
-    )
+    context = planned_context(planned, task, catalog, style)
     started = time.perf_counter()
     common = dict(
         policy=policy_name,

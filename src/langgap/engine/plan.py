@@ -161,25 +161,29 @@ def build_plan(
             )
         for condition in conditions:
             k = switch_step(condition)
-            if k and k >= task.max_steps:
-                raise CatalogError(
-                    f"{condition}: {task.id} ends at step {task.max_steps}, before its instruction would switch"
-                )
             for init_index in range(first_init, first_init + episodes):
                 instruction = None if k else condition_instruction(task, catalog, condition, style, init_index)
                 for repeat in range(repeats):
                     key = EpisodeKey(task.id, init_index, episode_seed(seed, init_index, repeat), condition)
                     if k:
-                        plan.append(_switch_episode(key, task, catalog, style, k))
+                        plan.append(switch_episode(key, task, catalog, style))
                     else:
                         plan.append(PlannedEpisode(key, instruction, scene=scene_key(task)))
     return plan
 
 
-def _switch_episode(key: EpisodeKey, task: Task, catalog: Catalog, style: str, k: int) -> PlannedEpisode:
-    """A `switch:K` episode: under its first task's instruction until policy step K, then the task's own."""
+def switch_episode(key: EpisodeKey, task: Task, catalog: Catalog, style: str) -> PlannedEpisode:
+    """A `switch:K` episode (K from `key.condition`): under its first task's instruction until policy step K,
+    then the task's own. A K the task never reaches is a CatalogError."""
     from langgap.catalog.files import scene_key
 
+    k = switch_step(key.condition)
+    if k is None:
+        raise CatalogError(f"unknown condition {key.condition!r} ({CONDITION_HELP})")
+    if k >= task.max_steps:
+        raise CatalogError(
+            f"{key.condition}: {task.id} ends at step {task.max_steps}, before its instruction would switch"
+        )
     first = switch_source(task, catalog, style, key.seed)
     return PlannedEpisode(
         key,

@@ -25,9 +25,17 @@ from gymnasium.error import ResetNeeded
 
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
 from langgap.catalog.task import DEFAULT_STYLE
-from langgap.engine.context import task_context
+from langgap.engine.context import planned_context
 from langgap.engine.episode import scene_goals
-from langgap.engine.plan import CONDITIONS, PlannedEpisode, condition_instruction, episode_seed
+from langgap.engine.plan import (
+    CONDITION_HELP,
+    PlannedEpisode,
+    condition_instruction,
+    episode_seed,
+    switch_episode,
+    switch_step,
+    unknown_conditions,
+)
 from langgap.engine.watch import SceneWatch
 from langgap.errors import LangGapError
 from langgap.policies.base import PolicySpec
@@ -119,6 +127,7 @@ class LangGapTaskEnv(gym.Env):
         self._watch: SceneWatch | None = None
         self._context = None
         self._planned: PlannedEpisode | None = None
+        self._instructions: list[tuple[int, str]] = []  # the episode's instruction timeline so far
         self._done = False
         self.action_space = spaces.Box(-1.0, 1.0, shape=(ACTION_DIM,), dtype=np.float32)
         self.observation_space = self._observation_space(image_size)
@@ -150,7 +159,9 @@ class LangGapTaskEnv(gym.Env):
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         """Start an episode. `options`: `init_index` (default: drawn from `np_random`) and `condition`
-        (the harness's language conditions: given, empty, shuffled, source; default given)."""
+        (the harness's language conditions: given, empty, shuffled, source, nonsense, switch:K; default given).
+        Under `switch:K` the observation's instruction is the first task's until policy step K (the
+        observation after the K-th step carries the task's own), as in `langgap eval`."""
         super().reset(seed=seed)
         options = dict(options or {})
         unknown = sorted(set(options) - set(_OPTIONS))
@@ -165,25 +176,21 @@ class LangGapTaskEnv(gym.Env):
                 f"init_index must be an integer in 0..{len(sim.init_states) - 1} for {self.task.id}, got {init_index!r}"
             )
         condition = options.get("condition", "given")
-        if condition not in CONDITIONS:
-            raise LangGapError(f"unknown condition {condition!r} (known: {', '.join(CONDITIONS)})")
+        if not isinstance(condition, str) or unknown_conditions((condition,)):
+            raise LangGapError(f"unknown condition {condition!r} ({CONDITION_HELP})")
         self._run_seed = run_seed(seed, self._run_seed, self.np_random)
         init_index = int(init_index)
-        env_seed = episode_seed(self._run_seed, init_index)
-        instruction = condition_instruction(self.task, self._catalog, condition, self.style, init_index)
+        key = EpisodeKey(self.task.id, init_index, episode_seed(self._run_seed, init_index), condition)
         # The harness's plan entry for this episode (what `langgap eval` would run and record).
-        self._planned = PlannedEpisode(EpisodeKey(self.task.id, init_index, env_seed, condition), instruction)
-        self._context = task_context(
-            self.task,
-            self._catalog,
-            init_index=init_index,
-            seed=env_seed,
-            style=self.style,
-            condition=condition,
-            instruction=instruction,
-        )
+        if switch_step(condition) is not None:
+            self._planned = switch_episode(key, self.task, self._catalog, self.style)
+        else:
+            instruction = condition_instruction(self.task, self._catalog, condition, self.style, init_index)
+            self._planned = PlannedEpisode(key, instruction)
+        self._context = planned_context(self._planned, self.task, self._catalog, self.style)
+        self._instructions = [(0, self._planned.instruction)]
         with global_rng_kept():
-            sim.reset(init_index, seed=env_seed, render=False)  # shown after settling, as in the harness
+            sim.reset(init_index, seed=key.seed, render=False)  # shown after settling, as in the harness
             sim.settle(capture=self.cameras)  # the observation's images, taken where robosuite samples
             self._watch = SceneWatch(sim, self._goals)
         self._done = False
@@ -205,21 +212,30 @@ class LangGapTaskEnv(gym.Env):
             self._watch.observe()
         truncated = sim.truncated and not success
         self._done = success or truncated
+        # The instruction the next observation carries: a switch takes effect at its policy step.
+        self._instructions += [(k, text) for k, text in self._planned.changes if k == sim.steps]
         return self._observation(), 1.0 if success else 0.0, success, truncated, self._info(success)
 
     def _observation(self) -> dict[str, Any]:
         seen = self._sim.observe(self.cameras)
         observation: dict[str, Any] = dict(seen.images)
         observation["state"] = seen.state
-        observation["instruction"] = self._context.instruction
+        observation["instruction"] = self._instructions[-1][1]
         if self.privileged:
             observation["privileged"] = {key: np.array(v, dtype=np.float64) for key, v in seen.privileged.items()}
         return observation
 
     def _info(self, success: bool) -> dict[str, Any]:
         watch, task = self._watch, self.task
+        switched = (self._planned.started_as, self._instructions[1][0]) if len(self._instructions) > 1 else None
         outcome = classify(
-            task.id, task.kind, task.source, success, watch.reached, wrong_order=watch.wrong_order(success)
+            task.id,
+            task.kind,
+            task.source,
+            success,
+            watch.reached,
+            wrong_order=watch.wrong_order(success),
+            switched=switched,
         )
         return {
             "task_id": task.id,
@@ -232,6 +248,7 @@ class LangGapTaskEnv(gym.Env):
             "outcome": str(outcome),
             "goals_holding": watch.holding(),  # the scene's task goals (its own included) true now
             "reached": dict(watch.reached),
+            "instructions": list(self._instructions),  # (policy step, instruction) of each one sent so far
         }
 
     # -- rendering and lifetime ----------------------------------------------------------------

@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from langgap.catalog.switch_verdicts import SwitchVerdicts, read_switch_verdicts, snapshot_switch_gates
 from langgap.catalog.task import GateResult
 from langgap.catalog.verdicts import snapshot_gates
 from langgap.errors import LangGapError
@@ -27,6 +28,7 @@ class Run:
     records: list[EpisodeRecord]
     gates: dict[str, GateResult] = field(default_factory=dict)  # the feasibility verdicts of its tasks
     gate_hashes: list[str] | None = None  # SHA-256 of the verdict files of its snapshot (None: no snapshot)
+    switch_gates: SwitchVerdicts = field(default_factory=dict)  # the switch gate's verdicts of its tasks, per K
 
     @property
     def privilege(self) -> Privilege:
@@ -59,6 +61,17 @@ def live_gates(spec: dict) -> dict[str, GateResult]:
     return {task.id: task.gate for task in catalog if task.gate is not None}
 
 
+def live_switch_gates(spec: dict) -> SwitchVerdicts:
+    """The switch verdicts in the run's catalog's switch verdict file now (empty when it has none or cannot
+    be read)."""
+    from langgap.catalog.catalog import registry_path
+
+    try:
+        return read_switch_verdicts(registry_path(spec["catalog"]))
+    except (KeyError, LangGapError):
+        return {}
+
+
 def load_runs(paths: list[str | Path]) -> list[Run]:
     """Read runs from their stores (while they are being written, too)."""
     runs = []
@@ -69,5 +82,9 @@ def load_runs(paths: list[str | Path]) -> list[Run]:
             records = store.records()
         gates = live_gates(spec) if snapshot is None else snapshot_gates(snapshot)
         hashes = None if snapshot is None else list(snapshot["sha256"])
-        runs.append(Run(f"{spec.get('policy', '?')} ({Path(path).name})", Path(path), spec, records, gates, hashes))
+        # Runs stored before the snapshot kept switch verdicts read the live file, as for the plain ones.
+        switch = (snapshot or {}).get("switch")
+        switch_gates = live_switch_gates(spec) if switch is None else snapshot_switch_gates(switch)
+        name = f"{spec.get('policy', '?')} ({Path(path).name})"
+        runs.append(Run(name, Path(path), spec, records, gates, hashes, switch_gates))
     return runs

@@ -14,8 +14,9 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 from langgap.catalog.labels import ALL_EXTENDED_DIMENSIONS, EXTENDED_DIMENSIONS, SPLIT_ORDER, SUITE_ORDER
+from langgap.catalog.switch_verdicts import SwitchVerdicts, accepted
 from langgap.catalog.task import BEYOND_DIMENSIONS, GateResult
-from langgap.engine.plan import repeat_of, switch_step
+from langgap.engine.plan import SWITCH, repeat_of, switch_step
 from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Outcome, Privilege, achieved
 from langgap.report.answer import Answer
 from langgap.report.card import PROTOCOL_ITEMS, protocol_card
@@ -201,16 +202,20 @@ class SwitchRow:
     k: int
     group: str
     classes: dict[str, Rate]  # `SWITCH_CLASSES` name -> its share
+    tasks: int = 0  # the group's tasks
+    unproven: tuple[str, ...] = ()  # its tasks the switch gate has not accepted at K (marked ⚠)
 
     def as_dict(self) -> dict:
         first = next(iter(self.classes.values()))
         shares = {name: r.rate for name, r in self.classes.items()}
         cis = {f"{name}_ci": list(r.ci) for name, r in self.classes.items()}
-        return {"k": self.k, "group": self.group, "episodes": first.episodes, "gaps": first.gaps, **shares, **cis}
+        counts = {"episodes": first.episodes, "gaps": first.gaps, "tasks": self.tasks, "unproven": list(self.unproven)}
+        return {"k": self.k, "group": self.group, **counts, **shares, **cis}
 
 
-def switch_rows(records: list[EpisodeRecord]) -> list[SwitchRow]:
-    """Per K of the run's `switch:K` conditions, per dimension, then all extended and original tasks."""
+def switch_rows(records: list[EpisodeRecord], verdicts: SwitchVerdicts | None = None) -> list[SwitchRow]:
+    """Per K of the run's `switch:K` conditions, per dimension, then all extended and original tasks, each
+    naming its tasks without an accepted switch verdict at K in `verdicts` (the run's snapshot)."""
     rows = []
     for k in sorted({k for r in records if (k := switch_step(r.condition)) is not None}):
         switched = [r for r in records if switch_step(r.condition) == k]
@@ -231,7 +236,12 @@ def switch_rows(records: list[EpisodeRecord]) -> list[SwitchRow]:
                 )
                 for name, outcomes in SWITCH_CLASSES.items()
             }
-            rows.append(SwitchRow(k, group, classes))
+            inits: dict[str, set[int]] = defaultdict(set)
+            for r in members:
+                inits[r.task_id].add(r.init_index)
+            condition = f"{SWITCH}{k}"
+            unproven = tuple(t for t in sorted(inits) if not accepted(verdicts or {}, t, condition, inits[t]))
+            rows.append(SwitchRow(k, group, classes, len(inits), unproven))
     return rows
 
 
@@ -415,7 +425,7 @@ def results(run: Run) -> RunResults:
         gate_source=run.gate_source,
         against_originals=against_sources(given),
         default_task=default_task(extended),
-        switches=switch_rows(run.records),
+        switches=switch_rows(run.records, run.switch_gates),
     )
 
 

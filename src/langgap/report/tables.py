@@ -361,10 +361,12 @@ def condition_table(run: RunResults) -> Table | None:
 
 def switch_table(run: RunResults) -> Table | None:
     """What the policy did after its instruction changed at step K (`switch:K`), per K and dimension, each
-    share with its 95% interval; None for a run without a switch. Paired against `given` in the conditions."""
+    share with its 95% interval; None for a run without a switch. Paired against `given` in the conditions.
+    ⚠ counts the group's tasks the switch gate has not accepted at K (unproven there), named in the title."""
     if not run.switches:
         return None
-    headers = ["K", "Dimension", "Episodes", *(f"{name.capitalize()} %, 95% CI" for name in SWITCH_CLASSES), "Gaps"]
+    headers = ["K", "Dimension", "Episodes", *(f"{name.capitalize()} %, 95% CI" for name in SWITCH_CLASSES)]
+    headers += ["Gaps", f"{CAPPED_MARK} unproven at K"]
     rows = [
         [
             str(row.k),
@@ -372,6 +374,7 @@ def switch_table(run: RunResults) -> Table | None:
             str(next(iter(row.classes.values())).episodes),
             *(f"{pct(r.rate)} {ci(r)}" for r in row.classes.values()),
             str(next(iter(row.classes.values())).gaps),
+            f"{len(row.unproven)} of {row.tasks}" if row.unproven else "",
         ]
         for row in run.switches
     ]
@@ -379,7 +382,16 @@ def switch_table(run: RunResults) -> Table | None:
         f"Instruction switched at step K — {run.label} (persisted: after the switch it did what the first "
         "instruction asked; other: another scene task)"
     )
+    unproven = sorted({(row.k, task) for row in run.switches for task in row.unproven})
+    if unproven:
+        named = ", ".join(f"{task} at K={k}" for k, task in unproven[:SHOWN_UNPROVEN])
+        more = len(unproven) - SHOWN_UNPROVEN
+        title += f"; {CAPPED_MARK} the switch gate (oracle ≥ 95 % under switch:K) has not accepted {named}"
+        title += f" and {more} more (the JSON report's `switches` lists them)" if more > 0 else ""
     return Table(title, headers, rows)
+
+
+SHOWN_UNPROVEN = 6  # task and K pairs a switch table's title names
 
 
 def comparison_table(summary: Summary) -> Table | None:

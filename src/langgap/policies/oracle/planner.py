@@ -181,8 +181,81 @@ def put_down(agent: Agent) -> Program:
     yield from back_off(agent)
 
 
-def replan(agent: Agent, goal: goals.Goal) -> Program:
-    """A new goal midway through the episode (its instruction changed): put down what the hand holds,
-    then the whole program for the new goal from the scene as it is."""
+# The state an articulated part rests in (closed, off), the goal atom that restores it, and the one that leaves it.
+_REST = {"close": ("Close", "Open"), "off": ("Turnoff", "Turnon")}
+LEFT_REST = 0.1  # share of the way to the open (on) state a part must have moved to count as opened
+OVERHANG_MARGIN = 0.02  # m: a place this close to beneath a part's footprint is under it
+
+
+def opened_since(start: Scene, scene: Scene) -> list[tuple[str, str]]:
+    """The articulated parts that were not open (on) in `start` and have since moved toward it by more than
+    `LEFT_REST` of the way — what the episode so far opened or turned on, if only partly — each with the
+    rest state (close, off) that undoes it. One name per part (a fixture's first joint is also listed under
+    the fixture's name)."""
+    found: list[tuple[str, str]] = []
+    for name in scene.articulated:
+        then, now = start.articulation(name), scene.articulation(name)
+        for rest, (_, leave) in _REST.items():
+            away = _STATE[leave]
+            if rest not in now.intervals or away not in now.intervals or then.holds(away):
+                continue
+            travel = then.target(away) - then.qpos
+            opened = bool(travel) and (now.qpos - then.qpos) / travel > LEFT_REST
+            if opened and not any(_same_part(scene, name, other) for other, _ in found):
+                found.append((name, rest))
+    return found
+
+
+def _same_part(scene: Scene, a: str, b: str) -> bool:
+    """Whether two articulation names are one moving part (a fixture's name and its first joint's region)."""
+    known = scene.articulated
+    return a in known and b in known and np.array_equal(scene.raw[f"art/{a}/body"], scene.raw[f"art/{b}/body"])
+
+
+def _negated(goal: goals.Goal) -> tuple[Predicate, ...]:
+    """The atoms `goal` mentions inside a `Not`."""
+    if isinstance(goal, goals.Not):
+        return goals.atoms(goal.part)
+    if isinstance(goal, goals.Atom):
+        return ()
+    return tuple(p for part in goal.parts for p in _negated(part))
+
+
+def _reached_places(scene: Scene, predicate: Predicate) -> list[np.ndarray]:
+    """Where the hand must go for `predicate`: the object it moves and its target, or the part's handle."""
+    if predicate.name in ("On", "In"):
+        obj, target = predicate.args
+        places = [scene.pos(obj)]
+        return places + [scene.pos(target) if scene.has_entity(target) else scene.region(target).pos]
+    return [scene.articulation(predicate.args[0]).handle]
+
+
+def needs_rest(scene: Scene, part: str, state: str, goal: goals.Goal) -> bool:
+    """Whether `goal` needs the opened (turned-on) `part` back in its rest `state` before anything else: the
+    goal negates its leaving that state, or — where the goal does not mention the part — the part as it
+    sticks out now overhangs a place the goal's hand must reach (an open drawer above the one to open, or
+    above an object to move)."""
+    leave = _REST[state][1]
+    if any(p.name == leave and _same_part(scene, p.args[0], part) for p in _negated(goal)):
+        return True
+    mentioned = goals.atoms(goal)
+    if any(any(_same_part(scene, arg, part) for arg in p.args) for p in mentioned):
+        return False  # the goal says what it wants of the part; its program sees to it
+    box = scene.articulation(part).bbox
+    lo, hi = box[:3] - OVERHANG_MARGIN, box[3:] + OVERHANG_MARGIN
+    return any(
+        bool(np.all(place[:2] >= lo[:2]) and np.all(place[:2] <= hi[:2]) and place[2] < box[2])
+        for p in mentioned
+        for place in _reached_places(scene, p)
+    )
+
+
+def replan(agent: Agent, goal: goals.Goal, start: Scene | None = None) -> Program:
+    """A new goal midway through the episode (its instruction changed): put down what the hand holds, close
+    (turn off) what the episode opened (turned on) since `start` — the scene as the episode began — where
+    the new goal needs it (`needs_rest`), then the whole program for the new goal from the scene as it is."""
     yield from put_down(agent)
+    for part, state in opened_since(start, agent.scene) if start is not None else ():
+        if needs_rest(agent.scene, part, state, goal):
+            yield from _achieve(agent, Predicate(_REST[state][0], (part,)))
     return (yield from program(agent, goal))

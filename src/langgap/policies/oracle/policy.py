@@ -21,8 +21,8 @@ class OraclePolicy:
     from the episode's seed and init index (and `noise_seed`, for another draw), for diverse
     demonstrations. `drawer` fixes how drawers are opened (`skills.DrawerSkill.parse`).
     It follows its instruction: when the instruction in force changes to one that asks for another goal
-    (`PrivilegedContext.goal_for`; condition `switch:K`), it puts down what it holds and replans from the
-    current state.
+    (`PrivilegedContext.goal_for`; condition `switch:K`), it puts down what it holds, closes what it opened
+    where the new goal needs it closed (`planner.needs_rest`) and replans from the current state.
     """
 
     spec = PolicySpec(sees_state=True, sees_goal=True)
@@ -39,6 +39,7 @@ class OraclePolicy:
         self._context: TaskContext | None = None
         self._agent = Agent(self.drawer)
         self._program: Program | None = None
+        self._start: Scene | None = None  # the scene the episode's first action saw
         self._rng = np.random.default_rng(0)
 
     def config(self) -> dict:
@@ -64,18 +65,22 @@ class OraclePolicy:
         self._goal = parse_goal(self._goal_strings)
         self._agent = Agent(self.drawer)
         self._program = None
+        self._start = None
         noise_key = [context.seed, context.init_index] + ([self.noise_seed] if self.noise_seed else [])
         self._rng = np.random.default_rng(noise_key)
 
     def act(self, observation: Observation) -> np.ndarray:
         self._agent.scene = Scene(simulator_state(observation, "the oracle"))
+        if self._start is None:
+            self._start = self._agent.scene
         instruction = current_instruction(observation, self._context)
         if instruction != self._instruction:
             self._instruction = instruction
             goal_strings = self.goal_of(self._context.privileged, instruction)
             if goal_strings != self._goal_strings:  # asked for another goal: replan from where the scene is
                 self._goal_strings, self._goal = goal_strings, parse_goal(goal_strings)
-                self._program = replan(self._agent, self._goal) if self._program is not None else None
+                started = self._program is not None
+                self._program = replan(self._agent, self._goal, self._start) if started else None
         if self._program is None:
             self._program = program(self._agent, self._goal)
         action = next(self._program)
