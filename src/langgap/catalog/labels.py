@@ -24,6 +24,8 @@ DIMENSION_LABEL = {
     "task": "Task (LIBERO-PRO)",
     "language": "Language",
 }
+# Every extended dimension reports name, in table order: LangGap's, then other catalogs' (libero-pro's).
+KNOWN_DIMENSIONS = tuple(d for d in DIMENSION_LABEL if d != "original")
 
 SPLIT_ORDER = SPLITS
 SPLIT_LABEL = {"original": "Original tasks", "train": "Extended, training split", "heldout": "Extended, held-out"}

@@ -8,7 +8,13 @@ from langgap.report.formats import DIAGNOSIS_FORMATS, FORMATS
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser("report", help="tables, diagnoses and plots from one or more runs")
-    parser.add_argument("run", metavar="RUN", help="run directory")
+    parser.add_argument(
+        "run",
+        metavar="RUN",
+        nargs="+",
+        help="run directories, side by side (the first is the reference for comparisons; one policy's runs on "
+        "several catalogs get a column group per catalog)",
+    )
     parser.add_argument("--compare", nargs="+", default=[], metavar="RUN2", help="more runs, side by side")
     parser.add_argument("--format", choices=sorted(FORMATS), default="md")
     parser.add_argument(
@@ -36,7 +42,7 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     from langgap.report import diagnosis_text, load_runs, render, summarize
 
-    paths = [args.run, *args.compare]
+    paths = [*args.run, *args.compare]
     published = not args.no_published
     if args.summary:
         if args.format not in DIAGNOSIS_FORMATS:

@@ -45,6 +45,21 @@ def _latex_escape(text: str) -> str:
     return text
 
 
+def _latex_headers(table: Table) -> list[str]:
+    """The header lines: with column groups, a row spanning each group over its columns (ruled below),
+    then the columns without their group's name."""
+    if not table.column_groups:
+        return [" & ".join(_latex_escape(h) for h in table.headers) + r" \\"]
+    spans, rules, headers, first = [], [], [], 1
+    for name, width in table.column_groups:
+        spans.append(rf"\multicolumn{{{width}}}{{c}}{{{_latex_escape(name)}}}" if name else "")
+        if name:
+            rules.append(rf"\cmidrule(lr){{{first}-{first + width - 1}}}")
+        headers += [h.removeprefix(f"{name}: ") for h in table.headers[first - 1 : first - 1 + width]]
+        first += width
+    return [" & ".join(spans) + r" \\", " ".join(rules), " & ".join(_latex_escape(h) for h in headers) + r" \\"]
+
+
 def latex_table(table: Table) -> str:
     lines = [
         r"\begin{table}[ht]",
@@ -53,7 +68,7 @@ def latex_table(table: Table) -> str:
         r"\small",
         r"\begin{tabular}{l" + "c" * (len(table.headers) - 1) + "}",
         r"\toprule",
-        " & ".join(_latex_escape(h) for h in table.headers) + r" \\",
+        *_latex_headers(table),
         r"\midrule",
     ]
     lines += [" & ".join(_latex_escape(c) for c in row) + r" \\" for row in table.rows]

@@ -14,7 +14,7 @@ import shutil
 import urllib.parse
 from pathlib import Path
 
-from langgap.catalog.labels import DIMENSION_LABEL
+from langgap.catalog.labels import DIMENSION_LABEL, label
 from langgap.records import Outcome
 from langgap.report.published import Published
 from langgap.report.summary import Summary, shown_dimensions
@@ -35,6 +35,7 @@ input.filter { margin: .25em 0; padding: .2em .4em; width: 20em; }
 svg text { font: 11px system-ui, sans-serif; }
 select.column-filter { margin: .25em 0 .25em .5em; }
 table.heatmap td { text-align: center; min-width: 2em; }
+tr.column-groups td { text-align: center; font-weight: bold; background: #f3f3f3; }
 .clips { display: flex; flex-wrap: wrap; gap: 1em; }
 figure { margin: 0; width: 370px; } figure video { width: 100%; background: #000; }
 figcaption { font-size: .9em; }
@@ -111,11 +112,20 @@ def _rows(table: Table) -> str:
     return "".join(rows)
 
 
+def _column_groups(table: Table) -> str:
+    """A header row naming each column group over its columns (cells, not headers: a click on a column's
+    header sorts by that column)."""
+    if not table.column_groups:
+        return ""
+    spans = "".join(f'<td colspan="{width}">{html.escape(name)}</td>' for name, width in table.column_groups)
+    return f'<tr class="column-groups">{spans}</tr>'
+
+
 def _table(table: Table, ident: str) -> str:
     heads = "".join(f"<th>{html.escape(h)}</th>" for h in table.headers)
     return (
         f"<section><h2>{html.escape(table.title)}</h2>{_filters(table, ident)}"
-        f'<table class="report {table.kind}" id="{ident}"><thead><tr>{heads}</tr></thead>'
+        f'<table class="report {table.kind}" id="{ident}"><thead>{_column_groups(table)}<tr>{heads}</tr></thead>'
         f"<tbody>{_rows(table)}</tbody></table></section>"
     )
 
@@ -178,8 +188,9 @@ def outcome_chart(summary: Summary) -> str:
         parts.append(f'<line x1="{left}" x2="{width}" y1="{y(tick):.1f}" y2="{y(tick):.1f}" stroke="#eee"/>')
         parts.append(f'<text x="{left - 6}" y="{y(tick) + 4:.1f}" text-anchor="end">{100 * tick:.0f}</text>')
     for j, group in enumerate(groups):
-        label = html.escape(DIMENSION_LABEL[group])
-        parts.append(f'<text x="{left + (j + 0.5) * slot:.1f}" y="{y(0) + 30}" text-anchor="middle">{label}</text>')
+        name = label(DIMENSION_LABEL, group)
+        x_mid = left + (j + 0.5) * slot
+        parts.append(f'<text x="{x_mid:.1f}" y="{y(0) + 30}" text-anchor="middle">{html.escape(name)}</text>')
         for i, run in enumerate(summary.runs):
             row = next((o for o in run.outcomes if o.group == group), None)
             if row is None or row.episodes == 0:
@@ -190,8 +201,7 @@ def outcome_chart(summary: Summary) -> str:
             for outcome, colour in OUTCOME_COLOURS.items():
                 if (share := row.shares[outcome]) <= 0:
                     continue
-                name = f"{DIMENSION_LABEL[group]}: {OUTCOME_NAME[outcome]}"
-                title = html.escape(f"{run.label} — {name} {100 * share:.1f} %")
+                title = html.escape(f"{run.label} — {name}: {OUTCOME_NAME[outcome]} {100 * share:.1f} %")
                 parts.append(
                     f'<rect class="segment" data-outcome="{outcome}" x="{x:.1f}" y="{y(base + share):.1f}" '
                     f'width="{bar * 0.9:.1f}" height="{y(base) - y(base + share):.1f}" fill="{colour}">'

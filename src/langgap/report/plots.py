@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from langgap.catalog.labels import DIMENSION_LABEL
+from langgap.catalog.labels import DIMENSION_LABEL, label
 from langgap.report.summary import RunResults, Summary, shown_dimensions
 
 
@@ -37,7 +37,7 @@ def dimension_plot(summary: Summary, out: Path) -> Path:
             errs[0].append(100 * (r.rate - low))
             errs[1].append(100 * (high - r.rate))
         ax.bar(xs, ys, width, yerr=errs, capsize=3, label=run.label)
-    ax.set_xticks(range(len(groups)), [DIMENSION_LABEL[g] for g in groups], rotation=15)
+    ax.set_xticks(range(len(groups)), [label(DIMENSION_LABEL, g) for g in groups], rotation=15)
     ax.set_ylabel("success rate (%), 95% Wilson CI")
     ax.set_ylim(0, 105)
     ax.legend(fontsize=8)
@@ -69,10 +69,10 @@ def confusion_plots(run: RunResults, out: Path) -> list[Path]:
                     ax.text(x, y, str(value), ha="center", va="center", fontsize=7)
         ax.set_xlabel("achieved")
         ax.set_ylabel("intended")
-        label = "_".join(intended[0].split("/")[:2])
-        ax.set_title(f"{run.label}: {label}", fontsize=8)
+        scene = "_".join(intended[0].split("/")[:2])
+        ax.set_title(f"{run.label}: {scene}", fontsize=8)
         fig.tight_layout()
-        path = out / f"confusion_{label}.png"
+        path = out / f"confusion_{scene}.png"
         fig.savefig(path, dpi=120)
         plt.close(fig)
         paths.append(path)

@@ -13,9 +13,14 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
-from langgap.catalog.labels import ALL_EXTENDED_DIMENSIONS, EXTENDED_DIMENSIONS, SPLIT_ORDER, SUITE_ORDER
+from langgap.catalog.labels import (
+    EXTENDED_DIMENSIONS,
+    KNOWN_DIMENSIONS,
+    SPLIT_ORDER,
+    SUITE_ORDER,
+)
 from langgap.catalog.switch_verdicts import SwitchVerdicts, accepted
-from langgap.catalog.task import BEYOND_DIMENSIONS, GateResult
+from langgap.catalog.task import GateResult
 from langgap.engine.plan import SWITCH, repeat_of, switch_step
 from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Outcome, Privilege, achieved
 from langgap.report.answer import Answer
@@ -36,6 +41,17 @@ def oracle_ceiling(records: Iterable[EpisodeRecord], gates: Mapping[str, GateRes
             inits[r.task_id].add(r.init_index)
     counts = [gates[task].oracle_on(sorted(indices)) for task, indices in inits.items()]
     return sum(s for s, _ in counts), sum(n for _, n in counts)
+
+
+def dimension_order(present: Iterable[str]) -> list[str]:
+    """The dimensions in `present`: those reports know in `KNOWN_DIMENSIONS` order, then any other, sorted."""
+    present = set(present)
+    return [d for d in KNOWN_DIMENSIONS if d in present] + sorted(present - set(KNOWN_DIMENSIONS))
+
+
+def extended_dimensions(records: Iterable[EpisodeRecord]) -> list[str]:
+    """The dimensions of `records`' extended tasks (`dimension_order`)."""
+    return dimension_order(r.dimension for r in records if r.kind == "extended")
 
 
 def rate(group: str, records: Iterable[EpisodeRecord], gates: Mapping[str, GateResult] | None = None) -> Rate:
@@ -155,7 +171,7 @@ def spread(records: list[EpisodeRecord], run_seed: int) -> list[SpreadRow]:
     if len(repeats) < 2:
         return []
     groups = [("original", lambda r: r.kind == "original"), ("extended", lambda r: r.kind == "extended")]
-    groups += [(d, lambda r, d=d: r.kind == "extended" and r.dimension == d) for d in ALL_EXTENDED_DIMENSIONS]
+    groups += [(d, lambda r, d=d: r.kind == "extended" and r.dimension == d) for d in extended_dimensions(records)]
     rows = []
     for name, member in groups:
         chosen = [r for r in records if member(r)]
@@ -220,7 +236,7 @@ def switch_rows(records: list[EpisodeRecord], verdicts: SwitchVerdicts | None = 
     for k in sorted({k for r in records if (k := switch_step(r.condition)) is not None}):
         switched = [r for r in records if switch_step(r.condition) == k]
         extended = [r for r in switched if r.kind == "extended"]
-        groups = [(d, [r for r in extended if r.dimension == d]) for d in ALL_EXTENDED_DIMENSIONS]
+        groups = [(d, [r for r in extended if r.dimension == d]) for d in extended_dimensions(extended)]
         groups += [("extended", extended), ("original", [r for r in switched if r.kind == "original"])]
         for group, members in groups:
             if not members:
@@ -386,7 +402,7 @@ def results(run: Run) -> RunResults:
     given = [r for r in run.records if r.condition == "given"]
     extended = [r for r in given if r.kind == "extended"]
     originals = [r for r in given if r.kind == "original"]
-    order = {d: i for i, d in enumerate(("original", *ALL_EXTENDED_DIMENSIONS))}
+    order = {d: i for i, d in enumerate(("original", *KNOWN_DIMENSIONS))}
     info = {r.task_id: r for r in given}
     per_outcome: dict[str, Counter] = defaultdict(Counter)
     for r in given:
@@ -398,7 +414,7 @@ def results(run: Run) -> RunResults:
         for t in rates_by(given, lambda r: r.task_id, gates=gates)
     ]
     tasks.sort(key=lambda row: (order.get(row.dimension, len(order)), row.rate.group))
-    outcome_groups = [(d, [r for r in extended if r.dimension == d]) for d in ALL_EXTENDED_DIMENSIONS]
+    outcome_groups = [(d, [r for r in extended if r.dimension == d]) for d in extended_dimensions(extended)]
     outcome_groups += [("extended", extended), ("original", originals)]
     return RunResults(
         name=run.name,
@@ -408,7 +424,7 @@ def results(run: Run) -> RunResults:
         episodes=len(run.records),
         gaps=sum(not r.judged for r in run.records),
         by_source=[rate("original", originals, gates), rate("extended", extended, gates), rate("total", given, gates)],
-        by_dimension=rates_by(extended, lambda r: r.dimension, ALL_EXTENDED_DIMENSIONS, gates),
+        by_dimension=rates_by(extended, lambda r: r.dimension, KNOWN_DIMENSIONS, gates),
         by_suite=rates_by(
             given, lambda r: f"{r.suite}/{r.kind}", [f"{s}/{k}" for s in SUITE_ORDER for k in KINDS], gates
         ),
@@ -430,9 +446,78 @@ def results(run: Run) -> RunResults:
 
 
 def shown_dimensions(runs: list[RunResults]) -> list[str]:
-    """The paper's dimensions (always shown), then those beyond them that some run has episodes of."""
-    present = {r.group for run in runs for r in run.by_dimension if r.episodes}
-    return [*EXTENDED_DIMENSIONS, *(d for d in BEYOND_DIMENSIONS if d in present)]
+    """The paper's dimensions (always shown), then those beyond them that some run has episodes of:
+    `langgap-beyond`'s, then other catalogs' (libero-pro's `task`, ...)."""
+    return [*EXTENDED_DIMENSIONS, *(d for d in present_dimensions(runs) if d not in EXTENDED_DIMENSIONS)]
+
+
+def present_dimensions(runs: list[RunResults]) -> list[str]:
+    """The dimensions some run has episodes of (`dimension_order`)."""
+    return dimension_order(r.group for run in runs for r in run.by_dimension if r.episodes)
+
+
+def policy_identity(run: RunResults) -> tuple[str, ...]:
+    """What makes two runs runs of one policy: its name, arguments and configuration hash (protocol card)."""
+    return tuple(run.card[item] for item in ("policy", "policy arguments", "policy config hash"))
+
+
+@dataclass(frozen=True)
+class SideBySide:
+    """Runs of one policy on several catalogs, side by side: one column group per catalog (its originals,
+    each of its dimensions, all its extended tasks), one row per policy (a second run of a policy on a
+    catalog it already has in a row starts another row)."""
+
+    catalogs: list[str]  # in the order the runs were given
+    groups: dict[str, list[str]]  # catalog -> `original`, its dimensions, `extended`
+    rows: list[dict[str, RunResults]]  # catalog -> the row's run on it
+
+    @staticmethod
+    def rate(run: RunResults, group: str) -> Rate | None:
+        """The run's rate of a column group's column (None: the run has no such tasks)."""
+        if group in ("original", "extended"):
+            return run.source(group)
+        return next((r for r in run.by_dimension if r.group == group), None)
+
+    def as_dict(self) -> list[dict]:
+        """One row per (row, catalog, group) the runs have: the JSON report's `side_by_side` section."""
+        out = []
+        for number, row in enumerate(self.rows):
+            for catalog, run in row.items():
+                for group in self.groups[catalog]:
+                    if (r := self.rate(run, group)) is not None:
+                        data = r.as_dict()
+                        del data["group"]
+                        policy = run.card["policy"]
+                        out.append(
+                            {"row": number, "policy": policy, "catalog": catalog, "run": run.name, "id": group, **data}
+                        )
+        return out
+
+
+def side_by_side(runs: list[RunResults]) -> SideBySide | None:
+    """The runs side by side by catalog, when some policy was run on two or more catalogs (None otherwise:
+    runs of different policies on different catalogs are compared as any runs are)."""
+    by_policy: dict[tuple[str, ...], list[RunResults]] = defaultdict(list)
+    for run in runs:
+        by_policy[policy_identity(run)].append(run)
+    if not any(len({run.card["catalog"] for run in group}) > 1 for group in by_policy.values()):
+        return None
+    rows: list[dict[str, RunResults]] = []
+    for group in by_policy.values():
+        mine: list[dict[str, RunResults]] = []  # this policy's rows: a run goes to the first without its catalog
+        for run in group:
+            catalog = run.card["catalog"]
+            row = next((row for row in mine if catalog not in row), None)
+            if row is None:
+                mine.append(row := {})
+            row[catalog] = run
+        rows += mine
+    catalogs = list(dict.fromkeys(run.card["catalog"] for run in runs))
+    groups = {
+        catalog: ["original", *present_dimensions([r for r in runs if r.card["catalog"] == catalog]), "extended"]
+        for catalog in catalogs
+    }
+    return SideBySide(catalogs, groups, rows)
 
 
 @dataclass
@@ -443,6 +528,7 @@ class Summary:
     comparisons: list[PairedTest]  # the first run against each other run, on matched episodes
     mismatches: dict[str, list[str]]  # other run -> protocol items in which it differs from the first
     refused: bool = False  # paired tests left out because protocols differ (and no `allow_mismatch`)
+    side_by_side: SideBySide | None = None  # one policy's runs on several catalogs (`side_by_side`)
 
     @property
     def privileges(self) -> set[Privilege]:
@@ -457,6 +543,7 @@ class Summary:
             "comparisons": [t.as_dict() for t in self.comparisons],
             "protocol_mismatches": self.mismatches,
             "comparisons_refused": self.refused,
+            "side_by_side": self.side_by_side.as_dict() if self.side_by_side else [],
         }
         sections = {
             "by_source": lambda run: run.by_source,
@@ -511,8 +598,9 @@ def keyed(run: Run, member: Callable[[EpisodeRecord], bool] = lambda r: True) ->
 
 def summarize(runs: list[Run], *, allow_mismatch: bool = False) -> Summary:
     """Aggregate runs once, for every table and format. Runs whose protocols differ from the first
-    run's are not paired episode by episode unless `allow_mismatch` is given; nor is a run paired with
-    a compared `blind` run whose protocol differs from its own."""
+    run's are not paired episode by episode unless `allow_mismatch` is given. Each run is paired with the
+    first compared `blind` run whose protocol (its catalog included) equals its own, or with `allow_mismatch`
+    the first `blind` run. Runs of one policy on several catalogs are also put side by side (`side_by_side`)."""
     results_ = [results(run) for run in runs]
     first = results_[0]
     mismatches = {other.name: protocol_differences(first, other) for other in results_[1:]}
@@ -522,14 +610,18 @@ def summarize(runs: list[Run], *, allow_mismatch: bool = False) -> Summary:
     if not refused:
         tests = (paired(f"{runs[0].name} vs {other.name}", keyed(runs[0]), keyed(other)) for other in runs[1:])
         comparisons = [t for t in tests if t is not None]
-    blind = next((i for i, run in enumerate(runs) if run.spec.get("policy") == BLIND_POLICY), None)
+    blinds = [
+        (run, result) for run, result in zip(runs, results_, strict=True) if run.spec.get("policy") == BLIND_POLICY
+    ]
+
+    def extended(r: EpisodeRecord) -> bool:
+        return r.kind == "extended" and r.condition == "given"
+
     for run, result in zip(runs, results_, strict=True):
-        if blind is None or run is runs[blind]:
-            continue
-        if allow_mismatch or not protocol_differences(results_[blind], result):
-
-            def extended(r: EpisodeRecord) -> bool:
-                return r.kind == "extended" and r.condition == "given"
-
-            result.against_blind = paired("blind vs extended", keyed(runs[blind], extended), keyed(run, extended))
-    return Summary(results_, comparisons, mismatches, refused)
+        others = [(blind, blind_result) for blind, blind_result in blinds if blind is not run]
+        # The blind run with the same protocol (on the same catalog, when runs of several catalogs are given).
+        matched = (blind for blind, blind_result in others if not protocol_differences(blind_result, result))
+        blind = next(matched, others[0][0] if others and allow_mismatch else None)
+        if blind is not None:
+            result.against_blind = paired("blind vs extended", keyed(blind, extended), keyed(run, extended))
+    return Summary(results_, comparisons, mismatches, refused, side_by_side(results_))

@@ -10,7 +10,15 @@ from langgap.records import JUDGED_OUTCOMES, Outcome, Privilege
 from langgap.report.card import CARD_ITEMS
 from langgap.report.published import Published
 from langgap.report.stats import PairedTest, Rate
-from langgap.report.summary import SWITCH_CLASSES, RunResults, Summary, TaskRow, shown_dimensions
+from langgap.report.summary import (
+    PRIVILEGE_MARK,
+    SWITCH_CLASSES,
+    RunResults,
+    SideBySide,
+    Summary,
+    TaskRow,
+    shown_dimensions,
+)
 
 SOURCE_LABEL = {"original": "Original (LIBERO)", "extended": "Extended (LangGap)", "total": "Total"}
 OUTCOME_LABEL = {
@@ -71,7 +79,9 @@ class Table:
 
     `filters` names the categorical columns a page can filter on; `kind` tells a page what the grid
     is: a `table`, a `heatmap` (counts, shaded by their share of the row) or a `gallery` (filmed
-    episodes, the last column the clip's file).
+    episodes, the last column the clip's file). `column_groups` spans the headers from left to right
+    ((name, number of columns); an empty name: no group); a grouped header reads `name: column`, which
+    formats that can span a group over its columns (LaTeX) shorten to `column`.
     """
 
     title: str
@@ -79,6 +89,7 @@ class Table:
     rows: list[list[str]]
     filters: tuple[str, ...] = ()
     kind: str = "table"
+    column_groups: tuple[tuple[str, int], ...] = ()
 
 
 def pct(x: float) -> str:
@@ -177,8 +188,9 @@ def dimension_table(summary: Summary, published: Published | None = None) -> Tab
 
 
 def beyond_table(summary: Summary) -> Table | None:
-    """Table VII's form for the dimensions beyond the paper's (ordering, negation, paraphrase, attribute
-    reference) that the runs have; None when they have none."""
+    """Table VII's form for the dimensions beyond the paper's that the runs have (`langgap-beyond`'s ordering,
+    negation, paraphrase, attribute reference; other catalogs' such as libero-pro's task and language); None
+    when they have none."""
     beyond = shown_dimensions(summary.runs)[len(EXTENDED_DIMENSIONS) :]
     if not beyond:
         return None
@@ -186,8 +198,34 @@ def beyond_table(summary: Summary) -> Table | None:
     for run in summary.runs:
         by_dim = {r.group: r for r in run.by_dimension}
         rows.append([run.label, *(rate_cell(r) + f" ({r.tasks})" if (r := by_dim.get(d)) else "–" for d in beyond)])
-    headers = ["Method", *(DIMENSION_LABEL[d] for d in beyond)]
-    return Table("Beyond Table VII — new dimensions (success %, 95% CI, (tasks))", headers, rows)
+    headers = ["Method", *(label(DIMENSION_LABEL, d) for d in beyond)]
+    return Table("Beyond Table VII — other dimensions (success %, 95% CI, (tasks))", headers, rows)
+
+
+def _side_by_side_label(row: dict[str, RunResults]) -> str:
+    """A row's policy, marked as its runs are (`RunResults.label`), and the runs' directories."""
+    first = next(iter(row.values()))
+    mark = PRIVILEGE_MARK.get(first.privilege)
+    directories = ", ".join(run.path.name for run in row.values())
+    return f"{first.card['policy']}{f' {mark}' if mark else ''} ({directories})"
+
+
+def side_by_side_table(summary: Summary) -> Table | None:
+    """One policy's runs on several catalogs: a column group per catalog (its originals, each of its
+    dimensions, all its extended tasks), success % with its 95% interval; None unless a policy was run
+    on two or more catalogs (`summary.side_by_side`)."""
+    side: SideBySide | None = summary.side_by_side
+    if side is None:
+        return None
+    names = {**DIMENSION_LABEL, "extended": "All extended"}
+    headers = ["Policy", *(f"{c}: {label(names, g)}" for c in side.catalogs for g in side.groups[c])]
+    groups = (("", 1), *((c, len(side.groups[c])) for c in side.catalogs))
+    rows = []
+    for row in side.rows:
+        cells = [rate_cell(side.rate(row[c], g)) if c in row else "–" for c in side.catalogs for g in side.groups[c]]
+        rows.append([_side_by_side_label(row), *cells])
+    title = "Side by side — one policy on several catalogs (success %, 95% CI; columns: catalog: tasks)"
+    return Table(title, headers, rows, column_groups=groups)
 
 
 def _count_cell(successes: int, episodes: int) -> str:
@@ -437,8 +475,11 @@ def confusion_tables(run: RunResults) -> list[Table]:
 
 
 def full_report(summary: Summary, published: Published | None = None) -> list[Table]:
-    """Every table of `langgap report` (with the paper's published rows when `published` is given)."""
+    """Every table of `langgap report` (with the paper's published rows when `published` is given); runs of
+    one policy on several catalogs side by side first, after the protocol card."""
     tables = [protocol_table(summary)]
+    if (catalogs := side_by_side_table(summary)) is not None:
+        tables.append(catalogs)
     for run in summary.runs:
         tables += [source_table(run), outcome_table(run)]
         if (videos := video_table(run)) is not None:
@@ -468,7 +509,10 @@ def full_report(summary: Summary, published: Published | None = None) -> list[Ta
 
 def diagnosis(summary: Summary, published: Published | None = None) -> list[Table]:
     """The short diagnosis: success by dimension (runs side by side) and what each policy did instead."""
-    tables = [protocol_table(summary), dimension_table(summary, published)]
+    tables = [protocol_table(summary)]
+    if (catalogs := side_by_side_table(summary)) is not None:
+        tables.append(catalogs)
+    tables.append(dimension_table(summary, published))
     if (beyond := beyond_table(summary)) is not None:
         tables.append(beyond)
     if (comparison := comparison_table(summary)) is not None and summary.refused:
