@@ -13,6 +13,7 @@ from langgap.engine.spec import ExecutionOptions
 from langgap.gate.rows import goals_exclude
 from langgap.gate.validation import validate
 from langgap.goals import conjunction
+from langgap.stack import physics_stack
 from langgap.version import code_version
 from tests.support.harness import REPO, run_cli
 
@@ -122,10 +123,11 @@ def test_cli_validate_writes_report_and_records_verdicts(probe_registry, tmp_pat
     catalog = load_catalog_file(probe_registry)
     gate = catalog.get("spatial/s0/ramekin-on-plate").gate
     assert gate is not None and gate.made_by == f"noop, langgap {code_version()}, exact stepping"
+    assert gate.physics == physics_stack() and gate.other_stack == []  # the stack it was made on, per verdict
     assert catalog.get("spatial/s0/black-bowl-1-on-plate").gate is None
     assert gate.proof == "" and not gate.feasible
     shown = run_cli("tasks", "show", "spatial/s0/ramekin-on-plate", "--catalog", str(probe_registry))
-    assert f"made by: {gate.made_by}" in shown.stdout
+    assert f"made by: {gate.made_by}" in shown.stdout and "made on another physics stack" not in shown.stdout
     assert f"evidence:    {unproven}" in shown.stdout and "infeasible" not in shown.stdout
 
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from langgap import stack
-from langgap.catalog.catalog import load_catalog
+from langgap.catalog.catalog import available_catalogs, load_catalog
 from langgap.catalog.files import task_bddl_path
 
 # A generated (extended) task, used to prove generated BDDL loads, resets and renders.
@@ -86,6 +86,21 @@ def _catalog() -> Check:
     )
 
 
+def _verdict_stacks() -> Check:
+    """How many shipped gate verdicts were made on another physics stack than the installed one: information,
+    not a failure (re-gating the tasks is what changes it)."""
+    from langgap.catalog.coverage import on_other_stacks
+
+    counts = {name: on_other_stacks(list(load_catalog(name))) for name in available_catalogs()}
+    shown = ", ".join(f"{name} {other} of {gated}" for name, (other, gated) in counts.items() if gated)
+    return Check(
+        "verdict stacks",
+        True,
+        f"gate verdicts made on another physics stack than the installed one: {shown} "
+        "(langgap tasks gate --catalog C names what differs)",
+    )
+
+
 def _env_checks() -> Iterator[Check]:
     from langgap.sim.env import EnvOptions, TaskEnv
 
@@ -143,6 +158,7 @@ CHECKS: tuple[Callable[[], Check | Iterator[Check]], ...] = (
     _renderer,
     _assets,
     _catalog,
+    _verdict_stacks,
     _env_checks,
     _settle_canary,
 )

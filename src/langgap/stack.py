@@ -107,3 +107,36 @@ def physics_stack(stepping: str = DEFAULT_STEPPING, seed_scheme: str = DEFAULT_S
     if seed_scheme != DEFAULT_SEED_SCHEME:
         chosen["seed_scheme"] = seed_scheme
     return versions | CONVENTIONS | chosen
+
+
+# Chosen per run, not installed: a verdict made with `fast` stepping is compared with the installed stack
+# under the same stepping (its `made_by` names it).
+CHOSEN = ("stepping", "seed_scheme")
+UNRECORDED = "stack not recorded"
+
+
+def stack_differences(made_on: dict, reference: dict) -> list[str]:
+    """How the physics stack `made_on` (a result's or a verdict's `physics`) differs from `reference`: one
+    `name value (not value)` per entry that differs, `made_on`'s value first (`none` where one lacks the entry);
+    [`UNRECORDED`] when `made_on` is empty; [] when they are the same."""
+    if not made_on:
+        return [UNRECORDED]
+    keys = sorted(made_on.keys() | reference.keys())
+    return [
+        f"{key} {made_on.get(key) or 'none'} (not {reference.get(key) or 'none'})"
+        for key in keys
+        if made_on.get(key) != reference.get(key)
+    ]
+
+
+def installed_differences(made_on: dict) -> list[str]:
+    """How the physics stack `made_on` differs from the installed one (`stack_differences`), under the stepping
+    and seed scheme `made_on` names: those are chosen per run, not installed."""
+    chosen = tuple((key, made_on[key]) for key in CHOSEN if key in made_on)
+    return stack_differences(made_on, dict(_installed(chosen)))
+
+
+@functools.cache
+def _installed(chosen: tuple[tuple[str, str], ...]) -> tuple[tuple[str, str | None], ...]:
+    # Cached: a catalog's every verdict is compared with it, and reading package metadata is slow.
+    return tuple(physics_stack(**dict(chosen)).items())

@@ -13,6 +13,7 @@ from langgap.catalog.verdicts import read_verdicts, record_verdicts, verdicts_pa
 from langgap.errors import CatalogError
 from langgap.report import load_runs, summarize
 from langgap.report.formats import FORMATS
+from langgap.report.tables import STACK_NOTE
 from tests.support.reports import episode, write_run
 
 DRAWER = "spatial/s2/open-cabinet-bottom-drawer"
@@ -59,12 +60,19 @@ def _run(tmp_path, name: str, successes: dict[str, int], verdicts: dict[str, Gat
     for task, wins in successes.items():
         for init in range(4):
             record = episode("spatial/s0/ramekin-on-plate", init, success=init < wins)
-            records.append(dataclasses.replace(record, task_id=task, suite="libero_spatial", catalog="langgap99"))
+            records.append(
+                dataclasses.replace(record, task_id=task, suite="libero_spatial", catalog="langgap99", physics=STACK)
+            )
     return write_run(tmp_path / name, name, records, catalog=str(registry))
 
 
-UNPROVEN = GateResult(50, 17, False, reason="oracle 17/50", inits=50, failed_inits=[i for i in range(50) if i % 3])
-ACCEPTED = GateResult(50, 50, True, inits=50, failed_inits=[], made_by="oracle, langgap 0.1.0, exact stepping")
+STACK = {"mujoco": "3.2.3", "robosuite": "1.4.1", "start": "fresh-env"}  # the runs' episodes' physics
+UNPROVEN = GateResult(
+    50, 17, False, reason="oracle 17/50", inits=50, failed_inits=[i for i in range(50) if i % 3], physics=STACK
+)
+ACCEPTED = GateResult(
+    50, 50, True, inits=50, failed_inits=[], made_by="oracle, langgap 0.1.0, exact stepping", physics=STACK
+)
 
 
 def test_reports_show_the_ceiling_and_mark_a_task_the_oracle_fails_as_unproven(tmp_path):
@@ -85,6 +93,20 @@ def test_reports_show_the_ceiling_and_mark_a_task_the_oracle_fails_as_unproven(t
     assert "infeasible (proof)" not in markdown and "certified" not in markdown
     assert "caps what any policy can show" not in markdown
     assert "⚠ marks a task the oracle does not do at 95 % on these init states (unproven" in markdown
+
+
+def test_reports_mark_a_ceiling_whose_verdict_was_made_on_another_stack(tmp_path):
+    older = dataclasses.replace(UNPROVEN, physics=STACK | {"robosuite": "1.4.0", "start": "cleared-warmstart"})
+    runs = load_runs([_run(tmp_path, "vla", {DRAWER: 0, BOWL: 2}, {DRAWER: older, BOWL: ACCEPTED})])
+    (run,) = summarize(runs).runs
+    assert run.other_stack == {DRAWER: ["robosuite 1.4.0 (not 1.4.1)", "start cleared-warmstart (not fresh-env)"]}
+    markdown = FORMATS["md"](summarize(runs), None)
+    assert f"| {DRAWER} ⚠ ≠ |" in markdown and f"| {BOWL} |" in markdown and STACK_NOTE in markdown
+    # The same stack: no mark, no note.
+    (tmp_path / "same").mkdir()
+    same_run = _run(tmp_path / "same", "vla", {DRAWER: 0, BOWL: 2}, {DRAWER: UNPROVEN, BOWL: ACCEPTED})
+    same = FORMATS["md"](summarize(load_runs([same_run])), None)
+    assert f"| {DRAWER} ⚠ |" in same and "≠" not in same
 
 
 def test_reports_mark_a_task_with_a_proof_infeasible(tmp_path):

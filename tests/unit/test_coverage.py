@@ -6,7 +6,7 @@ import dataclasses
 import json
 
 from langgap.catalog.catalog import load_catalog, registry_path
-from langgap.catalog.coverage import gate_counts
+from langgap.catalog.coverage import gate_counts, on_other_stacks
 from langgap.catalog.task import GateResult
 from langgap.cli.main import main
 
@@ -51,7 +51,18 @@ def test_tasks_gate_prints_the_recorded_verdicts(capsys):
         "| suite | dimension | tasks | gated | accepted | rejected | infeasible (proof) | unproven | oracle |"
     )
     rejected = len(recorded) - accepted
-    assert lines[-1] == (
+    assert lines[-1].startswith("verdicts made on the installed physics stack: ") and lines[-2] == ""
+    assert lines[-3] == (
         f"| total | all | 99 | {len(recorded)} | {accepted} | {rejected} | {proven} | {rejected - proven} "
         f"| {successes}/{episodes} |"
     )
+
+
+def test_doctor_says_how_many_shipped_verdicts_were_made_on_another_stack():
+    from langgap.doctor import CHECKS
+
+    (check,) = [c for c in CHECKS if c.__name__ == "_verdict_stacks"]
+    found = check()
+    other, gated = on_other_stacks(list(load_catalog("langgap99")))
+    assert found.ok and gated == 99  # information, never a failure
+    assert f"langgap99 {other} of {gated}" in found.detail

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from langgap import proofs
@@ -9,6 +11,7 @@ from langgap.catalog.catalog import registry_path
 from langgap.catalog.verdicts import read_verdicts
 from langgap.gate.recording import record
 from langgap.gate.rows import TaskValidation
+from langgap.stack import physics_stack
 
 DRAWER = "spatial/s2/open-cabinet-bottom-drawer"
 BOWL = "spatial/s2/black-bowl-1-on-plate"
@@ -77,3 +80,14 @@ def test_a_proof_the_episodes_refute_is_not_recorded(registry, monkeypatch):
     with pytest.warns(UserWarning, match="yet the gate did it 2 time"):
         record(str(registry), [_row(DRAWER, 2)], inits=5)
     assert read_verdicts(registry)[DRAWER].proof == ""
+
+
+def test_each_recorded_verdict_keeps_the_stack_it_was_made_on(registry):
+    record(str(registry), [_row(DRAWER, 0), _row(BOWL, 5)], inits=5, proofs={})
+    record(str(registry), [_row(BOWL, 5)], inits=5, stepping="fast", proofs={})  # re-validated: only its verdict
+    verdicts = read_verdicts(registry)
+    assert verdicts[DRAWER].physics == physics_stack() and verdicts[BOWL].physics == physics_stack("fast")
+    # The stepping is chosen per gate, not installed: both were made on the installed stack.
+    assert verdicts[DRAWER].other_stack == verdicts[BOWL].other_stack == []
+    older = dataclasses.replace(verdicts[DRAWER], physics=physics_stack() | {"robosuite": "1.4.0"})
+    assert older.other_stack == ["robosuite 1.4.0 (not 1.4.1)"]

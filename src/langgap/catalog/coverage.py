@@ -8,6 +8,7 @@ task nobody has yet shown to be doable or impossible.
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass
 
 from langgap.catalog.task import DIMENSIONS, Task
@@ -94,3 +95,24 @@ def coverage_table(counts: list[GateCount], *, markdown: bool = False) -> str:
         return "  ".join(cell.ljust(w) if i < 2 else cell.rjust(w) for i, (cell, w) in enumerate(cells))  # names left
 
     return "\n".join(map(line, rows))
+
+
+def on_other_stacks(tasks: list[Task]) -> tuple[int, int]:
+    """(verdicts made on another physics stack than the installed one, verdicts) over the tasks."""
+    gated = [t.gate for t in tasks if t.gate is not None]
+    return sum(bool(gate.other_stack) for gate in gated), len(gated)
+
+
+def stacks_text(tasks: list[Task]) -> str | None:
+    """How many of the tasks' verdicts were made on the installed physics stack and how many on another, with
+    what differs and in how many verdicts (`GateResult.other_stack`); None when no task is gated."""
+    gated = [t.gate for t in tasks if t.gate is not None]
+    if not gated:
+        return None
+    differing = Counter(difference for gate in gated for difference in gate.other_stack)
+    other, _ = on_other_stacks(tasks)
+    text = f"verdicts made on the installed physics stack: {len(gated) - other} of {len(gated)}"
+    if other:
+        named = "; ".join(f"{difference}: {n}" for difference, n in sorted(differing.items()))
+        text += f"; on another: {other} ({named}; re-gate: langgap validate --record)"
+    return text

@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass, field
 from langgap.bddl import Predicate
 from langgap.errors import CatalogError
 from langgap.goals import Goal, goal_strings, witness
+from langgap.stack import installed_differences
 
 KINDS = ("original", "extended")
 # The paper's four dimensions, then the four of the `langgap-beyond` catalog (`catalog/beyond.py`).
@@ -44,7 +45,8 @@ class GateResult:
     verdicts recorded before per-init results were kept), so the oracle's ceiling can be given for
     exactly the init states a run used. `made_by` says which policy, code version and stepping ran the
     gate for this verdict (a file mixes verdicts of several recordings when tasks are re-validated one
-    by one; empty in verdicts recorded before it was kept).
+    by one; empty in verdicts recorded before it was kept), and `physics` the physics stack and conventions
+    it ran on (`langgap.stack.physics_stack`, as results record it; empty: not recorded).
 
     What a verdict shows: a task is doable when a demonstration did it — the oracle, at the gate's
     rate, or `demonstration`, a stored replayable episode (a path relative to the registry's directory)
@@ -63,6 +65,7 @@ class GateResult:
     proof: str = ""
     demonstration: str = ""
     demonstrated_inits: tuple[int, ...] = ()  # init states the oracle failed that a searched episode did
+    physics: dict = field(default_factory=dict)
     # `catalog:task id` whose verdict this is, by identity (the task's `gate_from`); empty: the task's own.
     inherited_from: str = ""
 
@@ -129,6 +132,12 @@ class GateResult:
         if self.reason and self.reason != f"oracle {self.successes}/{self.episodes}":
             text += f"; the gate's reason: {self.reason}"
         return text
+
+    @property
+    def other_stack(self) -> list[str]:
+        """How the physics stack the verdict was made on differs from the installed one (empty: it does not;
+        `langgap.stack.installed_differences`)."""
+        return installed_differences(self.physics)
 
     @property
     def capped(self) -> bool:
@@ -255,7 +264,9 @@ class Task:
             "validated": self.gate is not None,
             "feasible": self.feasible,
             "evidence": self.evidence,
-            "gate": None if self.gate is None else {**asdict(self.gate), "rate": self.gate.rate},
+            "gate": None
+            if self.gate is None
+            else {**asdict(self.gate), "rate": self.gate.rate, "other_stack": self.gate.other_stack},
             "origin": None if self.origin is None else asdict(self.origin),
             "gate_from": self.gate_from,
         }

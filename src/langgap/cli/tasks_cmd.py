@@ -179,12 +179,14 @@ def run_show(args) -> int:
 
 
 def run_gate(args) -> int:
-    from langgap.catalog.coverage import coverage_table, gate_counts
+    from langgap.catalog.coverage import coverage_table, gate_counts, stacks_text
 
     tasks = load_catalog(args.catalog).select(args.tasks)
     if args.condition:
         return _switch_gate_counts(args, tasks)
     print(coverage_table(gate_counts(tasks), markdown=args.markdown))
+    if (stacks := stacks_text(tasks)) is not None:
+        print(f"\n{stacks}" if args.markdown else stacks)
     ungated = sum(t.gate is None for t in tasks)
     if ungated:
         print(
@@ -314,6 +316,8 @@ def _gate_lines(gate) -> list[str]:
         lines.append(f"oracle failed on init states {', '.join(map(str, gate.failed_inits))}")
     if gate.made_by:
         lines.append(f"made by: {gate.made_by}")
+    if gate.other_stack:
+        lines.append(f"made on another physics stack than the installed one: {', '.join(gate.other_stack)}")
     return lines
 
 

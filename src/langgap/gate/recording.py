@@ -67,5 +67,6 @@ def record(
     made_by = f"{policy}, langgap {about['code_version']}, {stepping} stepping"
     if proofs is None:
         proofs = prove_rejected(catalog_name, rows, inits)
-    verdicts = {r.id: r.verdict(inits, made_by, proofs.get(r.id, "")) for r in rows}
+    # Each verdict keeps its own stack: a file mixes verdicts of several recordings (and stacks), `about` is the last's.
+    verdicts = {r.id: r.verdict(inits, made_by, proofs.get(r.id, ""), about["physics"]) for r in rows}
     return record_verdicts(registry_path(catalog_name), verdicts, about)

@@ -50,9 +50,9 @@ class TaskValidation:
         """Whether the oracle's successes and the searched demonstrations together stay below the gate's rate."""
         return bool(self.episodes) and not shown_doable(self.successes, len(self.demonstrated_inits), self.episodes)
 
-    def verdict(self, inits: int, made_by: str = "", proof: str = "") -> GateResult:
-        """The verdict to record, for a gate that ran init states 0..`inits`-1 as `made_by` says (with `proof`,
-        the text of a proof that no policy can do the task, `langgap.proofs`)."""
+    def verdict(self, inits: int, made_by: str = "", proof: str = "", physics: dict | None = None) -> GateResult:
+        """The verdict to record, for a gate that ran init states 0..`inits`-1 as `made_by` says, on the physics
+        stack `physics` (with `proof`, the text of a proof that no policy can do the task, `langgap.proofs`)."""
         return GateResult(
             episodes=self.episodes,
             successes=self.successes,
@@ -64,6 +64,7 @@ class TaskValidation:
             proof=proof,
             demonstration=self.demonstration if self.demonstrated_inits else "",
             demonstrated_inits=tuple(self.demonstrated_inits),
+            physics=dict(physics or {}),
         )
 
 

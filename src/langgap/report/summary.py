@@ -27,6 +27,7 @@ from langgap.report.answer import Answer
 from langgap.report.card import PROTOCOL_ITEMS, protocol_card
 from langgap.report.load import Run
 from langgap.report.stats import PairedTest, Rate
+from langgap.stack import stack_differences
 
 SOURCES = ("original", "extended", "total")
 KINDS = ("original", "extended")
@@ -345,6 +346,16 @@ def capped_because(task_rate: Rate, gate: GateResult | None) -> str | None:
     return None if gate is None else gate.capped_because(task_rate.oracle_successes, task_rate.oracle_episodes)
 
 
+def verdicts_on_other_stacks(gates: Mapping[str, GateResult], episodes: Mapping[str, EpisodeRecord]) -> dict:
+    """Task -> how the physics stack its verdict was made on differs from that of its episode `episodes` gives
+    (`langgap.stack.stack_differences`), for the tasks whose verdict's stack differs: their Oracle % and ⚠
+    rest on other physics than the policy's episodes."""
+    differences = {
+        task: stack_differences(gates[task].physics, r.physics) for task, r in episodes.items() if task in gates
+    }
+    return {task: found for task, found in differences.items() if found}
+
+
 # How tables mark a run whose policy had a privilege (explained by `tables.PRIVILEGE_NOTES`).
 PRIVILEGE_MARK = {Privilege.GOAL: "†", Privilege.STATE: "‡"}
 
@@ -372,6 +383,7 @@ class RunResults:
     spread: list[SpreadRow]  # between-seed spread (runs with --repeats)
     clips: list[Clip]  # filmed episodes (`--video`)
     capped: dict[str, str]  # task -> why it is marked ⚠ (unproven: oracle below target; or infeasible (proof))
+    other_stack: dict[str, list[str]]  # task -> how its verdict's physics stack differs from its episodes'
     gate_source: str  # where the verdicts behind Oracle % and ⚠ come from (`Run.gate_source`)
     against_originals: PairedTest | None  # extended episodes against their sources' (`against_sources`)
     default_task: Rate  # extended episodes that did the scene's original task instead (`default_task`)
@@ -438,6 +450,7 @@ def results(run: Run) -> RunResults:
         spread=spread(given, int(run.spec.get("seed", 0))),
         clips=clips(run),
         capped={t.rate.group: why for t in tasks if (why := capped_because(t.rate, gates.get(t.rate.group)))},
+        other_stack=verdicts_on_other_stacks(gates, info),
         gate_source=run.gate_source,
         against_originals=against_sources(given),
         default_task=default_task(extended),
@@ -565,6 +578,7 @@ class Summary:
                     "spec": run.spec,
                     "card": run.card,
                     "capped_tasks": run.capped,
+                    "other_stack_tasks": run.other_stack,
                     "gate": run.gate_source,
                 }
             )

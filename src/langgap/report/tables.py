@@ -50,6 +50,12 @@ SELECTION_NOTE = (
     "`langgap tasks show ID`)."
 )
 
+STACK_NOTE = (
+    "≠ marks a task whose feasibility verdict (its Oracle % and ⚠) was made on another physics stack than these "
+    "episodes: other package versions, start or image conventions, stepping or seed scheme "
+    "(`langgap report --json`: other_stack_tasks; `langgap tasks show ID`)."
+)
+
 
 def selection_text(run: RunResults) -> str:
     """The run's task selection, as its report's header states it."""
@@ -67,6 +73,7 @@ def notes(summary: Summary, published: Published | None, *, ceiling: bool = True
     shown = [
         (SELECTION_NOTE, ceiling),
         (CEILING_NOTE, ceiling),
+        (STACK_NOTE, ceiling and any(run.other_stack for run in summary.runs)),
         *((note, privilege in summary.privileges) for privilege, note in PRIVILEGE_NOTES.items()),
         (PUBLISHED_NOTE, published is not None),
     ]
@@ -308,12 +315,15 @@ def outcome_table(run: RunResults) -> Table:
 
 
 CAPPED_MARK = "⚠"
+OTHER_STACK_MARK = "≠"
 
 
 def task_label(run: RunResults, task_id: str) -> str:
     """A task's id, marked ⚠ when the oracle does not do it at the target rate (unproven) or it is proven
-    infeasible (`GateResult.capped_because`)."""
-    return f"{task_id} {CAPPED_MARK}" if task_id in run.capped else task_id
+    infeasible (`GateResult.capped_because`), and ≠ when its verdict was made on another physics stack than
+    the run's episodes (`STACK_NOTE`)."""
+    marks = [mark for mark, on in ((CAPPED_MARK, run.capped), (OTHER_STACK_MARK, run.other_stack)) if task_id in on]
+    return " ".join([task_id, *marks])
 
 
 def _instead_cells(t: TaskRow) -> list[str]:

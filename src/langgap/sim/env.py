@@ -18,7 +18,8 @@ Conventions (the ones public LIBERO checkpoints were trained with; see the docs,
 * Nothing is rendered unless a camera is requested.
 * An episode starts as in a freshly built LIBERO environment (what openpi's LIBERO example runs):
   MuJoCo's solver warm start is cleared where a hard reset clears it, by robosuite's reset before its
-  forward passes, and never again: not at the init state, not after settling
+  forward passes (a soft reset makes the two a new rendering simulator makes, too: `_reset_as_fresh_sim`),
+  and never again: not at the init state, not after settling
   (`langgap.stack.CONVENTIONS`, recorded in results).
 * Episode length is capped here (`max_steps` policy steps after `settle()`), never by robosuite's
   horizon, which raises on the step after it.
@@ -49,6 +50,9 @@ ACTION_DIM = 7
 # The robosuite observable whose sampling marks the substep at which robosuite samples every observable
 # (its cameras too): the end-effector position, part of the state LangGap sends.
 _SAMPLED_WITH = "robot0_eef_pos"
+# The forward passes a hard reset of a rendering LIBERO env makes at the model's reference configuration:
+# robosuite's `_initialize_sim`, then `MjRenderContext.__init__` for the new simulator's offscreen context.
+_FRESH_SIM_FORWARDS = 2
 # Far above any episode: robosuite's own horizon must never be what ends an episode.
 _ROBOSUITE_HORIZON = 1_000_000
 
@@ -252,7 +256,7 @@ class TaskEnv:
             finally:
                 self._inner.hard_reset = self.options.hard_reset
         else:
-            self._raw_obs = self._env.reset()
+            self._raw_obs = self._reset_as_fresh_sim()
             if openpi_stream:
                 self._stream = (seed - init_index, init_index + 1, np.random.get_state())
         # robosuite keeps the gripper's commanded opening across soft resets (only a new model zeroes it);
@@ -261,15 +265,35 @@ class TaskEnv:
             robot.gripper.current_action = np.zeros(robot.gripper.dof)
         if init_index is not None:
             self._apply_init_state(init_index)
-        # MuJoCo's solver warm start is not touched here: robosuite's reset (mj_resetData, or a new MjData on a
-        # hard reset) zeroed it before its own forward passes, so it is what a fresh LIBERO environment has at
-        # this init state, whatever ran before (clearing it again would depart from a fresh environment).
+        # MuJoCo's solver warm start is not touched here: robosuite's reset zeroed it (mj_resetData, or a new
+        # MjData on a hard reset) before the forward passes a fresh LIBERO environment makes, so it is what a fresh
+        # environment has at this init state, whatever ran before (clearing it again would depart from one).
         self._captured = {}
         self.t0_hash = self.state_hash()
         self.steps = 0
         self._restart_goal()
         self._reapply_render_flags()
         return self.observe(None if render else ())
+
+    def _reset_as_fresh_sim(self) -> dict:
+        """robosuite's soft reset, with the two forward passes a hard reset of openpi's `OffScreenRenderEnv` makes
+        on its new simulator before placing anything (robosuite's `_initialize_sim`, then the new offscreen render
+        context's) made after `mj_resetData` too: each leaves MuJoCo's solver warm start from which the next
+        forward pass starts, so without them a libero_object scene's settled start differs from openpi's example
+        in the last bits (spatial, goal and libero_10 scenes settle the same either way: docs/parity.md). They are
+        made whether this env renders or not, so an episode's physics never depends on its cameras."""
+        sim = self.sim
+
+        def reset_as_new_simulator() -> None:
+            type(sim).reset(sim)
+            for _ in range(_FRESH_SIM_FORWARDS):
+                sim.forward()
+
+        sim.reset = reset_as_new_simulator
+        try:
+            return self._env.reset()
+        finally:
+            del sim.reset  # back to robosuite's method
 
     def _draw_openpi_stream(self, stream_seed: int, resets: int) -> None:
         """Put NumPy's global RNG where openpi's LIBERO example has it before episode `resets` of a task: seeded
