@@ -40,6 +40,8 @@ class HangingPolicy(NoopPolicy):
 class FlakyPolicy(NoopPolicy):
     """Fails the first time each episode is attempted (state kept in files, so it spans worker processes)."""
 
+    spec = PolicySpec()  # it reads its instruction (the episode's marker is named by it)
+
     def __init__(self, marker_dir: str = ""):
         self.marker_dir = Path(marker_dir)
         self.key = ""
@@ -120,7 +122,9 @@ class ChunkPolicy:
 class ContextRecorder(NoopPolicy):
     """Holds still; appends to `path` what it was told at reset (the context's fields) and whether its
     first observation carried simulator state (`simulator_state`: the schema's type, with an end-effector
-    position): one JSON line per episode. It declares neither privilege."""
+    position): one JSON line per episode. It declares neither privilege, and reads its instruction."""
+
+    spec = PolicySpec()
 
     def __init__(self, path: str = ""):
         self.path = Path(path)
@@ -215,6 +219,8 @@ class OrderBlindOracle(OraclePolicy):
 class InstructionLogPolicy(NoopPolicy):
     """Holds still and appends the instruction in force at each query to a file of its own per episode in
     `log_dir`, so a test sees what reached the policy in whichever process it ran (worker, server)."""
+
+    spec = PolicySpec()  # it reads its instruction
 
     def __init__(self, log_dir: str = ""):
         self.log_dir = Path(log_dir)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from langgap.catalog.task import INFEASIBLE, unproven
 from langgap.cli.eval_cmd import add_stepping_option
-from langgap.cli.execution_flags import add_execution_options, execution_options
+from langgap.cli.execution_flags import add_execution_options, add_share_rollouts_option, execution_options
 from langgap.cli.tasks_cmd import add_catalog_option
 from langgap.errors import LangGapError
 from langgap.gate.rows import FEASIBLE_RATE, FULL_INITS
@@ -51,6 +51,7 @@ def add_parser(subparsers) -> None:
         "every task's own environment reset to each init state (with --stepping, on the execution flags' "
         "workers), no policy run",
     )
+    add_share_rollouts_option(parser)
     parser.add_argument("--out", metavar="FILE", help="write the report as JSON (a row per task, the claims)")
     parser.add_argument(
         "--record",
@@ -69,9 +70,11 @@ def run_gate(
     policy: str = DEFAULT_POLICY,
     blind: bool = False,
     recording: bool = False,
+    share_rollouts: bool = False,
 ):
     """Run the feasibility gate with the options of `add_gate_options`; returns its `Validation`. Searched
-    demonstrations go beside the catalog's registry when `recording` (the verdicts will name them)."""
+    demonstrations go beside the catalog's registry when `recording` (the verdicts will name them);
+    `share_rollouts`: an instruction-blind policy's episodes (`blind`'s) share rollouts."""
     if args.resume and args.run is None:
         raise LangGapError("--resume needs --run (the directory of the validation to continue)")
     budget = args.search_budget
@@ -88,7 +91,7 @@ def run_gate(
         catalog,
         selection,
         inits=inits,
-        options=execution_options(args),
+        options=execution_options(args, share_rollouts=share_rollouts),
         run=args.run,
         resume=args.resume,
         policy=policy,
@@ -106,7 +109,16 @@ def run(args) -> int:
     if args.claims_only:
         return _claims_only(args)
     policy = args.policy or DEFAULT_POLICY
-    found = run_gate(args, args.catalog, args.tasks, args.inits, policy, blind=args.blind, recording=args.record)
+    found = run_gate(
+        args,
+        args.catalog,
+        args.tasks,
+        args.inits,
+        policy,
+        blind=args.blind,
+        recording=args.record,
+        share_rollouts=args.share_rollouts,
+    )
     print(table_text(found.rows))
     _print_claims(found, args.out)
     if args.record:
@@ -136,6 +148,7 @@ def _claims_only(args) -> int:
         "--run": args.run is not None,
         "--resume": args.resume,
         "--search-budget": args.search_budget is not None,
+        "--share-rollouts": args.share_rollouts,
     }
     given = [flag for flag, present in policy_flags.items() if present]
     if given:
