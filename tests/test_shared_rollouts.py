@@ -51,7 +51,7 @@ def _results(run) -> list[dict]:
     return [{k: v for k, v in row.items() if k not in MEASURED} for row in store_rows(run)]
 
 
-def test_shared_rollouts_give_every_episode_the_record_of_its_own_rollout(runs):
+def test_shared_rollouts_give_each_episode_its_own_record(runs):
     """`eval --share-rollouts` (`runs`): every field but the measured ones equals the separate run's."""
     root, stdout = runs
     # 3 tasks x 2 conditions share one rollout per init state.

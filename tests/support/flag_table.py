@@ -80,7 +80,7 @@ _RAY_WORK = "tests/test_ray.py::test_every_kind_of_work_runs_on_a_worker_node_th
 _SMALL_BC_CLI = "tests/test_small_bc.py::test_training_is_deterministic_and_checkpoint_round_trips"
 _HDF5_CLI = "tests/test_hdf5.py::test_cli_refuses_to_overwrite_and_rejects_what_is_not_a_collection"
 _SERVE = "tests/test_flags.py::test_serve_binds_the_host_and_port_it_is_given"
-_SHARED_ROLLOUTS = "tests/test_shared_rollouts.py::test_shared_rollouts_give_every_episode_the_record_of_its_own_rollout"
+_SHARED_ROLLOUTS = "tests/test_shared_rollouts.py::test_shared_rollouts_give_each_episode_its_own_record"
 _LEROBOT_EXPORT = "tests/test_lerobot_demos.py::test_export_lerobot_cli_writes_the_dataset_it_is_told"
 
 
