@@ -91,6 +91,33 @@ def test_a_resumed_shared_run_reruns_only_the_missing_members_of_a_rollout(runs,
     assert "12 already stored, 0 run" in again.stdout and "shared rollouts" not in again.stdout
 
 
+def test_a_malformed_action_ends_every_member_still_running_as_its_own_episode_would(short_catalog, tmp_path):
+    """`ErrsOnInitsPolicy` holds still (instruction-blind, as `noop`) and errs at its 5th call on init state 0."""
+    policy = ("--policy", "tests.support.policies:ErrsOnInitsPolicy", "--policy-arg", "inits=0")
+    common = (*policy, "--catalog", short_catalog, "--episodes", "2", "--workers", "0", "--no-progress", "--quiet")
+    separate = run_cli("eval", *common, "--run", str(tmp_path / "separate"))
+    shared = run_cli("eval", *common, "--share-rollouts", "--run", str(tmp_path / "shared"))
+    assert separate.returncode == shared.returncode == 0, shared.stderr
+    assert "shared rollouts: 6 episodes in 2 rollouts" in shared.stdout
+    rows = _results(tmp_path / "shared")
+    assert rows == _results(tmp_path / "separate")
+    assert {(r["init_index"], r["outcome"]) for r in rows} == {(0, "policy_error"), (1, "no_goal_reached")}
+
+
+def test_a_failure_after_a_member_ended_keeps_its_record_and_leaves_the_rest_as_gaps(scene_catalog, tmp_path):
+    """`BlindFailingAt` fails at its 80th call: after the source's success (about step 70), before the limit."""
+    policy = ("--policy", "tests.support.policies:BlindFailingAt", "--max-attempts", "1", "--episodes", "1")
+    common = (*policy, "--catalog", scene_catalog, "--workers", "1", "--no-progress", "--quiet")
+    separate = run_cli("eval", *common, "--run", str(tmp_path / "separate"))
+    shared = run_cli("eval", *common, "--share-rollouts", "--run", str(tmp_path / "shared"))
+    assert separate.returncode == shared.returncode == 3, shared.stderr  # a run that ends with gaps
+    assert "shared rollouts: 3 episodes in 1 rollouts" in shared.stdout
+    judged = [[r for r in _results(tmp_path / run) if r["status"] == "done"] for run in ("separate", "shared")]
+    assert judged[0] == judged[1] and [r["task_id"] for r in judged[1]] == [TINY_TASK]
+    gaps = [[r["task_id"] for r in _results(tmp_path / run) if r["status"] == "gap"] for run in ("separate", "shared")]
+    assert gaps[0] == gaps[1] and len(gaps[1]) == 2
+
+
 def test_a_policy_that_reads_its_instruction_never_shares_a_rollout(short_catalog, tmp_path):
     """`InstructionLogPolicy` holds still like `noop` but reads its instruction: each episode is its own."""
     logs = tmp_path / "logs"

@@ -13,6 +13,7 @@ import numpy as np
 
 from langgap.policies.base import PolicySpec, current_instruction
 from langgap.policies.oracle import OraclePolicy
+from langgap.policies.oracle.policy import BlindPolicy
 from langgap.policies.simple import NoopPolicy, RandomPolicy
 from langgap.sim.privileged_schema import PrivilegedState
 
@@ -206,6 +207,24 @@ class ErrsOnInitsPolicy(NoopPolicy):
     def act(self, observation):
         self.calls += 1
         return np.full(7, np.nan) if self.erring and self.calls == 5 else super().act(observation)
+
+
+class BlindFailingAt(BlindPolicy):
+    """`blind`, but its call `at` raises (an infrastructure failure, not a malformed action)."""
+
+    def __init__(self, at: int = 80):
+        super().__init__()
+        self.at = at
+
+    def reset(self, context):
+        super().reset(context)
+        self.calls = 0
+
+    def act(self, observation):
+        self.calls += 1
+        if self.calls == self.at:
+            raise ConnectionError("the model server went away")
+        return super().act(observation)
 
 
 class OrderBlindOracle(OraclePolicy):

@@ -66,7 +66,9 @@ def _switched(planned: PlannedEpisode, instructions: list[tuple[int, str]]) -> t
     return planned.started_as, instructions[1][0]
 
 
-def _policy_fields(env: TaskEnv, policy: Policy, *, policy_name: str, policy_hash: str, worker: int, attempts: int):
+def _policy_fields(
+    env: TaskEnv, policy: Policy, *, policy_name: str, policy_hash: str, worker: int, attempts: int
+) -> dict:
     """The record fields that say which policy ran, what it saw, and where."""
     return dict(
         policy=policy_name,
