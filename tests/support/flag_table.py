@@ -81,6 +81,7 @@ _RAY_WORK = "tests/test_ray.py::test_every_kind_of_work_runs_on_a_worker_node_th
 _SMALL_BC_CLI = "tests/test_small_bc.py::test_training_is_deterministic_and_checkpoint_round_trips"
 _HDF5_CLI = "tests/test_hdf5.py::test_cli_refuses_to_overwrite_and_rejects_what_is_not_a_collection"
 _SERVE = "tests/test_flags.py::test_serve_binds_the_host_and_port_it_is_given"
+_SHARED_ROLLOUTS = "tests/test_shared_rollouts.py::test_shared_rollouts_give_each_episode_its_own_record"
 _LEROBOT_EXPORT = "tests/test_lerobot_demos.py::test_export_lerobot_cli_writes_the_dataset_it_is_told"
 
 
@@ -162,6 +163,11 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
         ProvenBy("tests/test_ray.py::test_cluster_run_survives_a_killed_worker_and_equals_the_local_backend"),
         Refused((*_EVAL, "--ray-address", "127.0.0.1:1"), "--ray-address needs --backend ray"),
     ),
+    "eval --share-rollouts": (
+        Differs(_EVAL, ("--share-rollouts",)),
+        ProvenBy(_SHARED_ROLLOUTS),
+        ProvenBy("tests/test_shared_rollouts.py::test_a_policy_that_reads_its_instruction_never_shares_a_rollout"),
+    ),
     "eval --shared-policy": (
         ProvenBy(
             "tests/test_local_batching.py::test_two_workers_sharing_one_batching_policy_give_the_episodes_of_unshared_workers"
@@ -217,6 +223,10 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "validate --inits": (ProvenBy(_VALIDATE_CLI),),
     "validate --policy": (ProvenBy(_VALIDATE_CLI), _claims_refuse(("--policy", "blind"))),
     "validate --blind": (Differs(_VALIDATE, ("--blind",)),),
+    "validate --share-rollouts": (
+        ProvenBy("tests/test_shared_rollouts.py::test_validate_blind_shares_the_blind_rollouts_only"),
+        _claims_refuse(("--share-rollouts",)),
+    ),
     "validate --claims-only": (
         ProvenBy("tests/test_validate.py::test_claims_only_resets_every_task_without_a_policy"),
     ),

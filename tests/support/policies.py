@@ -13,6 +13,7 @@ import numpy as np
 
 from langgap.policies.base import PolicySpec, current_instruction
 from langgap.policies.oracle import OraclePolicy
+from langgap.policies.oracle.policy import BlindPolicy
 from langgap.policies.simple import NoopPolicy, RandomPolicy
 from langgap.sim.privileged_schema import PrivilegedState
 
@@ -39,6 +40,8 @@ class HangingPolicy(NoopPolicy):
 
 class FlakyPolicy(NoopPolicy):
     """Fails the first time each episode is attempted (state kept in files, so it spans worker processes)."""
+
+    spec = PolicySpec()  # it reads its instruction (the episode's marker is named by it)
 
     def __init__(self, marker_dir: str = ""):
         self.marker_dir = Path(marker_dir)
@@ -120,7 +123,9 @@ class ChunkPolicy:
 class ContextRecorder(NoopPolicy):
     """Holds still; appends to `path` what it was told at reset (the context's fields) and whether its
     first observation carried simulator state (`simulator_state`: the schema's type, with an end-effector
-    position): one JSON line per episode. It declares neither privilege."""
+    position): one JSON line per episode. It declares neither privilege, and reads its instruction."""
+
+    spec = PolicySpec()
 
     def __init__(self, path: str = ""):
         self.path = Path(path)
@@ -204,6 +209,24 @@ class ErrsOnInitsPolicy(NoopPolicy):
         return np.full(7, np.nan) if self.erring and self.calls == 5 else super().act(observation)
 
 
+class BlindFailingAt(BlindPolicy):
+    """`blind`, but its call `at` raises (an infrastructure failure, not a malformed action)."""
+
+    def __init__(self, at: int = 80):
+        super().__init__()
+        self.at = at
+
+    def reset(self, context):
+        super().reset(context)
+        self.calls = 0
+
+    def act(self, observation):
+        self.calls += 1
+        if self.calls == self.at:
+            raise ConnectionError("the model server went away")
+        return super().act(observation)
+
+
 class OrderBlindOracle(OraclePolicy):
     """The oracle given only the goal's atoms (its witness), not their order: it reaches every part of an
     ordered goal in its own habitual order (fixtures first), as a policy that skips "first ... then" would."""
@@ -215,6 +238,8 @@ class OrderBlindOracle(OraclePolicy):
 class InstructionLogPolicy(NoopPolicy):
     """Holds still and appends the instruction in force at each query to a file of its own per episode in
     `log_dir`, so a test sees what reached the policy in whichever process it ran (worker, server)."""
+
+    spec = PolicySpec()  # it reads its instruction
 
     def __init__(self, log_dir: str = ""):
         self.log_dir = Path(log_dir)

@@ -7,7 +7,7 @@ infrastructure failures with one cause; 2 bad input or another error (nothing st
 
 from __future__ import annotations
 
-from langgap.cli.execution_flags import add_execution_options, execution_options
+from langgap.cli.execution_flags import add_execution_options, add_share_rollouts_option, execution_options
 from langgap.cli.tasks_cmd import add_catalog_options
 from langgap.engine.filming import DEFAULT_VIDEO, VIDEO_DIR, VIDEO_HELP
 from langgap.engine.plan import CONDITION_HELP
@@ -92,6 +92,7 @@ def add_parser(subparsers) -> None:
         "reports give the between-seed spread",
     )
     add_execution_options(parser)
+    add_share_rollouts_option(parser)
     parser.add_argument(
         "--shared-policy",
         action="store_true",
@@ -145,12 +146,15 @@ def run(args) -> int:
         max_batch=args.max_batch,
         max_wait_ms=args.max_wait_ms,
         policy_gpus=args.policy_gpus,
+        share_rollouts=args.share_rollouts,
     )
     summary = evaluate(spec, args.run, options, resume=args.resume, extend=args.extend)
     print(
         f"run {summary.run}: {summary.planned} planned, {summary.skipped} already stored, {summary.ran} run "
         f"({summary.successes} successes, {summary.gaps} gaps)"
     )
+    if summary.rollouts:
+        print(f"shared rollouts: {summary.shared} episodes in {summary.rollouts} rollouts")
     if summary.policy_server:
         calls, queries = summary.policy_server["calls"], summary.policy_server["queries"]
         print(f"shared policy: {queries} queries in {calls} batched calls ({queries / max(1, calls):.2f} per call)")

@@ -58,6 +58,17 @@ def add_execution_options(parser: argparse.ArgumentParser, *, attempts_flag: str
     parser.set_defaults(attempts_flag=attempts_flag)
 
 
+def add_share_rollouts_option(parser: argparse.ArgumentParser) -> None:
+    """Add `--share-rollouts` (commands that run a policy's episodes: `eval`, `validate`)."""
+    parser.add_argument(
+        "--share-rollouts",
+        action="store_true",
+        help="run the episodes of an instruction-blind policy (noop, random, blind: PolicySpec.reads_instruction) "
+        "that start alike (scene, init state, seed) as one rollout judged for each of their tasks; every record "
+        "is the one its own episode gives (a policy that reads its instruction runs every episode on its own)",
+    )
+
+
 def execution_options(args: argparse.Namespace, **more) -> ExecutionOptions:
     """The `ExecutionOptions` of the flags `add_execution_options` added, with `more` (a command's own)."""
     if args.work_attempts < 1:  # checked here, where the flag's name is known (`collect` calls it otherwise)

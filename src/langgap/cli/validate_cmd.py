@@ -8,7 +8,7 @@ from pathlib import Path
 
 from langgap.catalog.task import INFEASIBLE, SAME_TRIAL, unproven
 from langgap.cli.eval_cmd import add_stepping_option
-from langgap.cli.execution_flags import add_execution_options, execution_options
+from langgap.cli.execution_flags import add_execution_options, add_share_rollouts_option, execution_options
 from langgap.cli.tasks_cmd import add_catalog_option
 from langgap.errors import LangGapError
 from langgap.gate.rows import FEASIBLE_RATE, FULL_INITS
@@ -60,6 +60,7 @@ def add_parser(subparsers) -> None:
         "at policy step K on 95%% of the init states, else the task is unproven at that K; --record keeps the "
         "verdicts in <registry>.switch-gate.json",
     )
+    add_share_rollouts_option(parser)
     parser.add_argument("--out", metavar="FILE", help="write the report as JSON (a row per task, the claims)")
     parser.add_argument(
         "--record",
@@ -83,9 +84,11 @@ def run_gate(
     policy: str = DEFAULT_POLICY,
     blind: bool = False,
     recording: bool = False,
+    share_rollouts: bool = False,
 ):
     """Run the feasibility gate with the options of `add_gate_options`; returns its `Validation`. Searched
-    demonstrations go beside the catalog's registry when `recording` (the verdicts will name them)."""
+    demonstrations go beside the catalog's registry when `recording` (the verdicts will name them);
+    `share_rollouts`: an instruction-blind policy's episodes (`blind`'s) share rollouts."""
     _check_resume(args)
     budget = args.search_budget
     if budget is not None and budget < 0:
@@ -101,7 +104,7 @@ def run_gate(
         catalog,
         selection,
         inits=inits,
-        options=execution_options(args),
+        options=execution_options(args, share_rollouts=share_rollouts),
         run=args.run,
         resume=args.resume,
         policy=policy,
@@ -121,7 +124,16 @@ def run(args) -> int:
     if args.condition:
         return _switch_gate(args)
     policy = args.policy or DEFAULT_POLICY
-    found = run_gate(args, args.catalog, args.tasks, args.inits, policy, blind=args.blind, recording=args.record)
+    found = run_gate(
+        args,
+        args.catalog,
+        args.tasks,
+        args.inits,
+        policy,
+        blind=args.blind,
+        recording=args.record,
+        share_rollouts=args.share_rollouts,
+    )
     if found.inherited:
         print(
             f"{len(found.inherited)} selected task(s) take the verdict of a task with {SAME_TRIAL} "
@@ -149,7 +161,11 @@ def _switch_gate(args) -> int:
     the plain gate's episodes are refused."""
     from langgap.gate.switch import record_switch, switch_conditions, switch_table_text, validate_switch
 
-    plain_only = {"--blind": args.blind, "--search-budget": args.search_budget is not None}
+    plain_only = {
+        "--blind": args.blind,
+        "--search-budget": args.search_budget is not None,
+        "--share-rollouts": args.share_rollouts,
+    }
     given = [flag for flag, present in plain_only.items() if present]
     if given:
         raise LangGapError(f"--condition runs the switch gate, which has no {' or '.join(given)}")
@@ -193,6 +209,7 @@ def _claims_only(args) -> int:
         "--resume": args.resume,
         "--search-budget": args.search_budget is not None,
         "--condition": bool(args.condition),
+        "--share-rollouts": args.share_rollouts,
     }
     given = [flag for flag, present in policy_flags.items() if present]
     if given:

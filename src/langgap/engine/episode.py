@@ -10,6 +10,7 @@ task's policy performed the original task of the scene).
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from datetime import UTC, datetime
 
 import numpy as np
@@ -20,7 +21,8 @@ from langgap.catalog.files import scene_key
 from langgap.catalog.task import Task
 from langgap.engine.context import planned_context
 from langgap.engine.plan import PlannedEpisode
-from langgap.engine.rollout import StepHook, run_episode
+from langgap.engine.rollout import RolloutResult, StepHook, run_episode, run_shared_episode
+from langgap.errors import one_line
 from langgap.goals import Goal
 from langgap.policies.base import Policy, PolicyOutputError
 from langgap.records import EpisodeRecord, FailureKind, Outcome, Status, classify
@@ -64,25 +66,11 @@ def _switched(planned: PlannedEpisode, instructions: list[tuple[int, str]]) -> t
     return planned.started_as, instructions[1][0]
 
 
-def execute_episode(
-    planned: PlannedEpisode,
-    task: Task,
-    catalog: Catalog,
-    env: TaskEnv,
-    policy: Policy,
-    *,
-    policy_name: str,
-    policy_hash: str,
-    style: str,
-    worker: int = 0,
-    attempts: int = 1,
-    on_step: StepHook | None = None,
-) -> EpisodeRecord:
-    """Run one planned episode. A malformed action is a policy failure (recorded); any other exception
-    propagates, for the caller to treat as an infrastructure error."""
-    context = planned_context(planned, task, catalog, style)
-    started = time.perf_counter()
-    common = dict(
+def _policy_fields(
+    env: TaskEnv, policy: Policy, *, policy_name: str, policy_hash: str, worker: int, attempts: int
+) -> dict:
+    """The record fields that say which policy ran, what it saw, and where."""
+    return dict(
         policy=policy_name,
         policy_config_hash=policy_hash,
         sees_state=policy.spec.sees_state,
@@ -93,25 +81,32 @@ def execute_episode(
         attempts=attempts,
         physics=stack.physics_stack(env.options.stepping, env.options.seed_scheme),
     )
-    try:
-        result = run_episode(
-            env, policy, context, watch=scene_goals(task, catalog), on_step=on_step, changes=planned.changes
-        )
-    except PolicyOutputError as exc:
-        return _record(
-            planned,
-            task,
-            status=Status.DONE,
-            success=False,
-            outcome=Outcome.POLICY_ERROR,
-            failure_kind=FailureKind.POLICY,
-            error=f"{policy_name}: {exc}",
-            steps=env.steps,
-            policy_calls=0,
-            t0_hash=env.t0_hash or "",
-            wall_time_s=time.perf_counter() - started,
-            **common,
-        )
+
+
+def _policy_error_record(
+    planned: PlannedEpisode, task: Task, error: str, env: TaskEnv, wall_time_s: float, common: dict
+) -> EpisodeRecord:
+    """The record of an episode that ended on a malformed action (`error`: the policy's name and why)."""
+    return _record(
+        planned,
+        task,
+        status=Status.DONE,
+        success=False,
+        outcome=Outcome.POLICY_ERROR,
+        failure_kind=FailureKind.POLICY,
+        error=error,
+        steps=env.steps,
+        policy_calls=0,
+        t0_hash=env.t0_hash or "",
+        wall_time_s=wall_time_s,
+        **common,
+    )
+
+
+def _judged_record(
+    planned: PlannedEpisode, task: Task, result: RolloutResult, wall_time_s: float, common: dict
+) -> EpisodeRecord:
+    """The record of an episode the policy played to its end."""
     return _record(
         planned,
         task,
@@ -135,9 +130,93 @@ def execute_episode(
         goals_at_start=result.at_start,
         goals_at_end=result.at_end,
         instructions=[list(change) for change in result.instructions],
-        wall_time_s=time.perf_counter() - started,
+        wall_time_s=wall_time_s,
         **common,
     )
+
+
+def execute_episode(
+    planned: PlannedEpisode,
+    task: Task,
+    catalog: Catalog,
+    env: TaskEnv,
+    policy: Policy,
+    *,
+    policy_name: str,
+    policy_hash: str,
+    style: str,
+    worker: int = 0,
+    attempts: int = 1,
+    on_step: StepHook | None = None,
+) -> EpisodeRecord:
+    """Run one planned episode. A malformed action is a policy failure (recorded); any other exception
+    propagates, for the caller to treat as an infrastructure error."""
+    context = planned_context(planned, task, catalog, style)
+    started = time.perf_counter()
+    common = _policy_fields(
+        env, policy, policy_name=policy_name, policy_hash=policy_hash, worker=worker, attempts=attempts
+    )
+    try:
+        result = run_episode(
+            env, policy, context, watch=scene_goals(task, catalog), on_step=on_step, changes=planned.changes
+        )
+    except PolicyOutputError as exc:
+        return _policy_error_record(planned, task, f"{policy_name}: {exc}", env, time.perf_counter() - started, common)
+    return _judged_record(planned, task, result, time.perf_counter() - started, common)
+
+
+def execute_shared(
+    members: tuple[PlannedEpisode, ...],
+    catalog: Catalog,
+    env: TaskEnv,
+    policy: Policy,
+    *,
+    policy_name: str,
+    policy_hash: str,
+    style: str,
+    worker: int = 0,
+    attempts: int = 1,
+) -> list[EpisodeRecord]:
+    """Run planned episodes that share one rollout (`langgap.engine.sharing`) as that one rollout; each gets
+    the record its own episode would have (`run_shared_episode`), the wall time measured to its own end.
+
+    A malformed action ends every episode still running as a policy failure, as it would have ended each.
+    Any other exception ends the episodes still running as gaps (infrastructure: a resume runs them again)
+    when some ended before it, and propagates (the whole rollout retried) when none did."""
+    tasks = {p.key.task_id: catalog.get(p.key.task_id) for p in members}
+    lead = members[0]
+    context = planned_context(lead, tasks[lead.key.task_id], catalog, style)
+    common = _policy_fields(
+        env, policy, policy_name=policy_name, policy_hash=policy_hash, worker=worker, attempts=attempts
+    )
+    started = time.perf_counter()
+    goals = {task_id: task.goal for task_id, task in tasks.items()}
+    rollout = run_shared_episode(env, policy, context, goals, watch=scene_goals(tasks[lead.key.task_id], catalog))
+    error = rollout.error
+    if error is not None and not isinstance(error, PolicyOutputError) and not rollout.results:
+        raise error
+    records = []
+    for planned in members:
+        task = tasks[planned.key.task_id]
+        result = rollout.results.get(task.id)
+        if result is not None:
+            result = replace(result, instructions=[(0, planned.instruction)])
+            records.append(_judged_record(planned, task, result, rollout.ended_after_s[task.id], common))
+        elif isinstance(error, PolicyOutputError):
+            wall = time.perf_counter() - started
+            records.append(_policy_error_record(planned, task, f"{policy_name}: {error}", env, wall, common))
+        else:
+            records.append(
+                gap_record(
+                    planned,
+                    task,
+                    policy_name=policy_name,
+                    error=one_line(error),
+                    attempts=attempts,
+                    physics=common["physics"],
+                )
+            )
+    return records
 
 
 def gap_record(

@@ -15,6 +15,7 @@ from langgap.engine.filming import VideoSelection, replay_matches
 from langgap.engine.plan import PlannedEpisode, build_plan
 from langgap.engine.pools import WorkerPool, make_pool
 from langgap.engine.runner import RunnerSetup
+from langgap.engine.sharing import SharedRollout, policy_spec, share_rollouts
 from langgap.engine.spec import PLAN_FIELDS, ExecutionOptions, RunSpec, SpecError
 from langgap.records import EpisodeRecord, Status
 from langgap.store import RunStore
@@ -33,6 +34,8 @@ class RunSummary:
     gaps: int = 0
     policy_server: dict = field(default_factory=dict)  # a shared policy's counters (Ray): calls, queries
     filmed: int = 0  # episodes with a clip among those `--video` chose
+    shared: int = 0  # episodes run inside shared rollouts (`--share-rollouts`)
+    rollouts: int = 0  # the shared rollouts they ran in
     film_mismatches: int = 0  # replays (per-outcome filming) that ended otherwise: no clip attached
 
     def rates(self, _latest: EpisodeRecord | None = None) -> str:
@@ -139,14 +142,21 @@ def evaluate(
         seed_scheme=spec.seed_scheme,
     )
 
-    def run_episodes(todo: list[PlannedEpisode], pool: WorkerPool) -> Iterator[EpisodeRecord]:
-        def make_gap(planned: PlannedEpisode, error: str, attempts: int) -> EpisodeRecord:
+    sharing = policy_spec(spec.policy, spec.policy_args) if options.share_rollouts else None
+
+    def run_episodes(items: list[PlannedEpisode | SharedRollout], pool: WorkerPool) -> Iterator[EpisodeRecord]:
+        def gap(planned: PlannedEpisode, error: str, attempts: int) -> EpisodeRecord:
             task = catalog.get(planned.key.task_id)
             return gap_record(
                 planned, task, policy_name=spec.policy, error=error, attempts=attempts, physics=spec.physics
             )
 
-        return scheduled(todo, pool, options, make_gap)
+        def make_gap(item: PlannedEpisode | SharedRollout, error: str, attempts: int):
+            if isinstance(item, SharedRollout):
+                return [gap(p, error, attempts) for p in item.members]
+            return gap(item, error, attempts)
+
+        return _episodes(scheduled(items, pool, options, make_gap))
 
     # The pool comes first: options it cannot satisfy (no Ray, too few GPUs) fail before a run
     # directory exists. Workers only start when the scheduler asks for them.
@@ -157,7 +167,10 @@ def evaluate(
         done = store.done_keys()
         todo = [p for p in plan if p.key not in done]
         summary = RunSummary(run, planned=len(plan), skipped=len(plan) - len(todo))
-        counted = _counted(run_episodes(todo, pool), summary)
+        items = todo if sharing is None else share_rollouts(todo, catalog, sharing, spec.style)
+        shared = [item for item in items if isinstance(item, SharedRollout)]
+        summary.shared, summary.rollouts = sum(len(item.members) for item in shared), len(shared)
+        counted = _counted(run_episodes(items, pool), summary)
         for record in with_progress(counted, len(todo), unit="ep", enabled=options.progress, describe=summary.rates):
             store.write(record)
     summary.policy_server = dict(getattr(pool, "server_stats", {}))  # set by closing a shared-policy pool
@@ -204,6 +217,15 @@ def _film(
                     summary.film_mismatches += 1
         finally:
             replays.close()
+
+
+def _episodes(results: Iterable[EpisodeRecord | list[EpisodeRecord]]) -> Iterator[EpisodeRecord]:
+    """The records of work items' results: a planned episode's record, each of a shared rollout's."""
+    for result in results:
+        if isinstance(result, list):
+            yield from result
+        else:
+            yield result
 
 
 def _counted(records: Iterable[EpisodeRecord], summary: RunSummary) -> Iterator[EpisodeRecord]:

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from langgap.engine.watch import SceneWatch
-from langgap.goals import Goal
+from langgap.goals import Goal, GoalProgress
 from langgap.policies.base import Policy, TaskContext, as_action_chunk, observation_for
 from langgap.sim.env import SETTLE_STEPS, EnvOptions, TaskEnv
 
@@ -78,6 +79,45 @@ def run_episode(
     (K, instruction) in `changes`, when the new one takes effect and the rest of an action chunk is
     dropped (the policy is asked again at once, as a person who changed their mind would expect).
     """
+    _begin(env, policy, context, settle_steps=settle_steps, sampled_start=sampled_start, on_start=on_start)
+    scene = SceneWatch(env, watch or {})
+
+    def observed(success: bool, _calls: int) -> bool:
+        scene.observe()
+        return success
+
+    calls, instructions = _act(env, policy, context, observed, on_step=on_step, changes=changes)
+    success = env.success()
+    return _result(env, scene, success, calls, instructions)
+
+
+def _result(
+    env: TaskEnv, scene: SceneWatch, success: bool, calls: int, instructions: list[tuple[int, str]]
+) -> RolloutResult:
+    """An episode's result as it stands at `env`'s current step, its scene goals judged by `scene`."""
+    return RolloutResult(
+        success=success,
+        steps=env.steps,
+        t0_hash=env.t0_hash or "",
+        policy_calls=calls,
+        reached=dict(scene.reached),
+        at_start=scene.at_start,
+        at_end=scene.holding(),
+        wrong_order=scene.wrong_order(success),
+        instructions=instructions,
+    )
+
+
+def _begin(
+    env: TaskEnv,
+    policy: Policy,
+    context: TaskContext,
+    *,
+    settle_steps: int,
+    sampled_start: bool,
+    on_start: Callable[[TaskEnv], None] | None,
+) -> None:
+    """Reset `env` to the context's start, reset the policy with what its spec lets it see, settle."""
     spec = policy.spec
     # The policy first looks after settling: an image of the unsettled start would be thrown away.
     env.reset(None if sampled_start else context.init_index, seed=context.seed, render=False)
@@ -85,10 +125,23 @@ def run_episode(
     env.settle(settle_steps, capture=tuple(spec.cameras))
     if on_start is not None:
         on_start(env)
-    scene = SceneWatch(env, watch or {})
+
+
+def _act(
+    env: TaskEnv,
+    policy: Policy,
+    context: TaskContext,
+    stop: Callable[[bool, int], bool],
+    *,
+    on_step: StepHook | None = None,
+    changes: Sequence[tuple[int, str]] = (),
+) -> tuple[int, list[tuple[int, str]]]:
+    """The policy acts, step by step, until `stop(success, policy calls so far)` (called after every step,
+    before `on_step`; `success`: the env's task goal) says so or the step limit is reached.
+    Returns (policy calls, the (policy step, instruction) of every instruction sent)."""
+    spec = policy.spec
     queue: list[np.ndarray] = []
     calls = 0
-    success = False
     instructions = [(0, context.instruction)]
     pending = sorted(changes)
     while not env.truncated:
@@ -104,19 +157,57 @@ def run_episode(
         # The policy is asked after this step when its chunk runs out or the instruction switches there.
         asked_next = not queue or bool(pending and pending[0][0] <= env.steps + 1)
         success = env.step(action, capture=_cameras_read_after(env, spec.cameras if asked_next else (), on_step))
-        scene.observe()
+        stopping = stop(success, calls)
         if on_step is not None:
             on_step(env, env.steps, action)
-        if success:
+        if stopping:
             break
-    return RolloutResult(
-        success=success,
-        steps=env.steps,
-        t0_hash=env.t0_hash or "",
-        policy_calls=calls,
-        reached=scene.reached,
-        at_start=scene.at_start,
-        at_end=scene.holding(),
-        wrong_order=scene.wrong_order(success),
-        instructions=instructions,
-    )
+    return calls, instructions
+
+
+@dataclass
+class SharedRollout:
+    """One rollout judged as the episode of each of several goals (`run_shared_episode`): `results` holds
+    the result of every goal decided so far; `error` the exception that ended the rollout early, if any."""
+
+    results: dict[str, RolloutResult] = field(default_factory=dict)
+    ended_after_s: dict[str, float] = field(default_factory=dict)  # seconds from the reset to each goal's end
+    error: Exception | None = None
+
+
+def run_shared_episode(
+    env: TaskEnv, policy: Policy, context: TaskContext, goals: Mapping[str, Goal], *, watch: Mapping[str, Goal]
+) -> SharedRollout:
+    """One rollout of an instruction-blind policy judged as the episode of every goal in `goals` (name ->
+    task goal; every task set in `env`'s scene, with `env`'s step limit): the policy acts until each goal
+    has held or the step limit is reached, and each goal's result is the one `run_episode` would return
+    for it: cut at the step its own episode would end (its first success, or the limit), with its scene
+    goals (`watch`), policy calls and wrong order as of that step.
+
+    The policy must act the same whatever the episode's goal: its spec's `reads_instruction` is False and
+    `context` is the one every goal's episode would give it (`TaskContext.for_policy` of each is equal).
+    Exceptions are caught into `error`: the results decided before stay exact.
+    """
+    rollout = SharedRollout()
+    started = time.perf_counter()
+    try:
+        _begin(env, policy, context, settle_steps=SETTLE_STEPS, sampled_start=False, on_start=None)
+        # Each goal is judged as its own episode's task goal: success from step 0, as `TaskEnv` judges its task.
+        scenes = {name: SceneWatch(env, watch, task_goal=goal) for name, goal in goals.items()}
+        progress = {name: GoalProgress(goal) for name, goal in goals.items()}
+        for judged in progress.values():
+            judged.observe(0, env.predicate_holds)
+
+        def decided(_success: bool, calls: int) -> bool:
+            for name in [n for n in goals if n not in rollout.results]:
+                scenes[name].observe()
+                success = progress[name].observe(env.steps, env.predicate_holds)
+                if success or env.truncated:
+                    rollout.results[name] = _result(env, scenes[name], success, calls, [(0, context.instruction)])
+                    rollout.ended_after_s[name] = time.perf_counter() - started
+            return len(rollout.results) == len(goals)
+
+        _act(env, policy, context, decided)
+    except Exception as exc:  # the caller decides what an early end means for the goals still undecided
+        rollout.error = exc
+    return rollout

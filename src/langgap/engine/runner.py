@@ -1,8 +1,9 @@
 """What executes work items wherever they run (in-process, a worker process, a Ray actor).
 
-A `WorkRunner` dispatches on the item's kind: a planned episode (`PlannedEpisode`) runs here, with the
-runner's policy; any other work item is a `Job` that does its own work (`Job.perform`) with what the
-runner lends it (the catalog, a kept environment, the output directory). A runner owns at most one
+A `WorkRunner` dispatches on the item's kind: a planned episode (`PlannedEpisode`) and a shared rollout
+of several (`SharedRollout`) run here, with the runner's policy; any other work item is a `Job` that does
+its own work (`Job.perform`) with what the runner lends it (the catalog, a kept environment, the output
+directory). A runner owns at most one
 policy and one environment; the environment is built lazily for the task of the next item and kept
 (soft resets) while consecutive items share the task. After an infrastructure failure everything is
 rebuilt, since a crash may leave either broken.
@@ -17,10 +18,11 @@ from typing import Any, Protocol
 
 from langgap.catalog.catalog import load_catalog
 from langgap.catalog.task import DEFAULT_STYLE, Task
-from langgap.engine.episode import execute_episode, video_hook
+from langgap.engine.episode import execute_episode, execute_shared, video_hook
 from langgap.engine.filming import VIDEO_DIR, clip_name
 from langgap.engine.plan import PlannedEpisode
 from langgap.engine.rollout import env_options_for
+from langgap.engine.sharing import SharedRollout
 from langgap.engine.work import Job, WorkItem
 from langgap.errors import one_line
 from langgap.policies import make_policy
@@ -78,6 +80,8 @@ class WorkRunner:
         try:
             if isinstance(item, PlannedEpisode):
                 return self._run_episode(item, attempts)
+            if isinstance(item, SharedRollout):
+                return self._run_shared(item, attempts)
             if isinstance(item, Job):
                 return item.perform(self)
             raise TypeError(f"not a work item: {type(item).__name__}")
@@ -96,24 +100,7 @@ class WorkRunner:
 
     def _run_episode(self, planned: PlannedEpisode, attempts: int) -> EpisodeRecord:
         task = self.catalog.get(planned.key.task_id)
-        if self._policy is None:
-            if self.setup.policy_server is not None:
-                self._policy = self.setup.policy_server.connect(self.worker)
-            else:
-                self._policy = make_policy(self.setup.policy, self.setup.policy_args)
-            self._policy_hash = config_hash(policy_config(self._policy))
-        # An environment without the video cameras serves every episode but a filmed one (rendering
-        # needs a GL context, which costs an environment build seconds and memory: only filming pays it).
-        env = self._env
-        if (
-            env is not None
-            and env.can_switch_to(task)
-            and (not planned.film or set(CAMERAS) <= set(env.options.cameras))
-        ):
-            env.switch_task(task)
-        else:
-            self._close_env()
-            self._env = TaskEnv(task, self._env_options(planned.film))
+        self._prepare(task, film=planned.film)
         frames: list = []
         hook = None
         if planned.film:
@@ -138,6 +125,37 @@ class WorkRunner:
             write_video(self.output_dir / clip, frames)
             record.video = clip.as_posix()
         return record
+
+    def _run_shared(self, item: SharedRollout, attempts: int) -> list[EpisodeRecord]:
+        self._prepare(self.catalog.get(item.task_id), film=False)
+        return execute_shared(
+            item.members,
+            self.catalog,
+            self._env,
+            self._policy,
+            policy_name=self.setup.policy,
+            policy_hash=self._policy_hash,
+            style=self.setup.style,
+            worker=self.worker,
+            attempts=attempts,
+        )
+
+    def _prepare(self, task: Task, *, film: bool) -> None:
+        """Build the policy (once) and an environment of `task` (filming's cameras when `film`)."""
+        if self._policy is None:
+            if self.setup.policy_server is not None:
+                self._policy = self.setup.policy_server.connect(self.worker)
+            else:
+                self._policy = make_policy(self.setup.policy, self.setup.policy_args)
+            self._policy_hash = config_hash(policy_config(self._policy))
+        # An environment without the video cameras serves every episode but a filmed one (rendering
+        # needs a GL context, which costs an environment build seconds and memory: only filming pays it).
+        env = self._env
+        if env is not None and env.can_switch_to(task) and (not film or set(CAMERAS) <= set(env.options.cameras)):
+            env.switch_task(task)
+        else:
+            self._close_env()
+            self._env = TaskEnv(task, self._env_options(film))
 
     def _env_options(self, film: bool):
         filming = {}

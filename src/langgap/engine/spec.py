@@ -153,6 +153,8 @@ class ExecutionOptions:
     max_batch: int | None = None  # shared policy: largest batch (None: DEFAULT_MAX_BATCH)
     max_wait_ms: float | None = None  # shared policy: how long a query waits for others (None: DEFAULT_MAX_WAIT_MS)
     policy_gpus: float | None = None  # ray's shared policy: GPUs for the policy actor (default 0)
+    # An instruction-blind policy's episodes that start alike as one rollout (`langgap.engine.sharing`): exact
+    share_rollouts: bool = False
 
     def __post_init__(self) -> None:
         # The backend's name is checked by `langgap.engine.pools.make_pool`, which owns the registry.

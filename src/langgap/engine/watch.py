@@ -15,16 +15,18 @@ class SceneWatch:
 
     A goal already true at the start is listed in `at_start`, never as reached; every other goal keeps
     its own history from step 0 (ordered goals), and `reached` maps it to the first step it held.
-    Call `observe()` after every `env.step`.
+    Call `observe()` after every `env.step`. `task_goal` is the goal whose order `wrong_order` judges (the
+    env's task's unless given: a shared rollout judges each member's).
     """
 
-    def __init__(self, env: TaskEnv, goals: Mapping[str, Goal]):
+    def __init__(self, env: TaskEnv, goals: Mapping[str, Goal], task_goal: Goal | None = None):
         self._env = env
         self.goals = dict(goals)
         self.at_start = self.holding()
         self._pending = {name: GoalProgress(goal) for name, goal in self.goals.items() if name not in self.at_start}
         # The task's goal unordered tells a wrong order (all parts held, not in the order asked).
-        self._ordered = GoalProgress(unordered(env.task.goal)) if is_ordered(env.task.goal) else None
+        task_goal = env.task.goal if task_goal is None else task_goal
+        self._ordered = GoalProgress(unordered(task_goal)) if is_ordered(task_goal) else None
         self.reached: dict[str, int] = {}
         for progress in [*self._pending.values(), *([self._ordered] if self._ordered else [])]:
             progress.observe(0, env.predicate_holds)

@@ -1,6 +1,7 @@
 """Work items: what the scheduler hands to workers. Every kind of episode work is one.
 
-A planned evaluation episode (`langgap.engine.plan.PlannedEpisode`) is the first kind. The others are
+A planned evaluation episode (`langgap.engine.plan.PlannedEpisode`) is the first kind, and a shared rollout
+of several (`langgap.engine.sharing.SharedRollout`: an instruction-blind policy's) the second. The others are
 `Job`s, frozen dataclasses that live with the feature they serve and do their work in `perform`, on a
 worker's `WorkRunner` (which lends them the catalog and a kept environment): a demonstration
 collection of one task (`langgap.demos.collect`), a demonstration rendered (`langgap.demos.render`),

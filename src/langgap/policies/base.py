@@ -37,6 +37,10 @@ class PolicySpec:
     `sees_state`: observations carry the simulator state; `sees_goal`: the reset context carries the
     task id and the goal (see the module docstring). `chunk`: the most actions one `act` returns
     (returning more is a policy error); `replan`: how many of them are executed before the next `act`.
+    `reads_instruction=False` declares an instruction-blind policy (`noop`, `random`, `blind`): it is
+    told no instruction, no condition and, of the answer, only the source task's goal (`for_policy`),
+    so every task of one scene that shares an init state, seed and source gets the same actions from
+    it, and those tasks may share one rollout (`--share-rollouts`).
     """
 
     cameras: tuple[str, ...] = ()
@@ -45,6 +49,7 @@ class PolicySpec:
     sees_goal: bool = False
     chunk: int = 1
     replan: int = 1
+    reads_instruction: bool = True
 
     def __post_init__(self) -> None:
         unknown = [c for c in self.cameras if c not in CAMERAS]
@@ -96,8 +101,17 @@ class TaskContext:
     privileged: PrivilegedContext | None = None
 
     def for_policy(self, spec: PolicySpec) -> TaskContext:
-        """The context a policy with `spec` may see."""
-        return self if spec.sees_goal else replace(self, privileged=None)
+        """The context a policy with `spec` may see; an instruction-blind one (`reads_instruction=False`) is
+        told nothing that tells sibling tasks of one source apart, so it acts the same on all of them."""
+        context = self if spec.sees_goal else replace(self, privileged=None)
+        if spec.reads_instruction:
+            return context
+        privileged = context.privileged
+        if privileged is not None:
+            privileged = PrivilegedContext(
+                task_id="", condition="", goal=(), source_goal=privileged.source_goal, goal_expression=""
+            )
+        return replace(context, instruction="", privileged=privileged)
 
 
 def current_instruction(observation: Observation, context: TaskContext) -> str:
@@ -107,7 +121,10 @@ def current_instruction(observation: Observation, context: TaskContext) -> str:
 
 
 def observation_for(observation: Observation, spec: PolicySpec) -> Observation:
-    """The observation a policy with `spec` may see: the simulator state only if it `sees_state`."""
+    """The observation a policy with `spec` may see: the simulator state only if it `sees_state`, the
+    instruction only if it `reads_instruction`."""
+    if not spec.reads_instruction:
+        observation = replace(observation, instruction="")
     if spec.sees_state or observation.privileged is None:
         return observation
     return replace(observation, privileged=None)
@@ -168,7 +185,10 @@ def as_action_chunk(output, spec: PolicySpec) -> np.ndarray:
 def policy_config(policy) -> dict:
     """A JSON-able description of a policy's configuration (its `config()` if it has one, plus its spec)."""
     config = policy.config() if hasattr(policy, "config") else {}
-    return {"class": f"{type(policy).__module__}.{type(policy).__qualname__}", "spec": asdict(policy.spec), **config}
+    # `reads_instruction` says how the engine may run a policy, not how it acts (a truthful declaration
+    # changes no action): left out, so stored runs keep their config hash.
+    spec = {k: v for k, v in asdict(policy.spec).items() if k != "reads_instruction"}
+    return {"class": f"{type(policy).__module__}.{type(policy).__qualname__}", "spec": spec, **config}
 
 
 def config_hash(config: dict) -> str:

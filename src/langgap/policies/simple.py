@@ -14,7 +14,7 @@ from langgap.sim.env import Observation
 class NoopPolicy:
     """Sends zero motion with the gripper open: the floor every success rate is compared with."""
 
-    spec = PolicySpec()
+    spec = PolicySpec(reads_instruction=False)
 
     def reset(self, context: TaskContext) -> None:
         pass
@@ -28,7 +28,7 @@ class RandomPolicy:
 
     def __init__(self, scale: float = 1.0, chunk: int = 1):
         self.scale = scale
-        self.spec = PolicySpec(chunk=chunk, replan=chunk)
+        self.spec = PolicySpec(chunk=chunk, replan=chunk, reads_instruction=False)
         self._rng = np.random.default_rng(0)
 
     def config(self) -> dict:

@@ -92,7 +92,9 @@ class OraclePolicy:
 
 class BlindPolicy(OraclePolicy):
     """The oracle run on the source task's goal whatever the instruction says: a policy that memorised the scene
-    (it never follows a switch: it persists by construction)."""
+    (it never follows a switch: it persists by construction). It is told no instruction (`reads_instruction`)."""
+
+    spec = PolicySpec(sees_state=True, sees_goal=True, reads_instruction=False)
 
     def goal_of(self, context: PrivilegedContext, instruction: str) -> tuple[str, ...]:
         return context.source_goal
