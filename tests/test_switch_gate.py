@@ -55,6 +55,9 @@ def test_the_switch_gate_records_counts_and_marks_verdicts_per_task_and_k(two_ta
     late = verdicts[EXTENDED]["switch:200"]
     assert not late.feasible and late.failed_inits == (0,) and not late.proof  # unproven, never infeasible
     assert late.reason == "oracle 0/1 under switch:200"
+    from langgap.stack import physics_stack
+
+    assert late.physics == physics_stack("exact")  # each verdict records the stack it was made on
     assert not registry.with_name("two.gate.json").exists()  # apart from the plain verdicts
 
     counted = run_cli("tasks", "gate", "--catalog", catalog, "--condition", "switch:5", "--condition", "switch:200")

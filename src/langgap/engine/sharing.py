@@ -19,7 +19,7 @@ from typing import ClassVar
 
 from langgap.catalog import files
 from langgap.catalog.catalog import Catalog
-from langgap.engine.context import task_context
+from langgap.engine.context import planned_context
 from langgap.engine.plan import PlannedEpisode
 from langgap.policies import make_policy
 from langgap.policies.base import PolicySpec
@@ -55,16 +55,7 @@ def rollout_key(planned: PlannedEpisode, catalog: Catalog, spec: PolicySpec, sty
     if spec.reads_instruction or planned.film or planned.changes:
         return None
     task = catalog.get(planned.task_id)
-    key = planned.key
-    context = task_context(
-        task,
-        catalog,
-        init_index=key.init_index,
-        seed=key.seed,
-        style=style,
-        condition=key.condition,
-        instruction=planned.instruction,
-    ).for_policy(spec)
+    context = planned_context(planned, task, catalog, style).for_policy(spec)
     # The start (`TaskEnv.can_switch_to`), and everything the policy is told (the context holds the init
     # index, seed and step limit).
     return task.suite, task.scene_task, files.scene_key(task), str(files.init_states_path(task)), context

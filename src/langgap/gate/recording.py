@@ -46,6 +46,14 @@ def prove_rejected(catalog_name: str, rows: list[TaskValidation], inits: int) ->
     return found
 
 
+def provenance(policy: str, inits: int, stepping: str, **rate: float) -> tuple[dict, str]:
+    """How a recording's verdicts were made: the verdict file's `about` (policy, init states, the gate's `rate`,
+    physics stack, code version) and the `made_by` text each verdict keeps."""
+    physics = physics_stack(stepping)
+    about = {"policy": policy, "inits": inits, **rate, "physics": physics, "code_version": code_version()}
+    return about, f"{policy}, langgap {about['code_version']}, {stepping} stepping"
+
+
 def record(
     catalog_name: str,
     rows: list[TaskValidation],
@@ -57,14 +65,7 @@ def record(
 ) -> Path:
     """Record the rows' verdicts beside the catalog's registry file, with the proofs of impossibility
     `proofs` gives (None: those `prove_rejected` finds)."""
-    about = {
-        "policy": policy,
-        "inits": inits,
-        "feasible_rate": FEASIBLE_RATE,
-        "physics": physics_stack(stepping),
-        "code_version": code_version(),
-    }
-    made_by = f"{policy}, langgap {about['code_version']}, {stepping} stepping"
+    about, made_by = provenance(policy, inits, stepping, feasible_rate=FEASIBLE_RATE)
     if proofs is None:
         proofs = prove_rejected(catalog_name, rows, inits)
     # Each verdict keeps its own stack: a file mixes verdicts of several recordings (and stacks), `about` is the last's.

@@ -22,10 +22,10 @@ from langgap.engine.evaluate import evaluate
 from langgap.engine.plan import switch_step
 from langgap.engine.spec import ExecutionOptions, RunSpec
 from langgap.errors import LangGapError
+from langgap.gate.recording import provenance
 from langgap.records import EpisodeRecord
-from langgap.stack import DEFAULT_STEPPING, physics_stack
+from langgap.stack import DEFAULT_STEPPING
 from langgap.store import RunStore
-from langgap.version import code_version
 
 
 @dataclass
@@ -55,7 +55,8 @@ class SwitchGateRow:
         parts = [f"oracle {self.successes}/{self.episodes} under {self.condition}"] if self.rate < SWITCH_RATE else []
         return "; ".join(parts + ([f"{self.gaps} episode(s) not judged"] if self.gaps else []))
 
-    def verdict(self, inits: int, made_by: str) -> GateResult:
+    def verdict(self, inits: int, made_by: str, physics: dict) -> GateResult:
+        """The verdict to record for a gate that ran init states 0..`inits`-1 as `made_by` says, on `physics`."""
         return GateResult(
             episodes=self.episodes,
             successes=self.successes,
@@ -64,6 +65,7 @@ class SwitchGateRow:
             inits=inits,
             failed_inits=tuple(self.failed_inits),
             made_by=made_by,
+            physics=physics,
         )
 
 
@@ -127,17 +129,10 @@ def record_switch(
     stepping: str = DEFAULT_STEPPING,
 ) -> Path:
     """Record the rows' verdicts in the catalog's switch verdict file (other tasks and K are kept)."""
-    about = {
-        "policy": policy,
-        "inits": inits,
-        "switch_rate": SWITCH_RATE,
-        "physics": physics_stack(stepping),
-        "code_version": code_version(),
-    }
-    made_by = f"{policy}, langgap {about['code_version']}, {stepping} stepping"
+    about, made_by = provenance(policy, inits, stepping, switch_rate=SWITCH_RATE)
     verdicts: SwitchVerdicts = {}
     for row in rows:
-        verdicts.setdefault(row.id, {})[row.condition] = row.verdict(inits, made_by)
+        verdicts.setdefault(row.id, {})[row.condition] = row.verdict(inits, made_by, about["physics"])
     return record_switch_verdicts(registry_path(catalog_name), verdicts, about)
 
 
