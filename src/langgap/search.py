@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
@@ -35,7 +35,7 @@ from langgap.engine.execute import execute
 from langgap.engine.rollout import env_options_for, run_episode
 from langgap.engine.runner import RunnerSetup
 from langgap.engine.spec import ExecutionOptions
-from langgap.engine.work import Job
+from langgap.engine.work import Job, JobHost
 from langgap.goals import atoms
 from langgap.policies import make_policy
 from langgap.policies.oracle.planner import order_goal
@@ -43,9 +43,6 @@ from langgap.policies.oracle.scene import Scene
 from langgap.sim.env import TaskEnv
 from langgap.stack import physics_stack
 from langgap.version import code_version
-
-if TYPE_CHECKING:
-    from langgap.engine.runner import WorkRunner
 
 BUDGET = 16  # candidate episodes per init state the oracle fails
 MAX_NOISE = 0.15  # action units
@@ -235,7 +232,7 @@ class SearchTask(Job):
     def size(self) -> int:
         return len(self.entries) * (self.budget + 1)  # the candidates, and each find's replay
 
-    def perform(self, runner: WorkRunner) -> tuple[str, list[int]]:
+    def perform(self, runner: JobHost) -> tuple[str, list[int]]:
         """The task's id, and the init states now shown doable."""
         catalog, task = runner.catalog, runner.catalog.get(self.task_id)
         shown = []

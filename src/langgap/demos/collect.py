@@ -20,9 +20,9 @@ from langgap.catalog.catalog import Catalog
 from langgap.demos.compact import FORMAT_VERSION, read_manifest, save_demo, write_manifest
 from langgap.demos.record import add_privileged, record_attempt
 from langgap.engine.execute import execute
-from langgap.engine.runner import RunnerSetup, WorkRunner
+from langgap.engine.runner import RunnerSetup
 from langgap.engine.spec import ExecutionOptions
-from langgap.engine.work import Job
+from langgap.engine.work import Job, JobHost
 from langgap.errors import LangGapError
 from langgap.policies import make_policy
 from langgap.sim.env import EnvOptions, TaskEnv
@@ -77,7 +77,7 @@ class CollectTask(Job):
     def size(self) -> int:
         return self.config.attempts_cap
 
-    def perform(self, runner: WorkRunner) -> TaskCollection:
+    def perform(self, runner: JobHost) -> TaskCollection:
         return collect_task(self.config, runner.catalog, self.task_id, runner.output_dir)
 
 

@@ -23,10 +23,9 @@ from langgap.demos.record import Demo, replay_states
 from langgap.engine.execute import execute, with_progress
 from langgap.engine.runner import RunnerSetup
 from langgap.engine.spec import ExecutionOptions
-from langgap.engine.work import Job
+from langgap.engine.work import Job, JobHost
 
 if TYPE_CHECKING:
-    from langgap.engine.runner import WorkRunner
     from langgap.sim.env import TaskEnv
 
 IMAGE_SIZE = 256
@@ -60,7 +59,7 @@ class RenderDemo(Job):
         # The folder of one task's demonstrations: they share a worker's rendering environment.
         return Path(self.path).parent.as_posix()
 
-    def perform(self, runner: WorkRunner) -> tuple[int, Demo, dict[str, np.ndarray]]:
+    def perform(self, runner: JobHost) -> tuple[int, Demo, dict[str, np.ndarray]]:
         from langgap.sim.env import CAMERAS, EnvOptions
 
         demo = load_demo(Path(self.path))

@@ -3,7 +3,7 @@
 A planned evaluation episode (`langgap.engine.plan.PlannedEpisode`) is the first kind, and a shared rollout
 of several (`langgap.engine.sharing.SharedRollout`: an instruction-blind policy's) the second. The others are
 `Job`s, frozen dataclasses that live with the feature they serve and do their work in `perform`, on a
-worker's `WorkRunner` (which lends them the catalog and a kept environment): a demonstration
+worker's `JobHost` (the runner, which lends them the catalog and a kept environment): a demonstration
 collection of one task (`langgap.demos.collect`), a demonstration rendered (`langgap.demos.render`),
 the search for demonstrations of one task (`langgap.search`), and the gate's probes of a scene
 (`langgap.gate.probes`). Whichever the kind, the scheduler gives it the same retries, timeouts, gaps
@@ -18,7 +18,11 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 from langgap.errors import LangGapError
 
 if TYPE_CHECKING:
-    from langgap.engine.runner import WorkRunner
+    from pathlib import Path
+
+    from langgap.catalog.catalog import Catalog
+    from langgap.catalog.task import Task
+    from langgap.sim.env import EnvOptions, TaskEnv
 
 
 class WorkItem(Protocol):
@@ -47,6 +51,17 @@ class WorkItem(Protocol):
         ...
 
 
+class JobHost(Protocol):
+    """What a `Job` may use of the worker that performs it (`langgap.engine.runner.WorkRunner`)."""
+
+    catalog: Catalog
+    output_dir: Path
+
+    def kept_env(self, task: Task, options: EnvOptions) -> TaskEnv:
+        """An environment of `task` built with `options`, kept while consecutive work asks for the same."""
+        ...
+
+
 class Job:
     """A work item that does its own work on a worker (mixed into a frozen dataclass)."""
 
@@ -64,7 +79,7 @@ class Job:
     def size(self) -> int:
         return 1
 
-    def perform(self, runner: WorkRunner) -> Any:
+    def perform(self, runner: JobHost) -> Any:
         """Do the work on a worker; an exception is an infrastructure failure (retried, then a gap)."""
         raise NotImplementedError
 

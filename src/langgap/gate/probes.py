@@ -8,7 +8,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
@@ -16,12 +16,9 @@ from langgap.catalog.task import Task
 from langgap.engine.execute import execute
 from langgap.engine.runner import RunnerSetup
 from langgap.engine.spec import ExecutionOptions
-from langgap.engine.work import Job
+from langgap.engine.work import Job, JobHost
 from langgap.gate.claims import Start
 from langgap.stack import DEFAULT_STEPPING
-
-if TYPE_CHECKING:
-    from langgap.engine.runner import WorkRunner
 
 SETTLE_INITS = 2
 SETTLE_IDLE_STEPS = 20
@@ -37,7 +34,7 @@ class SettleProbe(Job):
     task_id: str
     inits: int = SETTLE_INITS
 
-    def perform(self, runner: WorkRunner) -> tuple[str, float]:
+    def perform(self, runner: JobHost) -> tuple[str, float]:
         """The task's id and its scene's drift."""
         from langgap.sim.env import TaskEnv
 
@@ -67,7 +64,7 @@ class StartProbe(Job):
     inits: int
     stepping: str = DEFAULT_STEPPING
 
-    def perform(self, runner: WorkRunner) -> list[Start]:
+    def perform(self, runner: JobHost) -> list[Start]:
         from langgap.engine.episode import scene_goals
         from langgap.engine.plan import episode_seed
         from langgap.sim.env import EnvOptions, TaskEnv
