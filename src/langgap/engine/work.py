@@ -54,8 +54,15 @@ class WorkItem(Protocol):
 class JobHost(Protocol):
     """What a `Job` may use of the worker that performs it (`langgap.engine.runner.WorkRunner`)."""
 
-    catalog: Catalog
-    output_dir: Path
+    @property
+    def catalog(self) -> Catalog:
+        """The catalog the work's tasks come from."""
+        ...
+
+    @property
+    def output_dir(self) -> Path:
+        """Where work writes its files (a run's or a command's output directory)."""
+        ...
 
     def kept_env(self, task: Task, options: EnvOptions) -> TaskEnv:
         """An environment of `task` built with `options`, kept while consecutive work asks for the same."""
