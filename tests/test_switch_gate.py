@@ -59,6 +59,11 @@ def test_the_switch_gate_records_counts_and_marks_verdicts_per_task_and_k(two_ta
 
     assert late.physics == physics_stack("exact")  # each verdict records the stack it was made on
     assert not registry.with_name("two.gate.json").exists()  # apart from the plain verdicts
+    shown = run_cli("tasks", "show", "--catalog", catalog, EXTENDED)
+    assert "switch gate  switch:5: oracle 1/1 on init states 0–0: accepted" in shown.stdout
+    assert "switch gate  switch:200: oracle 0/1 on init states 0–0: rejected, unproven" in shown.stdout
+    shown_json = json.loads(run_cli("tasks", "show", "--catalog", catalog, EXTENDED, "--json").stdout)
+    assert shown_json["switch_gate"]["switch:200"]["feasible"] is False
 
     counted = run_cli("tasks", "gate", "--catalog", catalog, "--condition", "switch:5", "--condition", "switch:200")
     assert counted.returncode == 0, counted.stderr

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from collections import Counter
+from dataclasses import asdict
 
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
 from langgap.catalog.task import (
@@ -145,6 +146,8 @@ def run_show(args) -> int:
     }
     info["siblings"] = [t.id for t in catalog.siblings(task) if t.id != task.id]
     info["findings"] = _recorded_findings(args.catalog, task.id)
+    switch = _recorded_switch_verdicts(args.catalog, task.id)
+    info["switch_gate"] = {k: {**asdict(v), "rate": v.rate} for k, v in switch.items()}
     if args.json:
         print(json.dumps(info, indent=1))
         return 0
@@ -167,6 +170,8 @@ def run_show(args) -> int:
     for line in _gate_lines(task.gate):
         print(f"{'gate':<12} {line}")
     print(f"{'evidence:':<12} {task.evidence}")
+    for condition, verdict in switch.items():
+        print(f"{'switch gate':<12} {condition}: {_gate_lines(verdict)[0]}")
     for note in task.notes:
         print(f"{'note':<12} {note}")
     if task.origin is not None:
@@ -176,6 +181,16 @@ def run_show(args) -> int:
     for finding in info["findings"]:
         print(f"{'finding':<12} {finding['name']}: {finding['detail']}")
     return 0
+
+
+def _recorded_switch_verdicts(catalog: str, task_id: str) -> dict:
+    """The task's switch verdicts (`switch:K` -> verdict, in K order) from the catalog's switch verdict file."""
+    from langgap.catalog.catalog import registry_path
+    from langgap.catalog.switch_verdicts import read_switch_verdicts
+    from langgap.engine.plan import switch_step
+
+    by_k = read_switch_verdicts(registry_path(catalog)).get(task_id, {})
+    return dict(sorted(by_k.items(), key=lambda item: switch_step(item[0]) or 0))
 
 
 def run_gate(args) -> int:
