@@ -107,3 +107,23 @@ def test_summary_honours_format_and_allow_mismatch(tmp_path, runs):
     assert "Runs not compared: their protocols differ" in refused.stdout and "against blind" not in refused.stdout
     allowed = run_cli(*base, "--allow-mismatch")
     assert "Runs not compared" not in allowed.stdout and "against blind, 0 % on the same 7" in allowed.stdout
+
+
+def test_no_verdict_when_every_extended_task_asks_for_its_originals_goal(tmp_path):
+    """A rewording of the original's own goal (LIBERO-Plus's language variants, paraphrases) is done as well by a
+    policy that ignores its instruction: such tasks alone cannot show that it reads."""
+    from dataclasses import replace
+
+    reworded = [replace(episode(RAMEKIN, k, success=True, reached={SOURCE: 5}), dimension="language") for k in range(4)]
+    originals = [episode(SOURCE, k, success=True, reached={SOURCE: 5}) for k in range(4)]
+    (run,) = summarize(load_runs([write_run(tmp_path / "blind", "blind", originals + reworded)])).runs
+    assert run.answer.verdict is None
+    assert run.answer.text == (
+        "blind (blind): 100 % on original tasks vs 100 % [51, 100] on extended tasks (paired with their originals: "
+        "p = 1); every extended task asks for its original's goal in other words, which a policy that ignores its "
+        "instruction does as well, so these tasks cannot show whether it reads it."
+    )
+    # One task that asks for another goal is enough for a verdict.
+    mixed = reworded[:2] + [episode(STOVE, k, reached={SOURCE: 5}) for k in range(2)]
+    (run,) = summarize(load_runs([write_run(tmp_path / "mixed", "blind", originals + mixed)])).runs
+    assert run.answer.verdict == "reads its instruction weakly"

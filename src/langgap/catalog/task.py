@@ -18,6 +18,9 @@ BEYOND_DIMENSIONS = ("ordering", "negation", "paraphrase", "attribute_reference"
 # the same scene (LIBERO-PRO's *task*), and a reworded instruction (LIBERO-PRO's *lan*, LIBERO-Plus's language).
 EXTERNAL_DIMENSIONS = ("task", "language")
 DIMENSIONS = ("original", *PAPER_DIMENSIONS, *BEYOND_DIMENSIONS, *EXTERNAL_DIMENSIONS)
+# Dimensions whose tasks ask for their source's own goal in other words: a policy that ignores its instruction
+# does them as well as their sources, so they alone cannot show whether it reads.
+SAME_GOAL_DIMENSIONS = ("paraphrase", "language")
 SPLITS = ("original", "train", "heldout")
 INSTRUCTION_STYLES = ("libero", "paper")
 DEFAULT_STYLE = "libero"

@@ -42,11 +42,14 @@ class Answer:
     against_originals: PairedTest | None  # extended episodes against their sources'
     against_blind: PairedTest | None  # extended episodes against a compared blind run's
     gaps: int
+    same_goal_only: bool = False  # every extended task asks for its source's goal in other words
 
     @property
     def verdict(self) -> str | None:
-        """How well the policy reads its instruction (None: no extended tasks, or no original success to
-        compare with)."""
+        """How well the policy reads its instruction (None: no extended tasks, no original success to compare
+        with, or only extended tasks that a policy ignoring its instruction does as well as their sources)."""
+        if self.same_goal_only:
+            return None
         if not self.extended.episodes or not self.original.episodes or not self.original.rate:
             return None
         share = self.extended.rate / self.original.rate
@@ -82,6 +85,12 @@ class Answer:
             return (
                 f"{self.label}: {on_originals} {interval(original)}; the run has no extended tasks, so it does not "
                 "show whether the policy reads its instruction."
+            )
+        if self.same_goal_only:
+            return (
+                f"{self.label}: {on_originals} vs {percent(extended.rate)} {interval(extended)} on extended tasks"
+                f"{self._tests()}; every extended task asks for its original's goal in other words, which a policy "
+                "that ignores its instruction does as well, so these tasks cannot show whether it reads it."
             )
         if (verdict := self.verdict) is None:
             verdict = "does no original task, so the gap cannot be measured" if original.episodes else ""

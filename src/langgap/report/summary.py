@@ -20,7 +20,7 @@ from langgap.catalog.labels import (
     SUITE_ORDER,
 )
 from langgap.catalog.switch_verdicts import SwitchVerdicts, accepted
-from langgap.catalog.task import GateResult
+from langgap.catalog.task import SAME_GOAL_DIMENSIONS, GateResult
 from langgap.engine.plan import SWITCH, repeat_of, switch_step
 from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Outcome, Privilege, achieved
 from langgap.report.answer import Answer
@@ -389,6 +389,7 @@ class RunResults:
     default_task: Rate  # extended episodes that did the scene's original task instead (`default_task`)
     against_blind: PairedTest | None = None  # extended episodes against a compared `blind` run's (`summarize`)
     switches: list[SwitchRow] = field(default_factory=list)  # `switch:K` episodes per K and dimension
+    same_goal_only: bool = False  # every extended episode's task asks for its source's goal in other words
 
     @property
     def label(self) -> str:
@@ -405,7 +406,14 @@ class RunResults:
         """The run's opening sentence and what it rests on."""
         original, extended = self.source("original"), self.source("extended")
         return Answer(
-            self.label, original, extended, self.default_task, self.against_originals, self.against_blind, self.gaps
+            self.label,
+            original,
+            extended,
+            self.default_task,
+            self.against_originals,
+            self.against_blind,
+            self.gaps,
+            self.same_goal_only,
         )
 
 
@@ -455,6 +463,7 @@ def results(run: Run) -> RunResults:
         against_originals=against_sources(given),
         default_task=default_task(extended),
         switches=switch_rows(run.records, run.switch_gates),
+        same_goal_only=bool(extended) and all(r.dimension in SAME_GOAL_DIMENSIONS for r in extended),
     )
 
 
