@@ -8,7 +8,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from langgap.engine.watch import SceneWatch
+from langgap.engine.watch import OrderWatch, SceneWatch
 from langgap.goals import Goal, GoalProgress
 from langgap.policies.base import Policy, TaskContext, as_action_chunk, observation_for
 from langgap.sim.env import SETTLE_STEPS, EnvOptions, TaskEnv
@@ -88,11 +88,16 @@ def run_episode(
 
     calls, instructions = _act(env, policy, context, observed, on_step=on_step, changes=changes)
     success = env.success()
-    return _result(env, scene, success, calls, instructions)
+    return _result(env, scene, success, calls, instructions, scene.wrong_order(success))
 
 
 def _result(
-    env: TaskEnv, scene: SceneWatch, success: bool, calls: int, instructions: list[tuple[int, str]]
+    env: TaskEnv,
+    scene: SceneWatch,
+    success: bool,
+    calls: int,
+    instructions: list[tuple[int, str]],
+    wrong_order: bool,
 ) -> RolloutResult:
     """An episode's result as it stands at `env`'s current step, its scene goals judged by `scene`."""
     return RolloutResult(
@@ -103,7 +108,7 @@ def _result(
         reached=dict(scene.reached),
         at_start=scene.at_start,
         at_end=scene.holding(),
-        wrong_order=scene.wrong_order(success),
+        wrong_order=wrong_order,
         instructions=instructions,
     )
 
@@ -192,18 +197,23 @@ def run_shared_episode(
     started = time.perf_counter()
     try:
         _begin(env, policy, context, settle_steps=SETTLE_STEPS, sampled_start=False, on_start=None)
-        # Each goal is judged as its own episode's task goal: success from step 0, as `TaskEnv` judges its task.
-        scenes = {name: SceneWatch(env, watch, task_goal=goal) for name, goal in goals.items()}
+        # Every member's episode watches the same scene goals from the same states: one watch serves them all,
+        # its `reached` read when each member ends. Each goal is judged as its own episode's task goal: success
+        # from step 0, as `TaskEnv` judges its task, and its own order.
+        scene = SceneWatch(env, watch)
         progress = {name: GoalProgress(goal) for name, goal in goals.items()}
+        orders = {name: OrderWatch(env, goal) for name, goal in goals.items()}
         for judged in progress.values():
             judged.observe(0, env.predicate_holds)
 
         def decided(_success: bool, calls: int) -> bool:
+            scene.observe()
             for name in [n for n in goals if n not in rollout.results]:
-                scenes[name].observe()
+                orders[name].observe()
                 success = progress[name].observe(env.steps, env.predicate_holds)
                 if success or env.truncated:
-                    rollout.results[name] = _result(env, scenes[name], success, calls, [(0, context.instruction)])
+                    wrong = orders[name].wrong(success)
+                    rollout.results[name] = _result(env, scene, success, calls, [(0, context.instruction)], wrong)
                     rollout.ended_after_s[name] = time.perf_counter() - started
             return len(rollout.results) == len(goals)
 

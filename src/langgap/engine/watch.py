@@ -15,20 +15,17 @@ class SceneWatch:
 
     A goal already true at the start is listed in `at_start`, never as reached; every other goal keeps
     its own history from step 0 (ordered goals), and `reached` maps it to the first step it held.
-    Call `observe()` after every `env.step`. `task_goal` is the goal whose order `wrong_order` judges (the
-    env's task's unless given: a shared rollout judges each member's).
+    Call `observe()` after every `env.step`. `wrong_order` judges the env's task goal (`OrderWatch`).
     """
 
-    def __init__(self, env: TaskEnv, goals: Mapping[str, Goal], task_goal: Goal | None = None):
+    def __init__(self, env: TaskEnv, goals: Mapping[str, Goal]):
         self._env = env
         self.goals = dict(goals)
         self.at_start = self.holding()
         self._pending = {name: GoalProgress(goal) for name, goal in self.goals.items() if name not in self.at_start}
-        # The task's goal unordered tells a wrong order (all parts held, not in the order asked).
-        task_goal = env.task.goal if task_goal is None else task_goal
-        self._ordered = GoalProgress(unordered(task_goal)) if is_ordered(task_goal) else None
+        self._order = OrderWatch(env, env.task.goal)
         self.reached: dict[str, int] = {}
-        for progress in [*self._pending.values(), *([self._ordered] if self._ordered else [])]:
+        for progress in self._pending.values():
             progress.observe(0, env.predicate_holds)
 
     def observe(self) -> None:
@@ -37,8 +34,7 @@ class SceneWatch:
         for name, progress in self._pending.items():
             if progress.observe(step, truth) and name not in self.reached:
                 self.reached[name] = step
-        if self._ordered is not None:
-            self._ordered.observe(step, truth)
+        self._order.observe()
 
     def holding(self) -> list[str]:
         """The watched goals that hold in the current state, order ignored."""
@@ -46,4 +42,22 @@ class SceneWatch:
 
     def wrong_order(self, success: bool) -> bool:
         """Whether an ordered task goal's parts all held at some step without the goal being met."""
-        return not success and self._ordered is not None and self._ordered.first_held is not None
+        return self._order.wrong(success)
+
+
+class OrderWatch:
+    """Whether an ordered `goal`'s parts all held at some step on `env`, order ignored (from step 0; call
+    `observe()` after every `env.step`): a goal not met although they did came in the wrong order."""
+
+    def __init__(self, env: TaskEnv, goal: Goal):
+        self._env = env
+        self._unordered = GoalProgress(unordered(goal)) if is_ordered(goal) else None
+        self.observe()
+
+    def observe(self) -> None:
+        if self._unordered is not None:
+            self._unordered.observe(self._env.steps, self._env.predicate_holds)
+
+    def wrong(self, success: bool) -> bool:
+        """Whether the goal was not met although all its parts held at some step."""
+        return not success and self._unordered is not None and self._unordered.first_held is not None

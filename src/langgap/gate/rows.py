@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 
@@ -53,19 +54,45 @@ class TaskValidation:
     def verdict(self, inits: int, made_by: str = "", proof: str = "", physics: dict | None = None) -> GateResult:
         """The verdict to record, for a gate that ran init states 0..`inits`-1 as `made_by` says, on the physics
         stack `physics` (with `proof`, the text of a proof that no policy can do the task, `langgap.proofs`)."""
-        return GateResult(
-            episodes=self.episodes,
-            successes=self.successes,
-            feasible=self.feasible,
-            reason=self.reason,
-            inits=inits,
-            failed_inits=tuple(self.failed_inits),
-            made_by=made_by,
+        return gate_result(
+            self,
+            inits,
+            made_by,
+            physics,
             proof=proof,
             demonstration=self.demonstration if self.demonstrated_inits else "",
             demonstrated_inits=tuple(self.demonstrated_inits),
-            physics=dict(physics or {}),
         )
+
+
+class JudgedRow(Protocol):
+    """What a gate's row per task holds about the oracle's episodes (`TaskValidation`, a switch gate's row)."""
+
+    episodes: int
+    successes: int
+    failed_inits: list[int]
+
+    @property
+    def feasible(self) -> bool: ...
+
+    @property
+    def reason(self) -> str: ...
+
+
+def gate_result(row: JudgedRow, inits: int, made_by: str, physics: dict | None, **evidence) -> GateResult:
+    """The verdict on `row`'s task for a gate that ran init states 0..`inits`-1 as `made_by` says, on the physics
+    stack `physics`; `evidence`, the verdict's other fields (a proof, searched demonstrations)."""
+    return GateResult(
+        episodes=row.episodes,
+        successes=row.successes,
+        feasible=row.feasible,
+        reason=row.reason,
+        inits=inits,
+        failed_inits=tuple(row.failed_inits),
+        made_by=made_by,
+        physics=dict(physics or {}),
+        **evidence,
+    )
 
 
 def goals_exclude(a: Goal, b: Goal) -> bool:

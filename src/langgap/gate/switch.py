@@ -23,6 +23,7 @@ from langgap.engine.plan import switch_step
 from langgap.engine.spec import ExecutionOptions, RunSpec
 from langgap.errors import LangGapError
 from langgap.gate.recording import provenance
+from langgap.gate.rows import gate_result
 from langgap.records import EpisodeRecord
 from langgap.stack import DEFAULT_STEPPING
 from langgap.store import RunStore
@@ -57,16 +58,7 @@ class SwitchGateRow:
 
     def verdict(self, inits: int, made_by: str, physics: dict) -> GateResult:
         """The verdict to record for a gate that ran init states 0..`inits`-1 as `made_by` says, on `physics`."""
-        return GateResult(
-            episodes=self.episodes,
-            successes=self.successes,
-            feasible=self.feasible,
-            reason=self.reason,
-            inits=inits,
-            failed_inits=tuple(self.failed_inits),
-            made_by=made_by,
-            physics=physics,
-        )
+        return gate_result(self, inits, made_by, physics)
 
 
 def switch_conditions(conditions: list[str]) -> tuple[str, ...]:
