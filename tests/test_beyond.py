@@ -110,6 +110,22 @@ def test_paraphrase_and_attribute_keep_the_source_goal(beyond):
     assert not [t for t in beyond.select("attribute_reference") if t.suite == "libero_spatial"]
 
 
+def test_a_task_whose_gate_trial_repeats_its_sources_takes_the_sources_verdict(beyond, catalog):
+    """Originals, paraphrases and attribute references run their source's file outside (:language), init states,
+    goal and step limit: they take its LangGap-99 verdict (re-gating them would repeat its episodes); a task whose
+    file differs elsewhere (its objects of interest) or whose goal is another gets its own."""
+    source = catalog.get("goal/s8/black-bowl-on-plate")
+    for task_id in (source.id, "goal/s8/black-bowl-on-plate~by-attribute", "goal/s8/black-bowl-on-plate~passive"):
+        task = beyond.get(task_id)
+        assert task.gate_from == f"langgap99:{source.id}", task_id
+        assert task.gate.inherited_from == task.gate_from and task.gate.successes == source.gate.successes
+    assert beyond.get(NEGATED).gate_from is None and beyond.get(OUT_OF_ORDER).gate_from is None
+    taking = {t.id for t in beyond if t.gate_from is not None}
+    differs = [t for t in [*beyond.select("paraphrase"), *beyond.select("attribute_reference")] if t.id not in taking]
+    assert differs and all(t.obj_of_interest != beyond.get(t.source).obj_of_interest for t in differs)
+    assert len(taking) == 40 + 118 + 17
+
+
 ORDER_SOURCE = "goal/s8/black-bowl-on-plate"
 IN_ORDER = "goal/s8/first-turn-on-stove-then-black-bowl-on-plate"  # fixtures first, as the oracle would unordered
 OUT_OF_ORDER = "goal/s8/first-black-bowl-on-plate-then-turn-on-stove"

@@ -179,8 +179,8 @@ def test_a_variant_that_repeats_its_sources_trial_takes_its_verdict_and_is_not_r
     import dataclasses
 
     from langgap.catalog.catalog import gate_snapshot, load_catalog, registry_path
-    from langgap.catalog.external import _same_trial
     from langgap.catalog.files import task_bddl_text
+    from langgap.catalog.identity import same_trial
 
     source = load_catalog("langgap99").get("spatial/s0/black-bowl-1-on-plate")
     pro = load_catalog("libero-pro")
@@ -189,14 +189,17 @@ def test_a_variant_that_repeats_its_sources_trial_takes_its_verdict_and_is_not_r
     assert pro.get("spatial/s0/pro-lan").gate_from is None and pro.get("spatial/s0/pro-lan").gate is None
     assert pro.get("spatial/s0/pro-task").gate_from is None
 
+    def _trial(task, text):
+        return same_trial(task, source, text, starts_from_source=task.origin.init_runs == "source")
+
     text = task_bddl_text(source)
     reworded = dataclasses.replace(pro.get("spatial/s0/pro-lan"), origin=dataclasses.replace(
         pro.get("spatial/s0/pro-lan").origin, init_runs="source"))  # fmt: skip
-    assert _same_trial(reworded, source, text.replace("(:language", "(:language Do it;")) == f"langgap99:{source.id}"
-    assert _same_trial(reworded, source, text.replace("(:fixtures", "(:fixtures\n    extra_table - table")) is None
-    assert _same_trial(pro.get("spatial/s0/pro-lan"), source, text) is None  # its own init states
-    assert _same_trial(dataclasses.replace(reworded, goal=pro.get("spatial/s0/pro-task").goal), source, text) is None
-    assert _same_trial(dataclasses.replace(reworded, max_steps=source.max_steps + 1), source, text) is None
+    assert _trial(reworded, text.replace("(:language", "(:language Do it;")) == f"langgap99:{source.id}"
+    assert _trial(reworded, text.replace("(:fixtures", "(:fixtures\n    extra_table - table")) is None
+    assert _trial(pro.get("spatial/s0/pro-lan"), text) is None  # its own init states
+    assert _trial(dataclasses.replace(reworded, goal=pro.get("spatial/s0/pro-task").goal), text) is None
+    assert _trial(dataclasses.replace(reworded, max_steps=source.max_steps + 1), text) is None
 
     # A run's snapshot holds the taken verdict and the hash of the file it was read from.
     snapshot = gate_snapshot("libero-pro", [source.id, "spatial/s0/pro-lan"])

