@@ -123,7 +123,15 @@ def test_no_verdict_when_every_extended_task_asks_for_its_originals_goal(tmp_pat
         "p = 1); every extended task asks for its original's goal in other words, which a policy that ignores its "
         "instruction does as well, so these tasks cannot show whether it reads it."
     )
-    # One task that asks for another goal is enough for a verdict.
+    # One task that asks for another goal is enough for a verdict, and it rests on such tasks alone: blind does
+    # the rewordings (as LIBERO-PRO's language variants beside its task variants) but not the other goal.
     mixed = reworded[:2] + [episode(STOVE, k, reached={SOURCE: 5}) for k in range(2)]
     (run,) = summarize(load_runs([write_run(tmp_path / "mixed", "blind", originals + mixed)])).runs
-    assert run.answer.verdict == "reads its instruction weakly"
+    assert run.answer.verdict == "hardly reads its instruction"
+    assert run.answer.text == (
+        "blind (mixed) hardly reads its instruction: 100 % on original tasks vs 0 % [0, 66] on extended tasks that "
+        "ask for another goal (paired with their originals: p = 0.5); no oracle verdict covers them; 100 % of its "
+        "extended-task failures did the scene's original task instead (100 % [34, 100] of its extended episodes); "
+        "1 task that rewords the original's goal left out (a policy that ignores its instruction does them as well)."
+    )
+    assert run.source("extended").rate == 0.5  # the table's extended row keeps every extended task

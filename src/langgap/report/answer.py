@@ -43,6 +43,7 @@ class Answer:
     against_blind: PairedTest | None  # extended episodes against a compared blind run's
     gaps: int
     same_goal_only: bool = False  # every extended task asks for its source's goal in other words
+    reworded_left_out: int = 0  # extended tasks left out of `extended`: rewordings of their source's goal
 
     @property
     def verdict(self) -> str | None:
@@ -103,8 +104,20 @@ class Answer:
         were = "episode was a gap" if self.gaps == 1 else "episodes were gaps"
         gaps = f"; {self.gaps} {were}, left out" if self.gaps else ""
         return (
-            f"{head}: {on_originals} vs {percent(extended.rate)} {interval(extended)} on extended tasks"
-            f"{self._tests()}; {oracle}; {self._instead()}{gaps}."
+            f"{head}: {on_originals} vs {percent(extended.rate)} {interval(extended)} on {self._which()}"
+            f"{self._tests()}; {oracle}; {self._instead()}{gaps}{self._left_out()}."
+        )
+
+    def _which(self) -> str:
+        return "extended tasks that ask for another goal" if self.reworded_left_out else "extended tasks"
+
+    def _left_out(self) -> str:
+        if not self.reworded_left_out:
+            return ""
+        these = "task that rewords" if self.reworded_left_out == 1 else "tasks that reword"
+        return (
+            f"; {self.reworded_left_out} {these} the original's goal left out (a policy that ignores its "
+            "instruction does them as well)"
         )
 
     def as_dict(self) -> dict:

@@ -7,6 +7,7 @@ failures, and every row carries the number it left out.
 
 from __future__ import annotations
 
+import functools
 import statistics
 from collections import Counter, defaultdict
 from collections.abc import Callable, Iterable, Mapping
@@ -390,6 +391,10 @@ class RunResults:
     against_blind: PairedTest | None = None  # extended episodes against a compared `blind` run's (`summarize`)
     switches: list[SwitchRow] = field(default_factory=list)  # `switch:K` episodes per K and dimension
     same_goal_only: bool = False  # every extended episode's task asks for its source's goal in other words
+    # The extended episodes the answer rests on: those whose task asks for another goal than its source's, when
+    # the run has both kinds (a policy that ignores its instruction does a rewording of the source's goal as well).
+    asked: Rate | None = None
+    reworded_left_out: int = 0  # tasks (rewordings of their source's goal) the answer leaves out
 
     @property
     def label(self) -> str:
@@ -404,16 +409,17 @@ class RunResults:
     @property
     def answer(self) -> Answer:
         """The run's opening sentence and what it rests on."""
-        original, extended = self.source("original"), self.source("extended")
+        original = self.source("original")
         return Answer(
             self.label,
             original,
-            extended,
+            self.asked or self.source("extended"),
             self.default_task,
             self.against_originals,
             self.against_blind,
             self.gaps,
             self.same_goal_only,
+            self.reworded_left_out,
         )
 
 
@@ -422,6 +428,7 @@ def results(run: Run) -> RunResults:
     given = [r for r in run.records if r.condition == "given"]
     extended = [r for r in given if r.kind == "extended"]
     originals = [r for r in given if r.kind == "original"]
+    asked = [r for r in extended if answered_by(r, mixed=True)] or extended
     order = {d: i for i, d in enumerate(("original", *KNOWN_DIMENSIONS))}
     info = {r.task_id: r for r in given}
     per_outcome: dict[str, Counter] = defaultdict(Counter)
@@ -460,11 +467,24 @@ def results(run: Run) -> RunResults:
         capped={t.rate.group: why for t in tasks if (why := capped_because(t.rate, gates.get(t.rate.group)))},
         other_stack=verdicts_on_other_stacks(gates, info),
         gate_source=run.gate_source,
-        against_originals=against_sources(given),
-        default_task=default_task(extended),
+        against_originals=against_sources(originals + asked),
+        default_task=default_task(asked),
         switches=switch_rows(run.records, run.switch_gates),
         same_goal_only=bool(extended) and all(r.dimension in SAME_GOAL_DIMENSIONS for r in extended),
+        asked=rate("extended", asked, gates) if len(asked) < len(extended) else None,
+        reworded_left_out=len({r.task_id for r in extended}) - len({r.task_id for r in asked}),
     )
+
+
+def answered_given(record: EpisodeRecord, *, mixed: bool) -> bool:
+    """Whether `record` is an extended episode under the given instruction that a run's answer rests on."""
+    return record.kind == "extended" and record.condition == "given" and answered_by(record, mixed=mixed)
+
+
+def answered_by(record: EpisodeRecord, *, mixed: bool) -> bool:
+    """Whether the answer of a run rests on `record`, an extended episode: in a run that `mixed` rewordings of a
+    source's goal with tasks asking for another goal, only the latter; otherwise every one."""
+    return not mixed or record.dimension not in SAME_GOAL_DIMENSIONS
 
 
 def shown_dimensions(runs: list[RunResults]) -> list[str]:
@@ -637,10 +657,9 @@ def summarize(runs: list[Run], *, allow_mismatch: bool = False) -> Summary:
         (run, result) for run, result in zip(runs, results_, strict=True) if run.spec.get("policy") == BLIND_POLICY
     ]
 
-    def extended(r: EpisodeRecord) -> bool:
-        return r.kind == "extended" and r.condition == "given"
-
     for run, result in zip(runs, results_, strict=True):
+        extended = functools.partial(answered_given, mixed=result.asked is not None)
+
         others = [(blind, blind_result) for blind, blind_result in blinds if blind is not run]
         # The blind run with the same protocol (on the same catalog, when runs of several catalogs are given).
         matched = (blind for blind, blind_result in others if not protocol_differences(blind_result, result))
