@@ -165,6 +165,22 @@ def test_local_ray_instance_when_no_address_is_given(short_catalog, tmp_path):
     assert len(store_rows(run)) == 3
 
 
+def test_a_validation_starts_one_local_ray_instance_for_all_its_parts(short_catalog):
+    """The gate's episodes and its settle probes (and searches) run on one local Ray instance, not one each:
+    Ray writes a session directory per instance it starts."""
+    ray_tmp = _ray_tmp()
+    result = _in_network_namespace(
+        f"""
+        python -m langgap.cli.main validate --catalog {short_catalog} --inits 1 --workers 1 --backend ray \
+            --search-budget 0 --no-progress || test $? -eq 1
+    """,
+        ray_tmp,
+    )
+    assert result.returncode == 0, result.stderr
+    assert "spatial/s0/" in result.stdout  # its rows: the episodes ran
+    assert len(list((ray_tmp / "ray").glob("session_2*"))) == 1
+
+
 def test_core_works_without_ray(short_catalog, tmp_path):
     block_ray = "import sys; sys.modules['ray'] = None; from langgap.cli.main import main; sys.exit(main(sys.argv[1:]))"
     base = [

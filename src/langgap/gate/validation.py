@@ -27,6 +27,7 @@ from pathlib import Path
 from langgap.catalog.catalog import load_catalog
 from langgap.demos.searched import stored_demonstrations
 from langgap.engine.evaluate import evaluate
+from langgap.engine.pools import backend_session
 from langgap.engine.spec import ExecutionOptions, RunSpec
 from langgap.gate.claims import Claim, benchmark_claims
 from langgap.gate.probes import settle_drifts
@@ -73,8 +74,9 @@ def validate(
     (a directory; the run's, or a temporary one, when None), replayed from there and counted.
 
     Every part (the episodes, the searches, the settle probes) is work for the engine's scheduler, run
-    as `options` say (backend, workers, retries, timeouts, progress). A task with `gate_from` takes that task's
-    verdict (its trial would repeat that one's exactly) and is not run: it is listed in `inherited`."""
+    as `options` say (backend, workers, retries, timeouts, progress), all on one connection to the backend
+    (one local Ray instance). A task with `gate_from` takes that task's verdict (its trial would repeat that
+    one's exactly) and is not run: it is listed in `inherited`."""
     catalog = load_catalog(catalog_name)
     selected = catalog.select(selection)
     tasks = [t for t in selected if t.gate_from is None]
@@ -90,7 +92,7 @@ def validate(
         with RunStore.open(directory) as store:
             return store.records()
 
-    with tempfile.TemporaryDirectory(prefix="langgap-validate-") as scratch:
+    with backend_session(options), tempfile.TemporaryDirectory(prefix="langgap-validate-") as scratch:
         directory = Path(run) if run is not None else Path(scratch) / "run"
         records = episodes(policy, directory)
         blind_records = episodes("blind", directory.with_name(directory.name + "-blind")) if blind else None
@@ -104,10 +106,10 @@ def validate(
             demonstrated = demonstrate(
                 catalog_name, failures, where, stepping=stepping, budget=search_budget, options=options
             )
+        drift_by_scene = settle_drifts(catalog_name, tasks, options)
     by_task: dict[str, list[EpisodeRecord]] = {}
     for record in records:
         by_task.setdefault(record.task_id, []).append(record)
-    drift_by_scene = settle_drifts(catalog_name, tasks, options)
     rows = []
     for task in tasks:
         drift = drift_by_scene[(task.suite, task.scene_task)]

@@ -10,7 +10,8 @@ workers (`--shared-policy`: a policy process, or a policy actor).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import contextlib
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
@@ -93,6 +94,19 @@ def _ray(setup: RunnerSetup, options: ExecutionOptions) -> WorkerPool:
 
 
 BACKENDS: dict[str, PoolFactory] = {"local": _local, "ray": _ray}
+
+
+@contextlib.contextmanager
+def backend_session(options: ExecutionOptions) -> Iterator[None]:
+    """Keep the backend's connection open across several engine calls made inside (a validation's episodes,
+    searches and settle probes start one local Ray instance, not one each); a no-op for `local`."""
+    if options.backend != "ray":
+        yield
+        return
+    from langgap.engine.pools.ray import ray_session
+
+    with ray_session(options):
+        yield
 
 
 def make_pool(setup: RunnerSetup, options: ExecutionOptions) -> WorkerPool:

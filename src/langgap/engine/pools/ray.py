@@ -12,9 +12,11 @@ serves every environment actor, batching their queries (`langgap.engine.shared_p
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import tempfile
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -121,13 +123,41 @@ def start_loopback_instance(ray, num_cpus: int, **init_options) -> None:
         ray_constants.ENABLE_RAY_CLUSTER = saved[1]
 
 
+def connect(ray, options: ExecutionOptions) -> bool:
+    """Connect to the cluster at `options.ray_address` (or start a local instance) unless this process is
+    connected already; returns whether it connected now (and so is the one to shut Ray down)."""
+    if ray.is_initialized():
+        return False
+    common = dict(include_dashboard=False, log_to_driver=False, configure_logging=False)
+    try:
+        if options.ray_address:
+            ray.init(address=options.ray_address, **common)
+        else:
+            start_loopback_instance(ray, options.workers, **common)
+    except ConnectionError as exc:
+        raise LangGapError(f"cannot reach the Ray cluster at {options.ray_address}: {exc}") from None
+    return True
+
+
+@contextlib.contextmanager
+def ray_session(options: ExecutionOptions) -> Iterator[None]:
+    """One Ray connection for every pool made inside (`connect`): pools find it and leave it open."""
+    ray = import_ray()
+    started = connect(ray, options)
+    try:
+        yield
+    finally:
+        if started:
+            ray.shutdown()
+
+
 class RayPool:
     """Environment actors on a Ray cluster (a local one when no address is given)."""
 
     def __init__(self, setup: RunnerSetup, options: ExecutionOptions):
         ray = import_ray()
         self._ray = ray
-        self._started = self._connect(options)
+        self._started = connect(ray, options)
         self.server = None
         self.server_stats: dict = {}
         try:
@@ -147,21 +177,6 @@ class RayPool:
         self._actors: dict[int, object] = {}
         self._running: dict[object, int] = {}  # object ref -> worker
         self._next_id = 0
-
-    def _connect(self, options: ExecutionOptions) -> bool:
-        """Connect to (or start) Ray; returns whether this pool started it (and so shuts it down)."""
-        ray = self._ray
-        if ray.is_initialized():
-            return False
-        common = dict(include_dashboard=False, log_to_driver=False, configure_logging=False)
-        try:
-            if options.ray_address:
-                ray.init(address=options.ray_address, **common)
-            else:
-                start_loopback_instance(ray, options.workers, **common)
-        except ConnectionError as exc:
-            raise LangGapError(f"cannot reach the Ray cluster at {options.ray_address}: {exc}") from None
-        return True
 
     def _check_gpus(self, gpus: float) -> None:
         available = self._ray.cluster_resources().get("GPU", 0)
