@@ -3,6 +3,7 @@ and every record equals the one its own episode gives (real simulation, real wor
 
 from __future__ import annotations
 
+import json
 import shutil
 import sqlite3
 
@@ -16,7 +17,9 @@ MEASURED = {"wall_time_s", "finished_at", "worker"}
 # siblings run to the limit and record the source's goal as reached instead.
 STEPS = 90
 SCENE_TASKS = (TINY_TASK, "spatial/s0/black-bowl-2-on-plate", "spatial/s0/open-cabinet-top-drawer")
-BLIND = ("--policy", "blind", "--episodes", "2", "--condition", "given", "--condition", "nonsense")
+# switch:20 switches before the source's early success, switch:80 after it: a member that ended first never sent it.
+SWITCHES = ("--condition", "switch:20", "--condition", "switch:80")
+BLIND = ("--policy", "blind", "--episodes", "2", "--condition", "given", "--condition", "nonsense", *SWITCHES)
 
 
 @pytest.fixture(scope="module")
@@ -54,11 +57,17 @@ def _results(run) -> list[dict]:
 def test_shared_rollouts_give_each_episode_its_own_record(runs):
     """`eval --share-rollouts` (`runs`): every field but the measured ones equals the separate run's."""
     root, stdout = runs
-    # 3 tasks x 2 conditions share one rollout per init state.
-    assert "shared rollouts: 12 episodes in 2 rollouts" in stdout
+    # 3 tasks x 2 conditions share one rollout per init state; the switch:K episodes one per init state and K.
+    assert "shared rollouts: 24 episodes in 6 rollouts" in stdout
     separate, shared = _results(root / "separate"), _results(root / "shared")
-    assert len(separate) == 12
+    assert len(separate) == 24
     assert shared == separate
+    switched = [r for r in shared if r["condition"].startswith("switch:")]
+    assert {r["outcome"] for r in switched} >= {"persisted", "success"}
+    assert {len(json.loads(r["instructions"])) for r in switched if r["condition"] == "switch:80" and r["success"]} == {
+        1
+    }
+    shared = [r for r in shared if not r["condition"].startswith("switch:")]
     # What the cut has to get right: a member that ends early, members that run on past it to the limit
     # and see its goal reached instead, each with its own end state, policy calls and instruction.
     early = [r for r in shared if r["success"]]
@@ -84,11 +93,11 @@ def test_a_resumed_shared_run_reruns_only_the_missing_members_of_a_rollout(runs,
     common = (*BLIND, "--catalog", scene_catalog, "--no-progress", "--quiet", "--share-rollouts")
     result = run_cli("eval", *common, "--workers", "0", "--run", str(resumed), "--resume")
     assert result.returncode == 0, result.stderr
-    assert "10 already stored, 2 run" in result.stdout
+    assert "22 already stored, 2 run" in result.stdout
     assert "shared rollouts: 2 episodes in 1 rollouts" in result.stdout
     assert _results(resumed) == _results(root / "separate")
     again = run_cli("eval", *common, "--workers", "0", "--run", str(resumed), "--resume")
-    assert "12 already stored, 0 run" in again.stdout and "shared rollouts" not in again.stdout
+    assert "24 already stored, 0 run" in again.stdout and "shared rollouts" not in again.stdout
 
 
 def test_a_malformed_action_ends_every_member_still_running_as_its_own_episode_would(short_catalog, tmp_path):

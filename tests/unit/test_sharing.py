@@ -50,7 +50,11 @@ def test_what_cannot_be_cut_from_a_shared_rollout_runs_on_its_own(catalog):
     planned = _planned(catalog, SIBLINGS[0])
     assert rollout_key(planned, catalog, blind, "libero") is not None
     assert rollout_key(replace(planned, film=True), catalog, blind, "libero") is None
-    assert rollout_key(replace(planned, changes=((5, "other"),)), catalog, blind, "libero") is None
+    # A switch asks the policy again at its step: only episodes switching at the same steps share.
+    switched = rollout_key(replace(planned, changes=((5, "other"),)), catalog, blind, "libero")
+    assert switched is not None and switched != rollout_key(planned, catalog, blind, "libero")
+    assert switched == rollout_key(replace(planned, changes=((5, "another"),)), catalog, blind, "libero")
+    assert switched != rollout_key(replace(planned, changes=((6, "other"),)), catalog, blind, "libero")
     assert rollout_key(planned, catalog, OraclePolicy.spec, "libero") is None
     plan = [_planned(catalog, t) for t in SIBLINGS]
     assert share_rollouts(plan, catalog, OraclePolicy.spec, "libero") == plan

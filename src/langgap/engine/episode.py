@@ -191,7 +191,14 @@ def execute_shared(
     )
     started = time.perf_counter()
     goals = {task_id: task.goal for task_id, task in tasks.items()}
-    rollout = run_shared_episode(env, policy, context, goals, watch=scene_goals(tasks[lead.key.task_id], catalog))
+    rollout = run_shared_episode(
+        env,
+        policy,
+        context,
+        goals,
+        watch=scene_goals(tasks[lead.key.task_id], catalog),
+        change_steps=[step for step, _ in lead.changes],
+    )
     error = rollout.error
     if error is not None and not isinstance(error, PolicyOutputError) and not rollout.results:
         raise error
@@ -200,7 +207,7 @@ def execute_shared(
         task = tasks[planned.key.task_id]
         result = rollout.results.get(task.id)
         if result is not None:
-            result = replace(result, instructions=[(0, planned.instruction)])
+            result = replace(result, instructions=_instructions_sent(planned, result.steps))
             records.append(_judged_record(planned, task, result, rollout.ended_after_s[task.id], common))
         elif isinstance(error, PolicyOutputError):
             wall = time.perf_counter() - started
@@ -217,6 +224,12 @@ def execute_shared(
                 )
             )
     return records
+
+
+def _instructions_sent(planned: PlannedEpisode, steps: int) -> list[tuple[int, str]]:
+    """The (policy step, instruction) of every instruction `planned`'s episode sent in its `steps` steps: the
+    first, and each change at a step the episode acted in (as `run_episode` records them)."""
+    return [(0, planned.instruction), *((step, text) for step, text in sorted(planned.changes) if step < steps)]
 
 
 def gap_record(

@@ -181,7 +181,13 @@ class SharedRollout:
 
 
 def run_shared_episode(
-    env: TaskEnv, policy: Policy, context: TaskContext, goals: Mapping[str, Goal], *, watch: Mapping[str, Goal]
+    env: TaskEnv,
+    policy: Policy,
+    context: TaskContext,
+    goals: Mapping[str, Goal],
+    *,
+    watch: Mapping[str, Goal],
+    change_steps: Sequence[int] = (),
 ) -> SharedRollout:
     """One rollout of an instruction-blind policy judged as the episode of every goal in `goals` (name ->
     task goal; every task set in `env`'s scene, with `env`'s step limit): the policy acts until each goal
@@ -190,8 +196,10 @@ def run_shared_episode(
     goals (`watch`), policy calls and wrong order as of that step.
 
     The policy must act the same whatever the episode's goal: its spec's `reads_instruction` is False and
-    `context` is the one every goal's episode would give it (`TaskContext.for_policy` of each is equal).
-    Exceptions are caught into `error`: the results decided before stay exact.
+    `context` is the one every goal's episode would give it (`TaskContext.for_policy` of each is equal), and
+    every episode's instruction changes at `change_steps` (the policy is asked again there; what it changes to
+    is each member's, recorded by the caller). Exceptions are caught into `error`: the results decided before
+    stay exact.
     """
     rollout = SharedRollout()
     started = time.perf_counter()
@@ -217,7 +225,8 @@ def run_shared_episode(
                     rollout.ended_after_s[name] = time.perf_counter() - started
             return len(rollout.results) == len(goals)
 
-        _act(env, policy, context, decided)
+        # The policy never sees the instruction (`observation_for`): the text a change carries does not matter.
+        _act(env, policy, context, decided, changes=[(step, "") for step in change_steps])
     except Exception as exc:  # the caller decides what an early end means for the goals still undecided
         rollout.error = exc
     return rollout

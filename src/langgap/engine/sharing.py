@@ -7,8 +7,9 @@ but their source's goal (`TaskContext.for_policy`). Episodes of such a policy wh
 and the same context as the policy sees it, get the same actions step for step, whatever their task or
 condition: they run as one `SharedRollout`, judged as each member's episode (`run_shared_episode`). Only the
 episodes whose records can be cut from that rollout exactly share it: never one that is filmed (its clip
-would show the shared rollout past its own end) nor one whose instruction switches (the switch re-asks the
-policy mid-chunk, so its actions can differ).
+would show the shared rollout past its own end). An instruction that switches re-asks the policy at the
+switch, mid-chunk, so its actions can differ from an unswitched episode's: episodes share a rollout only
+with episodes whose instruction switches at the same policy steps (`switch:K` ones of one K, with each other).
 """
 
 from __future__ import annotations
@@ -52,13 +53,19 @@ class SharedRollout:
 
 def rollout_key(planned: PlannedEpisode, catalog: Catalog, spec: PolicySpec, style: str) -> Hashable | None:
     """What a planned episode of a policy with `spec` shares its rollout by (None: it runs on its own)."""
-    if spec.reads_instruction or planned.film or planned.changes:
+    if spec.reads_instruction or planned.film:
         return None
     task = catalog.get(planned.task_id)
     context = planned_context(planned, task, catalog, style).for_policy(spec)
-    # The start (`TaskEnv.can_switch_to`), and everything the policy is told (the context holds the init
-    # index, seed and step limit).
-    return task.suite, task.scene_task, files.scene_key(task), str(files.init_states_path(task)), context
+    # The start (`TaskEnv.can_switch_to`), everything the policy is told (the context holds the init index, seed
+    # and step limit), and when it is asked again because its instruction switched.
+    start = task.suite, task.scene_task, files.scene_key(task), str(files.init_states_path(task))
+    return *start, context, change_steps(planned)
+
+
+def change_steps(planned: PlannedEpisode) -> tuple[int, ...]:
+    """The policy steps at which `planned`'s instruction changes."""
+    return tuple(sorted(step for step, _ in planned.changes))
 
 
 def share_rollouts(
