@@ -207,7 +207,7 @@ def execute_shared(
         task = tasks[planned.key.task_id]
         result = rollout.results.get(task.id)
         if result is not None:
-            result = replace(result, instructions=_instructions_sent(planned, result.steps))
+            result = replace(result, instructions=_own_instructions(planned, result.instructions))
             records.append(_judged_record(planned, task, result, rollout.ended_after_s[task.id], common))
         elif isinstance(error, PolicyOutputError):
             wall = time.perf_counter() - started
@@ -226,10 +226,11 @@ def execute_shared(
     return records
 
 
-def _instructions_sent(planned: PlannedEpisode, steps: int) -> list[tuple[int, str]]:
-    """The (policy step, instruction) of every instruction `planned`'s episode sent in its `steps` steps: the
-    first, and each change at a step the episode acted in (as `run_episode` records them)."""
-    return [(0, planned.instruction), *((step, text) for step, text in sorted(planned.changes) if step < steps)]
+def _own_instructions(planned: PlannedEpisode, sent: list[tuple[int, str]]) -> list[tuple[int, str]]:
+    """The steps of the instructions a shared rollout `sent` before `planned`'s episode ended, each with the
+    instruction `planned`'s own episode sent there: its first, then its changes in order."""
+    texts = [planned.instruction, *(text for _, text in sorted(planned.changes))]
+    return [(step, text) for (step, _), text in zip(sent, texts, strict=False)]
 
 
 def gap_record(

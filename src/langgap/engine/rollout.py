@@ -82,7 +82,7 @@ def run_episode(
     _begin(env, policy, context, settle_steps=settle_steps, sampled_start=sampled_start, on_start=on_start)
     scene = SceneWatch(env, watch or {})
 
-    def observed(success: bool, _calls: int) -> bool:
+    def observed(success: bool, _calls: int, _sent: list[tuple[int, str]]) -> bool:
         scene.observe()
         return success
 
@@ -136,14 +136,14 @@ def _act(
     env: TaskEnv,
     policy: Policy,
     context: TaskContext,
-    stop: Callable[[bool, int], bool],
+    stop: Callable[[bool, int, list[tuple[int, str]]], bool],
     *,
     on_step: StepHook | None = None,
     changes: Sequence[tuple[int, str]] = (),
 ) -> tuple[int, list[tuple[int, str]]]:
-    """The policy acts, step by step, until `stop(success, policy calls so far)` (called after every step,
-    before `on_step`; `success`: the env's task goal) says so or the step limit is reached.
-    Returns (policy calls, the (policy step, instruction) of every instruction sent)."""
+    """The policy acts, step by step, until `stop(success, policy calls so far, instructions sent so far)`
+    (called after every step, before `on_step`; `success`: the env's task goal) says so or the step limit is
+    reached. Returns (policy calls, the (policy step, instruction) of every instruction sent)."""
     spec = policy.spec
     queue: list[np.ndarray] = []
     calls = 0
@@ -162,7 +162,7 @@ def _act(
         # The policy is asked after this step when its chunk runs out or the instruction switches there.
         asked_next = not queue or bool(pending and pending[0][0] <= env.steps + 1)
         success = env.step(action, capture=_cameras_read_after(env, spec.cameras if asked_next else (), on_step))
-        stopping = stop(success, calls)
+        stopping = stop(success, calls, instructions)
         if on_step is not None:
             on_step(env, env.steps, action)
         if stopping:
@@ -197,9 +197,10 @@ def run_shared_episode(
 
     The policy must act the same whatever the episode's goal: its spec's `reads_instruction` is False and
     `context` is the one every goal's episode would give it (`TaskContext.for_policy` of each is equal), and
-    every episode's instruction changes at `change_steps` (the policy is asked again there; what it changes to
-    is each member's, recorded by the caller). Exceptions are caught into `error`: the results decided before
-    stay exact.
+    every episode's instruction changes at `change_steps` (the policy is asked again there). Each result's
+    `instructions` holds the steps of the instructions sent up to its end, with the context's first instruction
+    and empty changes: what they changed to is each member's (the caller's). Exceptions are caught into
+    `error`: the results decided before stay exact.
     """
     rollout = SharedRollout()
     started = time.perf_counter()
@@ -214,14 +215,14 @@ def run_shared_episode(
         for judged in progress.values():
             judged.observe(0, env.predicate_holds)
 
-        def decided(_success: bool, calls: int) -> bool:
+        def decided(_success: bool, calls: int, sent: list[tuple[int, str]]) -> bool:
             scene.observe()
             for name in [n for n in goals if n not in rollout.results]:
                 orders[name].observe()
                 success = progress[name].observe(env.steps, env.predicate_holds)
                 if success or env.truncated:
                     wrong = orders[name].wrong(success)
-                    rollout.results[name] = _result(env, scene, success, calls, [(0, context.instruction)], wrong)
+                    rollout.results[name] = _result(env, scene, success, calls, list(sent), wrong)
                     rollout.ended_after_s[name] = time.perf_counter() - started
             return len(rollout.results) == len(goals)
 
