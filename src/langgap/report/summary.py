@@ -390,11 +390,21 @@ class RunResults:
     default_task: Rate  # extended episodes that did the scene's original task instead (`default_task`)
     against_blind: PairedTest | None = None  # extended episodes against a compared `blind` run's (`summarize`)
     switches: list[SwitchRow] = field(default_factory=list)  # `switch:K` episodes per K and dimension
-    same_goal_only: bool = False  # every extended episode's task asks for its source's goal in other words
-    # The extended episodes the answer rests on: those whose task asks for another goal than its source's, when
-    # the run has both kinds (a policy that ignores its instruction does a rewording of the source's goal as well).
-    asked: Rate | None = None
-    reworded_left_out: int = 0  # tasks (rewordings of their source's goal) the answer leaves out
+    # The extended episodes the answer rests on (`answer_rests_on`) and how many extended tasks reword their
+    # source's goal (a policy that ignores its instruction does those as well as their sources).
+    answered: Rate | None = None
+    reworded: int = 0
+
+    @property
+    def same_goal_only(self) -> bool:
+        """Whether every extended task asks for its source's goal in other words."""
+        return 0 < self.reworded == self.source("extended").tasks
+
+    @property
+    def mixed(self) -> bool:
+        """Whether the run has both rewordings of a source's goal and tasks asking for another goal: its answer
+        rests on the latter."""
+        return 0 < self.reworded < self.source("extended").tasks
 
     @property
     def label(self) -> str:
@@ -413,13 +423,13 @@ class RunResults:
         return Answer(
             self.label,
             original,
-            self.asked or self.source("extended"),
+            self.answered or self.source("extended"),
             self.default_task,
             self.against_originals,
             self.against_blind,
             self.gaps,
             self.same_goal_only,
-            self.reworded_left_out,
+            self.reworded if self.mixed else 0,
         )
 
 
@@ -428,7 +438,9 @@ def results(run: Run) -> RunResults:
     given = [r for r in run.records if r.condition == "given"]
     extended = [r for r in given if r.kind == "extended"]
     originals = [r for r in given if r.kind == "original"]
-    asked = [r for r in extended if answered_by(r, mixed=True)] or extended
+    reworded = {r.task_id for r in extended if r.dimension in SAME_GOAL_DIMENSIONS}
+    mixed = 0 < len(reworded) < len({r.task_id for r in extended})
+    answered = [r for r in extended if answer_rests_on(r, mixed=mixed)]
     order = {d: i for i, d in enumerate(("original", *KNOWN_DIMENSIONS))}
     info = {r.task_id: r for r in given}
     per_outcome: dict[str, Counter] = defaultdict(Counter)
@@ -467,24 +479,19 @@ def results(run: Run) -> RunResults:
         capped={t.rate.group: why for t in tasks if (why := capped_because(t.rate, gates.get(t.rate.group)))},
         other_stack=verdicts_on_other_stacks(gates, info),
         gate_source=run.gate_source,
-        against_originals=against_sources(originals + asked),
-        default_task=default_task(asked),
+        against_originals=against_sources(originals + answered),
+        default_task=default_task(answered),
         switches=switch_rows(run.records, run.switch_gates),
-        same_goal_only=bool(extended) and all(r.dimension in SAME_GOAL_DIMENSIONS for r in extended),
-        asked=rate("extended", asked, gates) if len(asked) < len(extended) else None,
-        reworded_left_out=len({r.task_id for r in extended}) - len({r.task_id for r in asked}),
+        answered=rate("extended", answered, gates) if mixed else None,
+        reworded=len(reworded),
     )
 
 
-def answered_given(record: EpisodeRecord, *, mixed: bool) -> bool:
-    """Whether `record` is an extended episode under the given instruction that a run's answer rests on."""
-    return record.kind == "extended" and record.condition == "given" and answered_by(record, mixed=mixed)
-
-
-def answered_by(record: EpisodeRecord, *, mixed: bool) -> bool:
-    """Whether the answer of a run rests on `record`, an extended episode: in a run that `mixed` rewordings of a
-    source's goal with tasks asking for another goal, only the latter; otherwise every one."""
-    return not mixed or record.dimension not in SAME_GOAL_DIMENSIONS
+def answer_rests_on(record: EpisodeRecord, *, mixed: bool) -> bool:
+    """Whether a run's answer rests on `record`: an extended episode under the given instruction, and in a run
+    that `mixed` rewordings of a source's goal with tasks asking for another goal, one of the latter."""
+    extended = record.kind == "extended" and record.condition == "given"
+    return extended and not (mixed and record.dimension in SAME_GOAL_DIMENSIONS)
 
 
 def shown_dimensions(runs: list[RunResults]) -> list[str]:
@@ -658,7 +665,7 @@ def summarize(runs: list[Run], *, allow_mismatch: bool = False) -> Summary:
     ]
 
     for run, result in zip(runs, results_, strict=True):
-        extended = functools.partial(answered_given, mixed=result.asked is not None)
+        extended = functools.partial(answer_rests_on, mixed=result.mixed)
 
         others = [(blind, blind_result) for blind, blind_result in blinds if blind is not run]
         # The blind run with the same protocol (on the same catalog, when runs of several catalogs are given).
