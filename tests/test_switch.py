@@ -7,8 +7,9 @@ import json
 import pytest
 
 from langgap.engine.evaluate import evaluate
-from langgap.engine.plan import build_plan, condition_instruction
+from langgap.engine.plan import build_plan, condition_instruction, switch_note
 from langgap.engine.spec import ExecutionOptions, RunSpec
+from langgap.errors import CatalogError
 from tests.support.harness import SHORT_STEPS, run_cli, store_rows
 from tests.support.servers import free_port, langgap_serve, running
 
@@ -29,6 +30,28 @@ def test_a_switch_starts_under_the_source_or_a_sibling_chosen_by_the_seed(catalo
     assert len(set(siblings.values())) > 1  # spread over the scene by the episode's seed...
     again = build_plan([original], catalog, episodes=4, conditions=("switch:20",), repeats=3)
     assert {p.key.seed: p.started_as for p in again} == siblings  # ...and the same in every run
+
+
+def test_an_original_alone_in_its_scene_is_left_unswitched_and_said_so(catalog, tmp_path):
+    """Ten LangGap-99 originals (eight of libero_10) have no sibling to start under: their switch episodes are
+    not planned (the other conditions are), the CLI says which, and a selection of only such tasks is one
+    error line."""
+    alone, original = catalog.get("libero10/s2/turn-on-stove+moka-pot-on-stove"), catalog.get(ORIGINAL)
+    plan = build_plan([alone, original], catalog, episodes=2, conditions=("given", "switch:20"))
+    assert {(p.task_id, p.key.condition) for p in plan} == {
+        (alone.id, "given"),
+        (original.id, "given"),
+        (original.id, "switch:20"),
+    }
+    note = switch_note([alone, original], catalog, ("given", "switch:20"))
+    assert note.startswith("note: 1 task(s) have no other task") and alone.id in note and original.id not in note
+    assert switch_note([alone, original], catalog, ("given",)) == ""
+    with pytest.raises(CatalogError, match="no selected task has another task in its scene"):
+        build_plan([alone], catalog, episodes=1, conditions=("switch:20",))
+    run = tmp_path / "run"
+    result = run_cli("eval", "--policy", "noop", "--tasks", alone.id, "--run", str(run), "--condition", "switch:20")
+    assert result.returncode != 0 and not run.exists()
+    assert result.stdout.startswith("note: 1 task(s)") and result.stderr.strip().startswith("error: switch: no")
 
 
 def test_nonsense_is_as_many_words_of_the_catalog_s_vocabulary(catalog):

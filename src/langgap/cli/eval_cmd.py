@@ -148,6 +148,7 @@ def run(args) -> int:
         policy_gpus=args.policy_gpus,
         share_rollouts=args.share_rollouts,
     )
+    print_switch_note(spec.catalog, spec.tasks, spec.conditions, spec.style)
     summary = evaluate(spec, args.run, options, resume=args.resume, extend=args.extend)
     print(
         f"run {summary.run}: {summary.planned} planned, {summary.skipped} already stored, {summary.ran} run "
@@ -170,3 +171,14 @@ def run(args) -> int:
 
         print(diagnosis_text([summary.run]))
     return 0 if summary.complete else EXIT_GAPS
+
+
+def print_switch_note(catalog_name: str, task_ids, conditions: tuple[str, ...], style: str = "libero") -> None:
+    """Say which selected tasks a plan leaves unswitched (`langgap.engine.plan.switch_note`), before the run."""
+    from langgap.catalog.catalog import load_catalog
+    from langgap.engine.plan import switch_note
+
+    catalog = load_catalog(catalog_name)
+    note = switch_note([catalog.get(t) for t in task_ids], catalog, conditions, style)
+    if note:
+        print(note, flush=True)

@@ -7,7 +7,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from langgap.catalog.task import INFEASIBLE, SAME_TRIAL, unproven
-from langgap.cli.eval_cmd import add_stepping_option
+from langgap.cli.eval_cmd import add_stepping_option, print_switch_note
 from langgap.cli.execution_flags import add_execution_options, add_share_rollouts_option, execution_options
 from langgap.cli.tasks_cmd import add_catalog_option
 from langgap.errors import LangGapError
@@ -172,6 +172,9 @@ def _switch_gate(args) -> int:
     _check_resume(args)
     policy = args.policy or DEFAULT_POLICY
     conditions = switch_conditions(args.condition)
+    from langgap.catalog.catalog import load_catalog
+
+    print_switch_note(args.catalog, [t.id for t in load_catalog(args.catalog).select(args.tasks)], conditions)
     rows = validate_switch(
         args.catalog,
         args.tasks,

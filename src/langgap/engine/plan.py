@@ -83,18 +83,43 @@ def _pick(pool: list[Task], *salt) -> Task:
     return pool[int.from_bytes(digest[:8], "big") % len(pool)]
 
 
-def switch_source(task: Task, catalog: Catalog, style: str, seed: int) -> Task:
-    """The task whose instruction a `switch:K` episode of `task` starts under: an extended task's source;
-    for an original, a sibling of its scene with another instruction and goal, chosen from the episode's seed."""
+def _switch_pool(task: Task, catalog: Catalog, style: str) -> list[Task]:
+    """The tasks a `switch:K` episode of `task` may start under: an extended task's source; for an original,
+    the siblings of its scene with another instruction and goal."""
     if task.kind != "original":
-        return catalog.get(task.source)
+        return [catalog.get(task.source)]
     own = task.instruction(style)
-    pool = [
+    return [
         t for t in catalog.scene_mates(task) if t.id != task.id and t.instruction(style) != own and t.goal != task.goal
     ]
+
+
+def switch_source(task: Task, catalog: Catalog, style: str, seed: int) -> Task:
+    """The task whose instruction a `switch:K` episode of `task` starts under: an extended task's source;
+    for an original, one of its scene's siblings (`_switch_pool`), chosen from the episode's seed."""
+    pool = _switch_pool(task, catalog, style)
     if not pool:
         raise CatalogError(f"switch: {task.id} has no sibling task in its scene to start under")
     return _pick(pool, task.id, "switch", seed)
+
+
+def without_switch_source(tasks: list[Task], catalog: Catalog, style: str = "libero") -> list[str]:
+    """The ids of `tasks` that no `switch:K` episode can start under another instruction of: originals whose
+    scene holds no other task of the catalog (libero_10's scenes in LangGap-99). A plan leaves their switch
+    episodes out."""
+    return [t.id for t in tasks if not _switch_pool(t, catalog, style)]
+
+
+def switch_note(tasks: list[Task], catalog: Catalog, conditions: tuple[str, ...], style: str = "libero") -> str:
+    """The line that says which tasks a plan with `switch:K` conditions leaves unswitched (empty: none)."""
+    missing = without_switch_source(tasks, catalog, style) if any(map(switch_step, conditions)) else []
+    if not missing:
+        return ""
+    shown = ", ".join(missing[:4]) + (f", … ({len(missing) - 4} more)" if len(missing) > 4 else "")
+    return (
+        f"note: {len(missing)} task(s) have no other task in their scene to start under; their switch:K "
+        f"episodes are not planned: {shown}"
+    )
 
 
 def nonsense(task: Task, catalog: Catalog, style: str, init_index: int) -> str:
@@ -142,7 +167,8 @@ def build_plan(
     repeats: int = 1,
 ) -> list[PlannedEpisode]:
     """Episodes `first_init .. first_init+episodes-1` (init state k = episode k) of every task × condition,
-    each `repeats` times with its own seed (same init state)."""
+    each `repeats` times with its own seed (same init state); no `switch:K` episode of a task that has nothing
+    to start under (`without_switch_source`)."""
     if episodes < 1:
         raise CatalogError(f"--episodes must be at least 1, got {episodes}")
     unknown = unknown_conditions(conditions)
@@ -152,6 +178,7 @@ def build_plan(
     from langgap.catalog.files import scene_key
 
     plan = []
+    unswitched = set(without_switch_source(tasks, catalog, style)) if any(map(switch_step, conditions)) else set()
     for task in tasks:
         available = files.init_states(task).shape[0]
         if first_init < 0 or first_init + episodes > available:
@@ -161,6 +188,8 @@ def build_plan(
             )
         for condition in conditions:
             k = switch_step(condition)
+            if k and task.id in unswitched:
+                continue
             for init_index in range(first_init, first_init + episodes):
                 instruction = None if k else condition_instruction(task, catalog, condition, style, init_index)
                 for repeat in range(repeats):
@@ -169,6 +198,8 @@ def build_plan(
                         plan.append(switch_episode(key, task, catalog, style))
                     else:
                         plan.append(PlannedEpisode(key, instruction, scene=scene_key(task)))
+    if not plan:
+        raise CatalogError("switch: no selected task has another task in its scene to start under")
     return plan
 
 
