@@ -94,8 +94,9 @@ _POOL_RUN = (
     "pool", ["in-process", "processes", "ray", "processes --share-rollouts", "ray --share-rollouts"]
 )
 def test_the_same_plan_gives_the_same_episodes_on_every_pool(pool, reference_episodes, short_catalog, tmp_path):
-    """Shared rollouts too (`random` is instruction-blind: a rollout per init state for every task and condition
-    but the switch) give the episodes of the reference, run one by one."""
+    """Shared rollouts too (`random` is instruction-blind: per init state, one rollout for every task and
+    condition but the switch, and one for the switch:5 episodes, which share theirs) give the episodes of the
+    reference, run one by one."""
     run = tmp_path / "run"
     pool, _, sharing = pool.partition(" ")
     args = [*_POOL_RUN, short_catalog, "--run", str(run), *([sharing] if sharing else [])]
@@ -105,7 +106,7 @@ def test_the_same_plan_gives_the_same_episodes_on_every_pool(pool, reference_epi
     else:
         result = run_cli("eval", *args, "--workers", "0" if pool == "in-process" else "2")
     assert result.returncode == 0, result.stderr
-    assert ("shared rollouts: 18 episodes in 2 rollouts" in result.stdout) == bool(sharing)
+    assert ("shared rollouts: 24 episodes in 4 rollouts" in result.stdout) == bool(sharing)
     rows = store_rows(run)
     assert [{k: r[k] for k in reference_episodes[0]} for r in rows] == reference_episodes
     assert {r["worker"] for r in rows} == ({0} if pool == "in-process" else {0, 1})
