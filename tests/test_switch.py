@@ -52,6 +52,9 @@ def test_an_original_alone_in_its_scene_is_left_unswitched_and_said_so(catalog, 
     result = run_cli("eval", "--policy", "noop", "--tasks", alone.id, "--run", str(run), "--condition", "switch:20")
     assert result.returncode != 0 and not run.exists()
     assert result.stdout.startswith("note: 1 task(s)") and result.stderr.strip().startswith("error: switch: no")
+    counted = run_cli("tasks", "gate", "--condition", "switch:20").stdout
+    assert "10 of 99 task(s) have no other task in their scene to start under: never switched" in counted
+    assert "not gated at switch:20" not in counted  # the shipped switch verdicts cover every other task
 
 
 def test_nonsense_is_as_many_words_of_the_catalog_s_vocabulary(catalog):

@@ -225,18 +225,25 @@ def _switch_gate_counts(args, tasks: list[Task]) -> int:
     from langgap.catalog.catalog import registry_path
     from langgap.catalog.coverage import coverage_table, gate_counts
     from langgap.catalog.switch_verdicts import read_switch_verdicts
+    from langgap.engine.plan import without_switch_source
     from langgap.gate.switch import switch_conditions
 
     verdicts = read_switch_verdicts(registry_path(args.catalog))
+    catalog = load_catalog(args.catalog)
+    alone = set(without_switch_source(tasks, catalog))
     for index, condition in enumerate(switch_conditions(args.condition)):
         at_k = [dataclasses.replace(t, gate=verdicts.get(t.id, {}).get(condition)) for t in tasks]
         print(("\n" if index else "") + f"{condition}:")
         print(coverage_table(gate_counts(at_k), markdown=args.markdown))
-        ungated = sum(t.gate is None for t in at_k)
+        ungated = sum(t.gate is None and t.id not in alone for t in at_k)
         if ungated:
             print(
                 f"{ungated} of {len(tasks)} task(s) not gated at {condition}: unproven until the switch gate runs "
                 f"(langgap validate --catalog {args.catalog} --condition {condition} --record)"
+            )
+        if alone:
+            print(
+                f"{len(alone)} of {len(tasks)} task(s) have no other task in their scene to start under: never switched"
             )
     return 0
 
