@@ -61,6 +61,13 @@ def test_a_task_variant_may_change_instruction_objects_and_goal(source):
         goal=(Predicate("On", ("akita_black_bowl_1", "plate_1")),),
     )
     assert names(scene_findings("t", "task", same_goal, source)) == ["not a perturbation"]
+    # a goal that is a part of its source's is done by a policy that does the source task (LIBERO-PRO's
+    # libero10/s8/pro-task: one moka pot of the two); a wider goal is not
+    on_plate = tuple(Predicate("On", (bowl, "plate_1")) for bowl in ("akita_black_bowl_1", "akita_black_bowl_2"))
+    both = rewrite_task_sections(source, language="Both bowls on the plate", obj_of_interest=(), goal=on_plate)
+    part = scene_findings("t", "task", same_goal, both)
+    assert names(part) == ["done by its source task"] and "akita_black_bowl_2" in part[0].detail
+    assert scene_findings("t", "task", both, same_goal) == []
     # a comment or reordering outside the sections is a change of the file too
     assert names(scene_findings("t", "task", other.replace("(define", "(define\n", 1), source)) == ["changes the scene"]
 

@@ -29,6 +29,7 @@ FINDINGS = {
     "unreadable": "the package's BDDL file does not parse, so the task is left out of the catalog",
     "changes the scene": "the BDDL differs from its source's outside what the perturbation changes",
     "not a perturbation": "the variant changes nothing its dimension names (same instruction, or same goal)",
+    "done by its source task": "every part of its goal is a part of its source's: doing the source task does it",
     "never satisfiable": "the goal names a predicate LIBERO does not evaluate, or a thing not in the scene",
     "ships other init states": "the init states the package ships for it are not its source's",
     "starts elsewhere": "its t0 state differs from its source's on the same init state (simulator)",
@@ -75,7 +76,8 @@ class Finding:
 
 def scene_findings(task_id: str, dimension: str, text: str, source_text: str) -> list[Finding]:
     """`changes the scene` when `text` differs from `source_text` outside the sections `dimension` may change
-    (or anywhere outside the sections' text: comments, order); `not a perturbation` when it changes none."""
+    (or anywhere outside the sections' text: comments, order); `not a perturbation` when it changes none;
+    `done by its source task` when a task variant's goal is a part of its source's."""
     ours, theirs = section_texts(text), section_texts(source_text)
     allowed = MAY_CHANGE[dimension]
     changed = sorted(k for k in ours.keys() | theirs.keys() if ours.get(k) != theirs.get(k) and k not in allowed)
@@ -89,6 +91,10 @@ def scene_findings(task_id: str, dimension: str, text: str, source_text: str) ->
         found.append(Finding("not a perturbation", task_id, "its instruction is its source's"))
     if dimension == "task" and set(parsed.goal) == set(source.goal):
         found.append(Finding("not a perturbation", task_id, "its goal is its source's"))
+    elif dimension == "task" and set(parsed.goal) < set(source.goal):
+        # A policy that ignores its instruction and does the source task succeeds: it asks nothing new.
+        left = " ".join(str(p) for p in source.goal if p not in parsed.goal)
+        found.append(Finding("done by its source task", task_id, f"its goal is its source's without {left}"))
     return found
 
 
