@@ -159,6 +159,7 @@ def run(args) -> int:
 def _switch_gate(args) -> int:
     """The switch gate (`langgap.gate.switch`): the oracle under each `switch:K`; its flags that vary or add to
     the plain gate's episodes are refused."""
+    from langgap.catalog.catalog import load_catalog
     from langgap.gate.switch import record_switch, switch_conditions, switch_table_text, validate_switch
 
     plain_only = {
@@ -172,8 +173,6 @@ def _switch_gate(args) -> int:
     _check_resume(args)
     policy = args.policy or DEFAULT_POLICY
     conditions = switch_conditions(args.condition)
-    from langgap.catalog.catalog import load_catalog
-
     print_switch_note(args.catalog, [t.id for t in load_catalog(args.catalog).select(args.tasks)], conditions)
     rows = validate_switch(
         args.catalog,

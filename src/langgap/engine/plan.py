@@ -110,9 +110,14 @@ def without_switch_source(tasks: list[Task], catalog: Catalog, style: str = "lib
     return [t.id for t in tasks if not _switch_pool(t, catalog, style)]
 
 
+def _unswitched(tasks: list[Task], catalog: Catalog, conditions: tuple[str, ...], style: str) -> list[str]:
+    """`without_switch_source` when `conditions` hold a `switch:K`; no task otherwise."""
+    return without_switch_source(tasks, catalog, style) if any(map(switch_step, conditions)) else []
+
+
 def switch_note(tasks: list[Task], catalog: Catalog, conditions: tuple[str, ...], style: str = "libero") -> str:
     """The line that says which tasks a plan with `switch:K` conditions leaves unswitched (empty: none)."""
-    missing = without_switch_source(tasks, catalog, style) if any(map(switch_step, conditions)) else []
+    missing = _unswitched(tasks, catalog, conditions, style)
     if not missing:
         return ""
     shown = ", ".join(missing[:4]) + (f", … ({len(missing) - 4} more)" if len(missing) > 4 else "")
@@ -178,7 +183,7 @@ def build_plan(
     from langgap.catalog.files import scene_key
 
     plan = []
-    unswitched = set(without_switch_source(tasks, catalog, style)) if any(map(switch_step, conditions)) else set()
+    unswitched = set(_unswitched(tasks, catalog, conditions, style))
     for task in tasks:
         available = files.init_states(task).shape[0]
         if first_init < 0 or first_init + episodes > available:
