@@ -199,6 +199,26 @@ def test_env_type_applies_init_states_instruction_and_lerobot_orientation(catalo
         LangGapEnv(task_ids=[0])
 
 
+def test_lerobot_libero_settings_are_the_parity_pages():
+    """docs/parity.md's `lerobot-eval` column: `--env.type=libero`'s own step limits (280 on libero_spatial,
+    where openpi uses 220) and render size (360), and `--env.type=langgap`'s defaults (openpi's step limit,
+    LeRobot's render size) with the flag that reproduces LeRobot's limit."""
+    from lerobot.envs.configs import LiberoEnv as LiberoConfig
+    from lerobot.envs.libero import TASK_SUITE_MAX_STEPS
+
+    lerobot_limits = {"libero_spatial": 280, "libero_object": 280, "libero_goal": 300, "libero_10": 520}
+    assert {suite: TASK_SUITE_MAX_STEPS[suite] for suite in lerobot_limits} == lerobot_limits
+    libero, ours = LiberoConfig(), LangGapEnv(task=TASK_ID)
+    assert (libero.observation_height, libero.observation_width) == (360, 360)
+    assert (ours.observation_height, ours.observation_width) == (360, 360)
+    for config, limit in ((ours, 220), (LangGapEnv(task=TASK_ID, episode_length=280), 280)):
+        (vector,) = config.create_envs(n_envs=1)[TASK_ID].values()
+        try:
+            assert list(vector.call("_max_episode_steps")) == [limit]
+        finally:
+            vector.close()
+
+
 @pytest.mark.slow
 def test_lerobot_eval_runs_langgap_tasks(checkpoint, tmp_path):
     output = tmp_path / "eval"

@@ -186,6 +186,50 @@ def test_images_are_robosuites_camera_observations(catalog, stepping):
         assert not np.array_equal(late, images["agentview"])
 
 
+def test_gymnasium_observations_are_openpis_example_bit_for_bit(catalog):
+    """`LangGap/Task-v0` observes what openpi's example sends before its resize: from the settled start on,
+    every step's camera images (robosuite's camera observations, upright) and 8-D state equal the raw LIBERO
+    env's, bit for bit, on the plan entry the env's seed rule names (env seed = run seed + init index)."""
+    import gymnasium as gym
+    from libero.libero.envs import OffScreenRenderEnv
+
+    import langgap.gym  # noqa: F401  (registers the ids)
+
+    task = catalog.get(TASK_ID)
+    cameras = ("agentview", "robot0_eye_in_hand")
+    size, init_index, run_seed = 128, 3, 4
+    actions = np.random.default_rng(2).uniform(-0.5, 0.5, (5, 7))
+
+    def sent(obs) -> dict[str, np.ndarray]:
+        state = (obs["robot0_eef_pos"], quat_to_axis_angle(obs["robot0_eef_quat"]), obs["robot0_gripper_qpos"])
+        return {"state": np.concatenate(state)} | {c: obs[f"{c}_image"][::-1, ::-1].copy() for c in cameras}
+
+    # The raw env first and alone: two simulators rendering in one process share one current GL context.
+    raw = OffScreenRenderEnv(bddl_file_name=str(files.task_bddl_path(task)), camera_heights=size, camera_widths=size)
+    try:
+        raw.seed(run_seed + init_index)
+        raw.reset()
+        raw.set_init_state(files.init_states(task)[init_index])
+        for _ in range(EXAMPLE_SETTLE):
+            obs, _, _, _ = raw.step(DUMMY_ACTION)
+        expected = [sent(obs)]
+        for action in actions:
+            obs, _, _, _ = raw.step(action.tolist())
+            expected.append(sent(obs))
+    finally:
+        raw.close()
+    env = gym.make("LangGap/Task-v0", task=TASK_ID, catalog="langgap99", cameras=cameras, image_size=size)
+    try:
+        observed = [env.reset(seed=run_seed, options={"init_index": init_index})[0]]
+        observed += [env.step(action)[0] for action in actions]
+    finally:
+        env.close()
+    for step, (got, want) in enumerate(zip(observed, expected, strict=True)):
+        np.testing.assert_array_equal(got["state"], want["state"].astype(got["state"].dtype), err_msg=f"step {step}")
+        for camera in cameras:
+            np.testing.assert_array_equal(got[camera], want[camera], err_msg=f"step {step}: {camera}")
+
+
 def example_starts(task, seed: int, episodes: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """openpi's example's starts: one LIBERO env for the task, `env.seed(seed)` once, then per episode `reset()`
     (a hard reset: LIBERO's default) and `set_init_state(k)`; each start's state and fixture placement."""
