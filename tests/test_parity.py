@@ -55,6 +55,42 @@ def oracle_actions(task, catalog) -> np.ndarray:
     return np.array(actions)
 
 
+def example_state(obs: dict) -> np.ndarray:
+    """The example's 8-D state: end-effector position, axis-angle orientation, gripper joints."""
+    return np.concatenate(
+        (obs["robot0_eef_pos"], quat_to_axis_angle(obs["robot0_eef_quat"]), obs["robot0_gripper_qpos"])
+    )
+
+
+def raw_observations(task, cameras, size, seed, init_index, actions, settle=0) -> list[dict[str, np.ndarray]]:
+    """The raw LIBERO env (robosuite's camera observations at `size`, `env.seed(seed)`, init state `init_index`):
+    after `settle` no-op steps (their last observation first, where there are any) and after each action, the
+    simulator state (`sim`), the 8-D state (`state`) and each camera's image, upright."""
+    from libero.libero.envs import OffScreenRenderEnv
+
+    def seen(obs) -> dict[str, np.ndarray]:
+        images = {c: obs[f"{c}_image"][::-1, ::-1].copy() for c in cameras}
+        return {"sim": raw.get_sim_state().copy(), "state": example_state(obs)} | images
+
+    # The raw env first and alone: two simulators rendering in one process share one current GL context.
+    raw = OffScreenRenderEnv(bddl_file_name=str(files.task_bddl_path(task)), camera_heights=size, camera_widths=size)
+    try:
+        raw.seed(seed)
+        raw.reset()
+        raw.set_init_state(files.init_states(task)[init_index])
+        observed = []
+        for _ in range(settle):
+            obs, _, _, _ = raw.step(DUMMY_ACTION)
+        if settle:
+            observed.append(seen(obs))
+        for action in actions:
+            obs, _, _, _ = raw.step(action.tolist())
+            observed.append(seen(obs))
+    finally:
+        raw.close()
+    return observed
+
+
 def example_episode(task, actions: np.ndarray) -> tuple[list[np.ndarray], list[dict]]:
     """openpi's LIBERO example loop on a fresh LIBERO env: the simulator state after every policy step, and
     every observation sent (the settled state first)."""
@@ -81,13 +117,7 @@ def example_episode(task, actions: np.ndarray) -> tuple[list[np.ndarray], list[d
                     {
                         "observation/image": image_tools.resize_with_pad(image, EXAMPLE_RESIZE, EXAMPLE_RESIZE),
                         "observation/wrist_image": image_tools.resize_with_pad(wrist, EXAMPLE_RESIZE, EXAMPLE_RESIZE),
-                        "observation/state": np.concatenate(
-                            (
-                                obs["robot0_eef_pos"],
-                                quat_to_axis_angle(obs["robot0_eef_quat"]),
-                                obs["robot0_gripper_qpos"],
-                            )
-                        ),
+                        "observation/state": example_state(obs),
                     }
                 )
                 plan.extend(actions[step : step + EXAMPLE_REPLAN])  # the server's chunk, first 5 executed
@@ -152,31 +182,18 @@ def test_images_are_robosuites_camera_observations(catalog, stepping):
     """The images `step(capture=...)` takes are robosuite's camera observations of the same step (the raw
     LIBERO env with camera observations on, from the same init state), rotated upright; the state is the
     same to the last bit; steps that capture nothing render nothing."""
-    from libero.libero.envs import OffScreenRenderEnv
-
     task = catalog.get(TASK_ID)
     cameras = ("agentview", "robot0_eye_in_hand")
     size, init_index = 128, 2
     actions = np.random.default_rng(1).uniform(-0.5, 0.5, (6, 7))
-    # The raw env first and alone: two simulators rendering in one process share one current GL context.
-    raw = OffScreenRenderEnv(bddl_file_name=str(files.task_bddl_path(task)), camera_heights=size, camera_widths=size)
-    try:
-        raw.seed(SEED)
-        raw.reset()
-        raw.set_init_state(files.init_states(task)[init_index])
-        expected = []
-        for action in actions:
-            obs, _, _, _ = raw.step(action.tolist())
-            expected.append((raw.get_sim_state().copy(), {c: obs[f"{c}_image"][::-1, ::-1].copy() for c in cameras}))
-    finally:
-        raw.close()
+    expected = raw_observations(task, cameras, size, SEED, init_index, actions)
     with TaskEnv(task, EnvOptions(cameras=cameras, image_size=size, stepping=stepping)) as env:
         env.reset(init_index, seed=SEED, render=False)
         renders = env.renders
-        for i, (action, (state, images)) in enumerate(zip(actions, expected, strict=True)):
+        for i, (action, images) in enumerate(zip(actions, expected, strict=True)):
             capture = cameras if i % 2 == 0 else ()
             env.step(action, capture=capture)
-            np.testing.assert_array_equal(env.sim_state(), state)
+            np.testing.assert_array_equal(env.sim_state(), images["sim"])
             if capture:
                 seen = env.observe()
                 for camera in cameras:
@@ -191,33 +208,15 @@ def test_gymnasium_observations_are_openpis_example_bit_for_bit(catalog):
     every step's camera images (robosuite's camera observations, upright) and 8-D state equal the raw LIBERO
     env's, bit for bit, on the plan entry the env's seed rule names (env seed = run seed + init index)."""
     import gymnasium as gym
-    from libero.libero.envs import OffScreenRenderEnv
 
     import langgap.gym  # noqa: F401  (registers the ids)
 
-    task = catalog.get(TASK_ID)
     cameras = ("agentview", "robot0_eye_in_hand")
     size, init_index, run_seed = 128, 3, 4
     actions = np.random.default_rng(2).uniform(-0.5, 0.5, (5, 7))
-
-    def sent(obs) -> dict[str, np.ndarray]:
-        state = (obs["robot0_eef_pos"], quat_to_axis_angle(obs["robot0_eef_quat"]), obs["robot0_gripper_qpos"])
-        return {"state": np.concatenate(state)} | {c: obs[f"{c}_image"][::-1, ::-1].copy() for c in cameras}
-
-    # The raw env first and alone: two simulators rendering in one process share one current GL context.
-    raw = OffScreenRenderEnv(bddl_file_name=str(files.task_bddl_path(task)), camera_heights=size, camera_widths=size)
-    try:
-        raw.seed(run_seed + init_index)
-        raw.reset()
-        raw.set_init_state(files.init_states(task)[init_index])
-        for _ in range(EXAMPLE_SETTLE):
-            obs, _, _, _ = raw.step(DUMMY_ACTION)
-        expected = [sent(obs)]
-        for action in actions:
-            obs, _, _, _ = raw.step(action.tolist())
-            expected.append(sent(obs))
-    finally:
-        raw.close()
+    expected = raw_observations(
+        catalog.get(TASK_ID), cameras, size, run_seed + init_index, init_index, actions, settle=EXAMPLE_SETTLE
+    )
     env = gym.make("LangGap/Task-v0", task=TASK_ID, catalog="langgap99", cameras=cameras, image_size=size)
     try:
         observed = [env.reset(seed=run_seed, options={"init_index": init_index})[0]]

@@ -4,19 +4,18 @@ simulated ones are compared bit for bit in tests/test_parity.py."""
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import numpy as np
 
 from langgap import stack
 from langgap.catalog.catalog import load_catalog
 from langgap.sim.env import SETTLE_ACTION, SETTLE_STEPS
+from tests.support.harness import REPO
 
 # openpi's examples/libero/main.py: max_steps per suite, num_steps_wait, LIBERO_DUMMY_ACTION.
 OPENPI_MAX_STEPS = {"libero_spatial": 220, "libero_object": 280, "libero_goal": 300, "libero_10": 520}
 OPENPI_SETTLE_STEPS = 10
 OPENPI_DUMMY_ACTION = [0.0] * 6 + [-1.0]
-REPO = Path(__file__).resolve().parents[2]
 
 
 def test_step_limits_are_openpis_per_suite():
