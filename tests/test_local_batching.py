@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 import re
 import signal
+import sqlite3
 import subprocess
 import sys
 import tempfile
@@ -104,6 +105,16 @@ def _policy_process(socket_dir: Path, timeout: float = 180) -> int:
     raise AssertionError(f"no shared policy socket appeared under {socket_dir}")
 
 
+def _episodes_stored(run: Path) -> bool:
+    """True once a run store holds an episode row (the file exists a moment before its tables)."""
+    if not (run / "episodes.sqlite").exists():  # checked first: connecting would create the file
+        return False
+    try:
+        return bool(store_rows(run))
+    except sqlite3.OperationalError:  # no table yet
+        return False
+
+
 def test_the_policy_process_listens_on_no_network_and_ends_with_the_run_even_a_killed_one(short_catalog, tmp_path):
     # The socket's directory goes under a short private TMPDIR (Unix socket paths allow ~107 bytes).
     sockets = Path(tempfile.mkdtemp(prefix="lg-", dir="/tmp"))
@@ -117,7 +128,7 @@ def test_the_policy_process_listens_on_no_network_and_ends_with_the_run_even_a_k
     first = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     policy = _policy_process(sockets)
     deadline = time.monotonic() + 180
-    while not (run / "episodes.sqlite").exists() or not store_rows(run):  # episodes are flowing
+    while not _episodes_stored(run):
         assert time.monotonic() < deadline and first.poll() is None
         time.sleep(0.2)
     tree = _tree(first.pid)
