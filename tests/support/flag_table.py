@@ -73,6 +73,7 @@ _EVAL_FLAGS = "tests/test_eval.py::test_every_flag_of_a_run_reaches_its_effect"
 _VALIDATE_CLI = "tests/test_validate.py::test_cli_validate_writes_report_and_records_verdicts"
 _GENERATE_GATE = "tests/test_generate.py::test_generate_gates_every_candidate_and_records_how"
 _GENERATE_CLI = "tests/test_generate.py::test_cli_generate_writes_a_loadable_registry_and_prints_counts"
+_REPLAY = "tests/test_search.py::test_tasks_replay_replays_a_verdicts_demonstrations_and_fails_a_damaged_one"
 _AUDIT = "tests/test_external.py::test_audit_runs_the_start_check_on_k_init_states_and_records_it_beside_the_registry"
 _COLLECT_CLI = "tests/test_demos.py::test_collect_cli_without_lerobot_writes_compact_form"
 _CLAIMS_EXECUTION = "tests/test_validate.py::test_claims_only_runs_its_probes_on_the_execution_flags"
@@ -114,6 +115,8 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "tasks gate --tasks": (Differs(("tasks", "gate"), ("--tasks", "spatial")),),
     "tasks gate --markdown": (Differs(("tasks", "gate"), ("--markdown",)),),
     "tasks gate --condition": (Differs(("tasks", "gate"), ("--condition", "switch:20")), ProvenBy(_SWITCH_GATE)),
+    "tasks replay --catalog": (ProvenBy(_REPLAY),),
+    "tasks replay --tasks": (ProvenBy(_REPLAY),),
     "tasks audit --catalog": (Differs(("tasks", "audit", "--tasks", "spatial/s0/*"), ("--catalog", "libero-pro")),),
     "tasks audit --tasks": (Differs(("tasks", "audit", "--catalog", "libero-pro"), ("--tasks", "spatial/s0/*")),),
     "tasks audit --examples": (Differs(("tasks", "audit", "--catalog", "libero-pro"), ("--examples", "0")),),

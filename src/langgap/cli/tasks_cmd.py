@@ -1,4 +1,4 @@
-"""`langgap tasks list`, `langgap tasks show`, `langgap tasks gate` and `langgap tasks audit`."""
+"""`langgap tasks list`, `show`, `gate`, `replay` and `audit`."""
 
 from __future__ import annotations
 
@@ -40,7 +40,7 @@ def add_catalog_options(parser) -> None:
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser("tasks", help="list and inspect tasks")
-    verbs = parser.add_subparsers(dest="tasks_verb", required=True, metavar="list|show|gate|audit")
+    verbs = parser.add_subparsers(dest="tasks_verb", required=True, metavar="list|show|gate|replay|audit")
 
     listing = verbs.add_parser("list", help="list tasks, optionally filtered")
     add_catalog_options(listing)
@@ -75,6 +75,17 @@ def add_parser(subparsers) -> None:
         help="count the switch gate's verdicts at K instead (repeatable; `langgap validate --condition switch:K`)",
     )
     gate.set_defaults(handler=run_gate)
+
+    replay = verbs.add_parser(
+        "replay",
+        help="replay every stored demonstration the selected tasks' verdicts rest on; exit 1 if one does not reach "
+        "its goal at its recorded step",
+    )
+    add_catalog_option(replay)
+    replay.add_argument(
+        "--tasks", metavar="SELECTION", default="all", help="selection expression (default: every task, gated or not)"
+    )
+    replay.set_defaults(handler=run_replay)
 
     audit = verbs.add_parser(
         "audit",
@@ -216,6 +227,24 @@ def run_gate(args) -> int:
             f"{SAME_TRIAL} (the oracle column counts a source's episodes once per task that takes its verdict)"
         )
     return 0
+
+
+def run_replay(args) -> int:
+    from langgap.demos.searched import replay_verdicts
+
+    tasks = load_catalog(args.catalog).select(args.tasks)
+    checks = []
+    for check in replay_verdicts(tasks, args.catalog):
+        checks.append(check)
+        outcome = f"FAIL: {check.error}" if check.error else f"reaches its goal at step {check.steps}, as recorded"
+        print(f"{check.task_id} init {check.init_index}: {outcome}", flush=True)
+    if not checks:
+        print(f"no verdict of the {len(tasks)} selected task(s) rests on a stored demonstration")
+        return 0
+    failed = sum(bool(c.error) for c in checks)
+    shown = len({c.task_id for c in checks})
+    print(f"{len(checks) - failed}/{len(checks)} stored demonstration(s) of {shown} task(s) replay to their goals")
+    return 1 if failed else 0
 
 
 def _switch_gate_counts(args, tasks: list[Task]) -> int:

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from langgap.atomic import write_bytes_atomically
-from langgap.catalog.catalog import Catalog
+from langgap.catalog.catalog import Catalog, load_catalog, registry_path
 from langgap.catalog.task import Task
 from langgap.engine.context import task_context
 from langgap.engine.rollout import RolloutResult, run_episode
@@ -148,3 +148,58 @@ def stored_demonstrations(directory: str | Path) -> dict[int, Path]:
         except ValueError:
             continue
     return found
+
+
+@dataclass(frozen=True)
+class ReplayCheck:
+    """One demonstration a verdict rests on, replayed: `error` is empty when it reached its goal at its step."""
+
+    task_id: str  # the task whose verdict names it (for an inherited verdict: the source's)
+    init_index: int
+    path: Path
+    steps: int
+    error: str
+
+
+def verdict_evidence(task: Task, catalog_name: str) -> tuple[str, str, dict[int, Path]]:
+    """The catalog and task whose gate run made `task`'s verdict (its own, or the one it takes by `gate_from`),
+    and the demonstration files the verdict names: init state -> file (named whether or not it exists)."""
+    gate = task.gate
+    maker, _, task_id = gate.inherited_from.partition(":") if gate and gate.inherited_from else ("", "", "")
+    maker, task_id = maker or catalog_name, task_id or task.id
+    if gate is None or not gate.demonstration:
+        return maker, task_id, {}
+    directory = registry_path(maker).parent / gate.demonstration
+    return maker, task_id, {i: demonstration_path(directory, i) for i in gate.demonstrated_inits}
+
+
+def replay_verdicts(tasks: list[Task], catalog_name: str):
+    """Replay every stored demonstration the verdicts of `tasks` rest on, each once (verdicts taken from one
+    source share its files), one environment per task and stepping: yields a `ReplayCheck` per file."""
+    named: dict[tuple[str, str], dict[int, Path]] = {}
+    for task in tasks:
+        maker, task_id, files = verdict_evidence(task, catalog_name)
+        if files:
+            named[(maker, task_id)] = files
+    for (maker, task_id), files in named.items():
+        catalog = load_catalog(maker)
+        envs: dict[str, TaskEnv] = {}
+        try:
+            for init_index, path in sorted(files.items()):
+                yield _replay_check(catalog, task_id, init_index, path, envs)
+        finally:
+            for env in envs.values():
+                env.close()
+
+
+def _replay_check(catalog: Catalog, task_id: str, init_index: int, path: Path, envs: dict) -> ReplayCheck:
+    try:
+        demo = Demonstration.load(path)
+        if (demo.task_id, demo.init_index) != (task_id, init_index):
+            raise DemonstrationError(f"{path} holds {demo.task_id} init {demo.init_index}")
+        if demo.stepping not in envs:
+            envs[demo.stepping] = replay_env(catalog.get(task_id), demo.stepping)
+        verify(envs[demo.stepping], demo, catalog)
+    except DemonstrationError as exc:
+        return ReplayCheck(task_id, init_index, path, 0, str(exc).removeprefix(f"{task_id} init {init_index}: "))
+    return ReplayCheck(task_id, init_index, path, demo.steps, "")
