@@ -38,6 +38,12 @@ def add_catalog_options(parser) -> None:
     )
 
 
+def _add_tasks_option(parser) -> None:
+    parser.add_argument(
+        "--tasks", metavar="SELECTION", default="all", help="selection expression (default: every task, gated or not)"
+    )
+
+
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser("tasks", help="list and inspect tasks")
     verbs = parser.add_subparsers(dest="tasks_verb", required=True, metavar="list|show|gate|replay|audit")
@@ -48,9 +54,7 @@ def add_parser(subparsers) -> None:
     listing.add_argument("--kind", choices=KINDS)
     listing.add_argument("--dimension", choices=DIMENSIONS)
     listing.add_argument("--split", choices=[s for s in SPLITS if s != "original"] + ["original"])
-    listing.add_argument(
-        "--tasks", metavar="SELECTION", default="all", help="selection expression (default: every task, gated or not)"
-    )
+    _add_tasks_option(listing)
     listing.add_argument("--json", action="store_true", help="print a JSON array of task objects")
     listing.set_defaults(handler=run_list)
 
@@ -64,9 +68,7 @@ def add_parser(subparsers) -> None:
         "gate", help="the feasibility gate's verdicts counted per suite and dimension (what is proven)"
     )
     add_catalog_option(gate)
-    gate.add_argument(
-        "--tasks", metavar="SELECTION", default="all", help="selection expression (default: every task, gated or not)"
-    )
+    _add_tasks_option(gate)
     gate.add_argument("--markdown", action="store_true", help="print a Markdown table")
     gate.add_argument(
         "--condition",
@@ -82,9 +84,7 @@ def add_parser(subparsers) -> None:
         "its goal at its recorded step",
     )
     add_catalog_option(replay)
-    replay.add_argument(
-        "--tasks", metavar="SELECTION", default="all", help="selection expression (default: every task, gated or not)"
-    )
+    _add_tasks_option(replay)
     replay.set_defaults(handler=run_replay)
 
     audit = verbs.add_parser(
@@ -93,9 +93,7 @@ def add_parser(subparsers) -> None:
         "their goals): each finding, counted",
     )
     add_catalog_option(audit)
-    audit.add_argument(
-        "--tasks", metavar="SELECTION", default="all", help="selection expression (default: every task, gated or not)"
-    )
+    _add_tasks_option(audit)
     audit.add_argument(
         "--starts",
         type=int,
