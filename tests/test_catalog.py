@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import json
+import os
 import re
+import subprocess
+import sys
 from collections import Counter
 
 import pytest
@@ -13,7 +16,7 @@ from langgap.catalog.catalog import catalog_from_data, load_catalog
 from langgap.catalog.phrasing import instruction
 from langgap.errors import CatalogError, UnknownTaskError
 from langgap.stack import libero_root
-from tests.support.harness import run_cli
+from tests.support.harness import REPO, run_cli
 
 ID_FORMAT = re.compile(r"^(spatial|object|goal|libero10)/s\d/[a-z0-9+-]+$")
 
@@ -193,6 +196,16 @@ def test_cli_list_json_has_every_field():
     assert {t["max_steps"] for t in tasks if t["suite"] == "libero_10"} == {520}
     paper = json.loads(run_cli("tasks", "list", "--json", "--style", "paper", "--suite", "libero_object").stdout)
     assert paper[0]["instruction"] == "Pick the alphabet soup and place it in the basket"
+
+
+def test_cli_output_cut_short_by_its_reader_ends_quietly():
+    # `langgap tasks list | head -1`: the reader leaves after one line; no traceback, the shell's SIGPIPE status.
+    env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
+    command = [sys.executable, "-m", "langgap.cli.main", "tasks", "list", "--catalog", "libero-plus-language"]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    assert process.stdout.readline().startswith(b"id ")
+    process.stdout.close()
+    assert process.wait(timeout=120) == 141 and process.stderr.read() == b""
 
 
 def test_cli_list_filters():
