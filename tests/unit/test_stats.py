@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from langgap.report.stats import PairedTest, Rate, mcnemar_exact, minimum_detectable_effect, wilson
+from langgap.report.stats import PairedTest, Rate, cohen_kappa, mcnemar_exact, minimum_detectable_effect, wilson
 
 
 @pytest.mark.parametrize(
@@ -61,3 +61,23 @@ def test_more_episodes_detect_smaller_effects():
     assert (
         minimum_detectable_effect(0.3, 20) > minimum_detectable_effect(0.3, 200) > minimum_detectable_effect(0.3, 2000)
     )
+
+
+@pytest.mark.parametrize(
+    ("both", "only_a", "only_b", "neither", "kappa"),
+    [
+        (20, 5, 10, 15, 0.4),  # agreement 0.7, chance 0.6 x 0.5 + 0.4 x 0.5 = 0.5
+        (10, 0, 0, 10, 1.0),  # every pair agrees, rates of 1/2
+        (0, 10, 10, 0, -1.0),  # every pair disagrees
+        (25, 25, 25, 25, 0.0),  # agreement 1/2 is what chance gives
+        (12, 0, 0, 0, None),  # one outcome everywhere: chance agrees on all, κ is undefined
+    ],
+)
+def test_cohen_kappa(both, only_a, only_b, neither, kappa):
+    assert cohen_kappa(both, only_a, only_b, neither) == pytest.approx(kappa)
+
+
+def test_paired_agreement_and_kappa_come_from_the_pairs():
+    test = PairedTest("a vs b", pairs=50, successes_a=25, successes_b=30, only_a=5, only_b=10, changed=0)
+    assert test.agreement == pytest.approx(0.7) and test.kappa == pytest.approx(0.4)
+    assert test.as_dict()["agreement"] == pytest.approx(0.7) and test.as_dict()["kappa"] == pytest.approx(0.4)

@@ -73,6 +73,15 @@ def test_condition_and_run_comparisons_are_paired(summary):
     assert comparison.pairs == 11  # the gap has no partner
     assert (comparison.successes_a, comparison.successes_b) == (4, 10)
     assert comparison.as_dict()["p_value"] == pytest.approx(0.03125)
+    # Agreement 5 of 11 pairs; chance gives (4 x 10 + 7 x 1) / 121: κ = (55 - 47) / (121 - 47).
+    assert comparison.agreement == pytest.approx(5 / 11) and comparison.kappa == pytest.approx(8 / 74)
+
+
+def test_the_run_comparison_table_shows_agreement_and_kappa(summary):
+    from langgap.report.tables import comparison_table
+
+    table = comparison_table(summary)
+    assert table.headers[-2:] == ["Agree %", "κ"] and table.rows[0][-2:] == ["45.5", "0.11"]
 
 
 def test_privileged_runs_are_marked(summary):

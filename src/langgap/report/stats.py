@@ -29,6 +29,17 @@ def mcnemar_exact(only_a: int, only_b: int) -> float:
     return min(1.0, 2 * tail)
 
 
+def cohen_kappa(both: int, only_a: int, only_b: int, neither: int) -> float | None:
+    """Cohen's κ of two binary ratings of the same items: their agreement beyond what their own success
+    rates give by chance. None when chance alone agrees on every item (both rate every item alike)."""
+    n = both + only_a + only_b + neither
+    if n == 0:
+        return None
+    a, b = (both + only_a) / n, (both + only_b) / n
+    chance = a * b + (1 - a) * (1 - b)
+    return None if chance == 1 else ((both + neither) / n - chance) / (1 - chance)
+
+
 def minimum_detectable_effect(rate: float, n: int, z_alpha: float = Z_95, z_power: float = Z_POWER_80) -> float:
     """The smallest change in success rate (towards 1/2) that a second run of `n` episodes would detect
     against a rate of `rate` over `n` episodes, with 80 % power at α = 0.05 (two-sided z-test for two
@@ -113,11 +124,24 @@ class PairedTest:
     def p_value(self) -> float:
         return mcnemar_exact(self.only_a, self.only_b)
 
+    @property
+    def agreement(self) -> float:
+        """The share of pairs with the same outcome (a test-retest's first figure)."""
+        return 1 - (self.only_a + self.only_b) / self.pairs
+
+    @property
+    def kappa(self) -> float | None:
+        """Cohen's κ of the pairs' outcomes (`cohen_kappa`)."""
+        both = self.successes_a - self.only_a
+        return cohen_kappa(both, self.only_a, self.only_b, self.pairs - both - self.only_a - self.only_b)
+
     def as_dict(self) -> dict:
         return {
             **asdict(self),
             "rate_a": self.successes_a / self.pairs,
             "rate_b": self.successes_b / self.pairs,
             "p_value": self.p_value,
+            "agreement": self.agreement,
+            "kappa": self.kappa,
             "changed_behaviour": self.changed / self.pairs,
         }

@@ -450,11 +450,13 @@ def comparison_table(summary: Summary) -> Table | None:
         return Table(title, ["Run", "Differs in"], rows)
     if not summary.comparisons:
         return None
-    headers = ["Comparison", "Pairs", "First %", "Second %", "Only first", "Only second", "p"]
+    headers = ["Comparison", "Pairs", "First %", "Second %", "Only first", "Only second", "p", "Agree %", "κ"]
     title = "Runs compared on matched episodes (McNemar)"
     if summary.mismatches:
         title += " — protocols differ: " + "; ".join(f"{n}: {', '.join(i)}" for n, i in summary.mismatches.items())
-    return Table(title, headers, [_paired_cells(t) for t in summary.comparisons])
+    rows = [[*_paired_cells(t), pct(t.agreement), "–" if t.kappa is None else f"{t.kappa:.2f}"]
+            for t in summary.comparisons]  # fmt: skip
+    return Table(title, headers, rows)
 
 
 def protocol_table(summary: Summary) -> Table:
