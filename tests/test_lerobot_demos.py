@@ -3,6 +3,8 @@ experiments as `lerobot-train` configurations. Runs in the LeRobot environment; 
 
 from __future__ import annotations
 
+import contextlib
+import io
 import re
 import shutil
 
@@ -14,7 +16,7 @@ pytest.importorskip("lerobot", reason="LeRobot lives in .venv-lerobot (created b
 from lerobot.datasets.lerobot_dataset import LeRobotDataset  # noqa: E402
 
 from langgap.demos.compact import demo_files, load_demo  # noqa: E402
-from langgap.demos.export import CAMERA_FEATURES, write_lerobot_dataset  # noqa: E402
+from langgap.demos.export import CAMERA_FEATURES  # noqa: E402
 from langgap.demos.record import start_episode  # noqa: E402
 from langgap.sim.env import CAMERAS, EnvOptions, TaskEnv  # noqa: E402
 from langgap.training.lerobot_train import EXPERIMENTS, load_experiment, train_command  # noqa: E402
@@ -23,11 +25,22 @@ from tests.test_lerobot import lerobot_libero_batch  # noqa: E402
 
 
 @pytest.fixture(scope="module")
-def dataset(tiny_collection, tmp_path_factory):
+def exported(tiny_collection, tmp_path_factory):
+    """`langgap export-lerobot DIR --workers 0 --no-progress` on a copy of the tiny collection: the copy, the
+    dataset and what the command wrote to stderr."""
+    from langgap.cli.main import main
+
     root = tmp_path_factory.mktemp("export") / "tiny"
     shutil.copytree(tiny_collection, root)
-    path = write_lerobot_dataset(root, workers=0, progress=False)
-    return root, LeRobotDataset("local/langgap_demos", root=path, video_backend="pyav")
+    with contextlib.redirect_stderr(io.StringIO()) as err:
+        assert main(["export-lerobot", str(root), "--workers", "0", "--no-progress"]) == 0
+    return root, LeRobotDataset("local/langgap_demos", root=root / "lerobot", video_backend="pyav"), err.getvalue()
+
+
+@pytest.fixture(scope="module")
+def dataset(exported):
+    root, ds, _ = exported
+    return root, ds
 
 
 def test_dataset_has_the_lerobot_libero_schema(dataset, catalog):
@@ -45,23 +58,19 @@ def test_dataset_has_the_lerobot_libero_schema(dataset, catalog):
     assert int(ds[demos[0].length]["episode_index"]) == 1
 
 
-def test_export_lerobot_cli_writes_the_dataset_it_is_told(tiny_collection, tmp_path, capsys):
-    """`--workers 2` renders in worker processes the dataset `--workers 0` renders here; `--no-progress` hides
-    the progress bar the default shows."""
+def test_export_lerobot_cli_writes_the_dataset_it_is_told(exported, tiny_collection, tmp_path, capsys):
+    """`--workers 2` renders in worker processes the dataset `--workers 0` renders here (`exported`);
+    `--no-progress` hides the progress bar the default shows."""
     from langgap.cli.main import main
 
-    here, there = tmp_path / "here", tmp_path / "there"
-    for root in (here, there):
-        shutil.copytree(tiny_collection, root)
-    assert main(["export-lerobot", str(here), "--workers", "0", "--no-progress"]) == 0
-    quiet = capsys.readouterr().err
+    _, here, quiet = exported
+    there = tmp_path / "there"
+    shutil.copytree(tiny_collection, there)
     assert main(["export-lerobot", str(there), "--workers", "2"]) == 0
     shown = capsys.readouterr().err
     ours = re.compile(r"\d+/\d+ \[[^\]]*demo")  # our bar counts demos (LeRobot's own `Map:` bars show anyway)
     assert not ours.search(quiet) and ours.search(shown)
-    datasets = [
-        LeRobotDataset("local/langgap_demos", root=root / "lerobot", video_backend="pyav") for root in (here, there)
-    ]
+    datasets = [here, LeRobotDataset("local/langgap_demos", root=there / "lerobot", video_backend="pyav")]
     assert len(datasets[0]) == len(datasets[1]) > 0
     for i in (0, len(datasets[0]) - 1):
         first, second = datasets[0][i], datasets[1][i]
