@@ -156,7 +156,6 @@ class ReplayCheck:
 
     task_id: str  # the task whose verdict names it (for an inherited verdict: the source's)
     init_index: int
-    path: Path
     steps: int
     error: str
 
@@ -201,5 +200,5 @@ def _replay_check(catalog: Catalog, task_id: str, init_index: int, path: Path, e
             envs[demo.stepping] = replay_env(catalog.get(task_id), demo.stepping)
         verify(envs[demo.stepping], demo, catalog)
     except DemonstrationError as exc:
-        return ReplayCheck(task_id, init_index, path, 0, str(exc).removeprefix(f"{task_id} init {init_index}: "))
-    return ReplayCheck(task_id, init_index, path, demo.steps, "")
+        return ReplayCheck(task_id, init_index, 0, str(exc).removeprefix(f"{task_id} init {init_index}: "))
+    return ReplayCheck(task_id, init_index, demo.steps, "")
