@@ -53,6 +53,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
+    argv = sys.argv[1:] if argv is None else argv
+    if not argv:
+        # A bare `langgap` asks what it can do: the help, not a missing-argument error.
+        parser.print_help()
+        return 0
     args = parser.parse_args(argv)
     try:
         return int(args.handler(args) or 0)

@@ -34,7 +34,9 @@ def add_gate_options(parser) -> None:
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
-        "validate", help=f"prove tasks doable: the scripted oracle must reach {FEASIBLE_RATE:.0%} on their init states"
+        # argparse %-formats help strings: the percent sign is doubled.
+        "validate",
+        help=f"prove tasks doable: the scripted oracle must reach {FEASIBLE_RATE:.0%}% on their init states",
     )
     parser.add_argument("tasks", nargs="?", default="all", metavar="SELECTION", help="task selection (default: all)")
     add_catalog_option(parser)

@@ -1,0 +1,49 @@
+"""Every help text of the `langgap` command formats: the top level, every verb and sub-verb, and a bare `langgap`.
+
+argparse formats a help string only when it is shown, with `%`-formatting: a stray `%` in one help text crashes
+`langgap --help` while every other command works, so each parser's help is formatted here."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+
+import pytest
+
+from langgap.cli.main import build_parser, main
+
+
+def _parsers(parser: argparse.ArgumentParser, prog: str = "langgap"):
+    """(command line, parser) for `parser` and every sub-parser below it."""
+    yield prog, parser
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, child in action.choices.items():
+                yield from _parsers(child, f"{prog} {name}")
+
+
+PARSERS = dict(_parsers(build_parser()))
+
+
+def test_the_walk_reaches_verbs_and_sub_verbs():
+    assert {"langgap", "langgap eval", "langgap tasks gate", "langgap train small-bc"} <= set(PARSERS)
+
+
+@pytest.mark.parametrize("command", sorted(PARSERS))
+def test_help_formats(command):
+    text = PARSERS[command].format_help()
+    assert text.startswith(f"usage: {command}")
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["-h"], []], ids=["--help", "-h", "bare"])
+def test_the_top_level_help_prints_every_verb_and_exits_0(argv):
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        try:
+            code = main(argv)
+        except SystemExit as exc:  # argparse's --help exits; a bare command returns
+            code = exc.code
+    assert code == 0
+    verbs = next(a for a in PARSERS["langgap"]._actions if isinstance(a, argparse._SubParsersAction)).choices
+    assert all(f"    {verb}" in out.getvalue() for verb in verbs)
