@@ -31,6 +31,7 @@ _EXPORTS = {
     "PolicySpec": "langgap.policies.base",
     "TaskContext": "langgap.policies.base",
     "Observation": "langgap.sim.env",
+    "current_instruction": "langgap.policies.base",
     "make_policy": "langgap.policies",
     "EpisodeRecord": "langgap.records",
     "Outcome": "langgap.records",

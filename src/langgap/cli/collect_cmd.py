@@ -34,7 +34,7 @@ def add_parser(subparsers) -> None:
     )
     # A task's collection is one work item: its infrastructure retries have their own flag.
     add_execution_options(parser, attempts_flag="--max-task-attempts")
-    parser.set_defaults(handler=run)
+    parser.set_defaults(handler=run, smoke=("tasks", "demos", "workers"))
 
 
 def run(args) -> int:

@@ -106,7 +106,7 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument("--policy-gpus", type=float, help="ray's shared policy: GPUs for the policy actor (default: 0)")
     parser.add_argument("--quiet", action="store_true", help="print no diagnosis table at the end")
-    parser.set_defaults(handler=run)
+    parser.set_defaults(handler=run, smoke=("tasks", "episodes", "repeats", "workers"))
 
 
 def add_stepping_option(parser) -> None:

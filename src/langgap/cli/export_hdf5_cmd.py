@@ -15,7 +15,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--workers", type=int, help="with --images: rendering processes (default: 1; 0: here)")
     parser.add_argument("--force", action="store_true", help="replace existing HDF5 files")
     parser.add_argument("--no-progress", action="store_true")
-    parser.set_defaults(handler=run)
+    parser.set_defaults(handler=run, smoke=("workers",))
 
 
 def run(args) -> int:

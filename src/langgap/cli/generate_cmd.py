@@ -55,7 +55,7 @@ def add_parser(subparsers) -> None:
     add_gate_options(parser)
     # The gate's options act only through --gate-inits: `run` refuses any of them set without it.
     gate_options = {a.dest: (a.option_strings[0], a.default) for a in parser._actions[first_gate_option:]}
-    parser.set_defaults(handler=run, gate_options=gate_options)
+    parser.set_defaults(handler=run, gate_options=gate_options, smoke=("gate_inits", "workers"))
 
 
 def summary_lines(tasks: list[Task]) -> list[str]:

@@ -17,6 +17,7 @@ from langgap.cli import (
     generate_cmd,
     report_cmd,
     serve_cmd,
+    smoke,
     tasks_cmd,
     train_cmd,
     validate_cmd,
@@ -60,6 +61,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     args = parser.parse_args(argv)
     try:
+        smoke.apply(args)
         return int(args.handler(args) or 0)
     except LangGapError as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -85,7 +85,7 @@ def add_parser(subparsers) -> None:
     )
     add_catalog_option(replay)
     _add_tasks_option(replay)
-    replay.set_defaults(handler=run_replay)
+    replay.set_defaults(handler=run_replay, smoke=("tasks",))
 
     audit = verbs.add_parser(
         "audit",
@@ -104,7 +104,7 @@ def add_parser(subparsers) -> None:
     )
     audit.add_argument("--examples", type=int, default=3, metavar="N", help="examples shown per finding")
     audit.add_argument("--record", action="store_true", help="record the checks that ran beside the registry")
-    audit.set_defaults(handler=run_audit)
+    audit.set_defaults(handler=run_audit, smoke=("tasks", "starts"))
 
 
 def _filtered(args) -> list[Task]:

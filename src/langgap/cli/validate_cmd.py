@@ -70,7 +70,7 @@ def add_parser(subparsers) -> None:
         help="record the verdicts beside the catalog's registry (rejected tasks leave the default selection)",
     )
     add_gate_options(parser)
-    parser.set_defaults(handler=run)
+    parser.set_defaults(handler=run, smoke=("tasks", "inits", "workers"))
 
 
 def _check_resume(args) -> None:

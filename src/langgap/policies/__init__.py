@@ -1,6 +1,7 @@
 """Policies by name. Adding one: write a module with a class that follows `Policy`, add one line here.
 
-A name may also be `package.module:Class` for a policy outside LangGap.
+A name may also be `package.module:Class` for a policy outside LangGap: an installed package, or a module in the
+working directory (`my_policy:MyPolicy` for ./my_policy.py), as `python -m` would find it.
 """
 
 from __future__ import annotations
@@ -8,6 +9,8 @@ from __future__ import annotations
 import difflib
 import importlib
 import inspect
+import os
+import sys
 
 from langgap.errors import LangGapError
 from langgap.policies.base import Policy
@@ -36,6 +39,9 @@ def policy_class(name: str) -> type:
         hint = f"; did you mean {', '.join(close)}?" if close else f" (known: {', '.join(sorted(REGISTRY))})"
         raise UnknownPolicyError(f"unknown policy {name!r}{hint}")
     module_name, _, attr = target.partition(":")
+    if name not in REGISTRY and os.getcwd() not in sys.path:
+        # After everything installed, so a local file never shadows a package; spawned workers inherit the path.
+        sys.path.append(os.getcwd())
     try:
         return getattr(importlib.import_module(module_name), attr)
     except (ImportError, AttributeError) as exc:
