@@ -4,10 +4,10 @@ the Python API page's example (docs/api.md) runs as printed."""
 from __future__ import annotations
 
 import os
-import re
 import subprocess
 import sys
 
+from tests.support.doc_blocks import blocks, run_block, sandbox
 from tests.support.harness import REPO
 
 
@@ -36,11 +36,10 @@ def test_import_is_cheap_and_every_name_resolves_with_a_docstring():
 
 
 def test_the_api_page_example_runs_as_printed(tmp_path):
-    page = (REPO / "docs" / "api.md").read_text()
-    section = page[page.index("## Example") :]
-    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
-    assert len(code.strip().splitlines()) <= 10
-    result = _python(code, cwd=tmp_path)
-    assert result.returncode == 0, result.stderr
+    (block,) = [b for b in blocks("docs/api.md") if b.language == "python"]
+    assert len(block.code.strip().splitlines()) <= 12
+    root = sandbox(tmp_path / "repo")
+    result = run_block(block, root)
+    assert result.returncode == 0, result.stderr[-3000:]
     assert result.stdout.splitlines() == ["1/13 episodes succeeded", "Counter({'did_source_task': 12})"]
-    assert (tmp_path / "runs" / "api" / "episodes.sqlite").exists()
+    assert (root / "runs" / "api" / "episodes.sqlite").exists()

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import os
-import re
 import subprocess
 import sys
 
@@ -18,6 +17,7 @@ import langgap.gym  # noqa: F401  (registers the ids)
 from langgap.errors import LangGapError
 from langgap.gym import LangGapTaskEnv, policy_observation
 from langgap.policies import make_policy
+from tests.support.doc_blocks import blocks, run_block, sandbox
 from tests.support.harness import REPO, SHORT_STEPS, TINY_TASK, run_cli, store_rows
 
 SIBLING = "spatial/s0/black-bowl-2-on-plate"
@@ -190,15 +190,12 @@ def test_registered_through_the_module_id_in_a_fresh_interpreter():
 
 @pytest.mark.slow
 def test_docs_examples_run_as_shown(tmp_path):
-    text = (REPO / "docs/gymnasium.md").read_text()
-    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
-    assert len(blocks) == 3
-    env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
+    examples = [b for b in blocks("docs/gymnasium.md") if b.language == "python"]
+    assert len(examples) == 3
+    root = sandbox(tmp_path / "repo")
     outputs = []
-    for index, block in enumerate(blocks):
-        script = tmp_path / f"example_{index}.py"
-        script.write_text(block)
-        done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, cwd=tmp_path, env=env)
+    for block in examples:
+        done = run_block(block, root)
         assert done.returncode == 0, done.stderr[-3000:]
         outputs.append(done.stdout.split("\n"))
     assert outputs[0][0].split()[2:4] == ["(128,", "128,"]
