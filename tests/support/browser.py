@@ -88,8 +88,10 @@ class Page:
             raise RuntimeError(details.get("exception", {}).get("description") or details.get("text"))
         return result["result"].get("value")
 
-    def screenshot(self, path: Path) -> Path:
-        data = self.call("Page.captureScreenshot", format="png", captureBeyondViewport=True)["data"]
+    def screenshot(self, path: Path, clip: dict | None = None) -> Path:
+        """Save the viewport, or the page's rectangle `clip` ({x, y, width, height} in CSS pixels), as PNG."""
+        region = {"clip": {**clip, "scale": 1}} if clip else {}
+        data = self.call("Page.captureScreenshot", format="png", captureBeyondViewport=True, **region)["data"]
         path.write_bytes(base64.b64decode(data))
         return path
 
