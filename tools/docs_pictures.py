@@ -35,7 +35,7 @@ from tests.support.browser import CHROMIUM, chromium
 from tools.picture_stamps import PICTURES, REPO, Picture, PictureError, fingerprint, source_digests, stamp_file
 
 RUNS = REPO / "runs" / "docs-pictures"
-VIEWPORT = {"width": 1280, "height": 900}
+VIEWPORT = {"width": 1280, "height": 1000}
 # The quick start's runs (setup.sh's main job; its task list is read from there).
 EPISODES, WORKERS = "3", "2"
 FILMED = {"blind": ("--video", "per-outcome:1")}
@@ -48,13 +48,14 @@ _CLIPS_LOADED = """(async () => {
   await new Promise(done => requestAnimationFrame(() => requestAnimationFrame(done)));
   return videos.map(v => v.error && v.error.code).filter(Boolean);
 })()"""
-# The page's rectangle from its top to the end of the outcome chart, and the gallery section's.
+# The page's rectangle from its top to the end of the outcome chart, and the gallery section's (from a margin
+# above its heading), in CSS pixels of the document.
 _REGIONS = """(() => {
-  const box = element => { const r = element.getBoundingClientRect();
-    return {x: 0, y: r.top + scrollY, width: document.documentElement.clientWidth, height: r.height}; };
-  const chart = box(document.getElementById("outcome-chart"));
+  const box = (element, above) => { const r = element.getBoundingClientRect();
+    return {x: 0, y: r.top + scrollY - above, width: document.documentElement.clientWidth, height: r.height + above}; };
+  const chart = box(document.getElementById("outcome-chart"), 0);
   return {top: {...chart, y: 0, height: chart.y + chart.height + 16},
-          gallery: box(document.querySelector("section.gallery"))};
+          gallery: box(document.querySelector("section.gallery"), 16)};
 })()"""
 
 
@@ -135,12 +136,19 @@ def report_pictures(tree: Path) -> None:
     pictures = {p.path: p for p in PICTURES if p.group == "report"}
     with chromium() as page:
         page.call("Emulation.setDeviceMetricsOverride", **VIEWPORT, deviceScaleFactor=1, mobile=False)
+        page.call("Emulation.setScrollbarsHidden", hidden=True)
         page.open(page_file.as_uri())
         if failed := page.evaluate(_CLIPS_LOADED):
             raise PictureError(f"{len(failed)} clip(s) of {page_file} did not load (media error codes {failed})")
         regions = page.evaluate(_REGIONS)
         for name, path in (("top", "docs/report.png"), ("gallery", "docs/report-gallery.png")):
-            page.screenshot(REPO / path, clip=regions[name])
+            region = regions[name]
+            if region["height"] > VIEWPORT["height"]:
+                raise PictureError(f"the page's {name} is taller than the viewport ({region['height']:.0f} px)")
+            # Chromium paints video frames only inside the viewport: the region is scrolled to its top.
+            page.evaluate(f"window.scrollTo(0, {region['y']})")
+            page.evaluate("new Promise(done => requestAnimationFrame(() => requestAnimationFrame(done)))")
+            page.screenshot(REPO / path, clip=region)
             stamp_file(REPO / path, fingerprint(pictures[path], tree))
             print(f"wrote {path}", flush=True)
         if page.errors:

@@ -89,9 +89,10 @@ class Page:
         return result["result"].get("value")
 
     def screenshot(self, path: Path, clip: dict | None = None) -> Path:
-        """Save the viewport, or the page's rectangle `clip` ({x, y, width, height} in CSS pixels), as PNG."""
+        """Save the viewport, or the page's rectangle `clip` ({x, y, width, height} in CSS pixels of the
+        document) as PNG; a clip must lie in the viewport (scroll there first): video frames are painted there only."""
         region = {"clip": {**clip, "scale": 1}} if clip else {}
-        data = self.call("Page.captureScreenshot", format="png", captureBeyondViewport=True, **region)["data"]
+        data = self.call("Page.captureScreenshot", format="png", captureBeyondViewport=not clip, **region)["data"]
         path.write_bytes(base64.b64decode(data))
         return path
 
