@@ -48,7 +48,7 @@ PICTURES = (
 
 
 class PictureError(Exception):
-    """A picture cannot be stamped or checked (a source pattern that matches nothing, a file that is no PNG)."""
+    """A picture cannot be made, stamped or checked (a failed run, a source pattern that matches no file, ...)."""
 
 
 def source_digests(picture: Picture, root: Path = REPO) -> dict[str, str]:

@@ -1,4 +1,5 @@
-"""A headless Chromium driven over the DevTools protocol (websocket on 127.0.0.1), for page tests.
+"""A headless Chromium driven over the DevTools protocol (websocket on 127.0.0.1), for page tests and
+the documentation's pictures (tools/docs_pictures.py).
 
 Chromium is Debian's package (installed by ./setup.sh); the flags keep it from reaching the network
 on its own (background services, updates), so every request the page makes is the page's.
