@@ -28,24 +28,25 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
-from tests.support.browser import CHROMIUM, chromium
+from tests.support.browser import CHROMIUM, Page, chromium
 from tools.picture_stamps import PICTURES, REPO, Picture, PictureError, fingerprint, source_digests, stamp_file
 
 RUNS = REPO / "runs" / "docs-pictures"
 VIEWPORT = {"width": 1280, "height": 1000}
+STILL_TRIES = 40
 # The quick start's runs (setup.sh's main job; its task list is read from there).
 EPISODES, WORKERS = "3", "2"
 FILMED = {"blind": ("--video", "per-outcome:1")}
 
-# Resolves once every clip of the page shows its first frame (or failed: the error codes are returned).
+# Resolves once every clip of the page has its first frame (or failed: the error codes are returned).
 _CLIPS_LOADED = """(async () => {
   const videos = [...document.querySelectorAll("video")];
   await Promise.all(videos.map(v => v.readyState >= 2 ? null : new Promise(done => {
     v.addEventListener("loadeddata", done); v.addEventListener("error", done); })));
-  await new Promise(done => requestAnimationFrame(() => requestAnimationFrame(done)));
   return videos.map(v => v.error && v.error.code).filter(Boolean);
 })()"""
 # The page's rectangle from its top to the end of the outcome chart, and the gallery section's (from a margin
@@ -128,6 +129,19 @@ def quick_start_report(tree: Path) -> Path:
     return page / "index.html"
 
 
+def _still_screenshot(page: Page, path: Path, clip: dict) -> None:
+    """Screenshot `clip` until two shots in a row are equal: a clip's loading spinner fades out for a second
+    after its first frame is shown, and a shot taken meanwhile would show it."""
+    previous = None
+    for _ in range(STILL_TRIES):
+        shot = page.screenshot(path, clip=clip).read_bytes()
+        if shot == previous:
+            return
+        previous = shot
+        time.sleep(0.25)
+    raise PictureError(f"{path.name}: the page did not come to rest in {STILL_TRIES} screenshots")
+
+
 def report_pictures(tree: Path) -> None:
     """docs/report.png and docs/report-gallery.png from the quick start's page in headless Chromium."""
     if CHROMIUM is None:
@@ -147,8 +161,7 @@ def report_pictures(tree: Path) -> None:
                 raise PictureError(f"the page's {name} is taller than the viewport ({region['height']:.0f} px)")
             # Chromium paints video frames only inside the viewport: the region is scrolled to its top.
             page.evaluate(f"window.scrollTo(0, {region['y']})")
-            page.evaluate("new Promise(done => requestAnimationFrame(() => requestAnimationFrame(done)))")
-            page.screenshot(REPO / path, clip=region)
+            _still_screenshot(page, REPO / path, region)
             stamp_file(REPO / path, fingerprint(pictures[path], tree))
             print(f"wrote {path}", flush=True)
         if page.errors:
