@@ -1,6 +1,7 @@
 """Image policies against the renderer, the physical limit on a CPU machine (one run, side by side).
 
     .venv/bin/python bench/bench_render.py [--task ID] [--steps 60] [--size 256] [--rounds 5] [--png FILE] [--scenes]
+                                           [--no-speed]
 
 Rows, in interleaved rounds (medians): a bare render loop (two cameras per iteration, no physics),
 with and without the reflection pass; a bare physics loop; the LangGap episode loop (`--steps` steps,
@@ -14,7 +15,8 @@ Then what the reflection pass changes in the images: both environments take the 
 at several steps both cameras are compared (pixels that differ, mean and max absolute difference) and
 the differing pixels attributed to the body drawn there (a segmentation render). `--png` saves
 agentview with the pass on, off, and their difference (amplified) side by side; `--scenes` counts the
-catalog's scenes that have a surface for the pass to draw.
+catalog's scenes that have a surface for the pass to draw; `--no-speed` skips the loop table (docs/reflection.png
+is made that way by `python -m tools.docs_pictures reflection`, which stamps it with the code it shows).
 """
 
 from __future__ import annotations
@@ -261,9 +263,11 @@ def main() -> None:
     parser.add_argument("--renders", type=int, default=10, help="bare render iterations per round")
     parser.add_argument("--png", type=Path, help="save agentview with reflections on | off | difference")
     parser.add_argument("--scenes", action="store_true", help="also count the scenes with a reflective surface")
+    parser.add_argument("--no-speed", action="store_true", help="skip the loop table (only what the pass changes)")
     args = parser.parse_args()
     task = dataclasses.replace(load_catalog().get(args.task), max_steps=args.steps)
-    speed(task, args.size, args.rounds, args.renders)
+    if not args.no_speed:
+        speed(task, args.size, args.rounds, args.renders)
     reflection_difference(task, args.size, min(args.steps, 30), args.png)
     if args.scenes:
         reflective_scenes()

@@ -1,4 +1,5 @@
-"""A headless Chromium driven over the DevTools protocol (websocket on 127.0.0.1), for page tests.
+"""A headless Chromium driven over the DevTools protocol (websocket on 127.0.0.1), for page tests and
+the documentation's pictures (tools/docs_pictures.py).
 
 Chromium is Debian's package (installed by ./setup.sh); the flags keep it from reaching the network
 on its own (background services, updates), so every request the page makes is the page's.
@@ -88,8 +89,11 @@ class Page:
             raise RuntimeError(details.get("exception", {}).get("description") or details.get("text"))
         return result["result"].get("value")
 
-    def screenshot(self, path: Path) -> Path:
-        data = self.call("Page.captureScreenshot", format="png", captureBeyondViewport=True)["data"]
+    def screenshot(self, path: Path, clip: dict | None = None) -> Path:
+        """Save the viewport, or the page's rectangle `clip` ({x, y, width, height} in CSS pixels of the
+        document) as PNG; a clip must lie in the viewport (scroll there first): video frames are painted there only."""
+        region = {"clip": {**clip, "scale": 1}} if clip else {}
+        data = self.call("Page.captureScreenshot", format="png", captureBeyondViewport=not clip, **region)["data"]
         path.write_bytes(base64.b64decode(data))
         return path
 

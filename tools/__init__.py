@@ -1,0 +1,1 @@
+"""Developer commands that are neither the package, its tests nor a benchmark (run from the repository root)."""
