@@ -111,6 +111,7 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "tasks show --catalog": (Differs(("tasks", "show", SHORT_TASK), ("--catalog", "{catalog}")),),
     "tasks show --style": (Differs(("tasks", "show", SHORT_TASK), ("--style", "paper")),),
     "tasks show --json": (Differs(("tasks", "show", SHORT_TASK), ("--json",)),),
+    "tasks show --bddl": (Differs(("tasks", "show", SHORT_TASK), ("--bddl",)),),
     "tasks gate --catalog": (Differs(("tasks", "gate"), ("--catalog", "{catalog}")),),
     "tasks gate --tasks": (Differs(("tasks", "gate"), ("--tasks", "spatial")),),
     "tasks gate --markdown": (Differs(("tasks", "gate"), ("--markdown",)),),

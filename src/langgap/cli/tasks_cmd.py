@@ -62,6 +62,9 @@ def add_parser(subparsers) -> None:
     add_catalog_options(show)
     show.add_argument("id", help="task id (see `langgap tasks list`)")
     show.add_argument("--json", action="store_true")
+    show.add_argument(
+        "--bddl", action="store_true", help="print only the task's BDDL file (a start for a task of your own)"
+    )
     show.set_defaults(handler=run_show)
 
     gate = verbs.add_parser(
@@ -143,6 +146,9 @@ def run_show(args) -> int:
 
     catalog = load_catalog(args.catalog)
     task = catalog.get(args.id)
+    if args.bddl:
+        print(files.task_bddl_path(task).read_text(encoding="utf-8"), end="")
+        return 0
     info = task.to_dict(args.style)
     info["bddl"] = str(files.task_bddl_path(task))
     info["scene_bddl"] = str(files.scene_bddl_path(task))
