@@ -113,25 +113,42 @@ def test_reports_mark_a_task_with_a_proof_infeasible(tmp_path):
     proven = GateResult(50, 0, False, reason="oracle 0/50", inits=50, failed_inits=range(50), proof="Out of reach")
     runs = load_runs([_run(tmp_path, "vla", {DRAWER: 0, BOWL: 2}, {DRAWER: proven, BOWL: ACCEPTED})])
     (run,) = summarize(runs).runs
-    assert run.capped == {DRAWER: "infeasible (proof)"}
+    assert run.capped == {DRAWER: "infeasible: a proof that no policy can do it"}
     markdown = FORMATS["md"](summarize(runs), None)
-    assert f"⚠ {DRAWER} (infeasible (proof))" in markdown and "unproven: the oracle" not in markdown
+    assert f"⚠ {DRAWER} (infeasible: a proof that no policy can do it)" in markdown
+    assert "unproven: the oracle" not in markdown
 
 
-def test_a_task_is_marked_by_a_low_oracle_as_unproven_or_by_a_proof_as_infeasible():
+def test_reports_mark_a_task_whose_starts_do_not_come_to_rest_unsettled(tmp_path):
+    """The oracle did it on every init state; the gate rejected it for its starts: ⚠, as unsettled, not unproven."""
+    restless = dataclasses.replace(ACCEPTED, feasible=False, reason="scene settles", made_by="")
+    runs = load_runs([_run(tmp_path, "vla", {DRAWER: 0, BOWL: 2}, {DRAWER: restless, BOWL: ACCEPTED})])
+    (run,) = summarize(runs).runs
+    assert run.capped == {DRAWER: "unsettled: its starts do not come to rest (the oracle did it 4/4)"}
+    markdown = FORMATS["md"](summarize(runs), None)
+    assert f"| {DRAWER} ⚠ |" in markdown and f"⚠ {DRAWER} (unsettled: its starts do not come to rest" in markdown
+    assert "unproven" not in markdown.split("\n\n")[1]  # the run's header line
+    assert json.loads(FORMATS["json"](summarize(runs), None))["runs"][0]["capped_tasks"] == run.capped
+
+
+def test_a_task_is_marked_by_a_low_oracle_by_its_verdict_or_by_a_proof_as_infeasible():
     from langgap.report.stats import Rate
     from langgap.report.summary import capped_because
 
     low = Rate("t", 20, 5, 0, 1, oracle_successes=18, oracle_episodes=20)
-    unproven = capped_because(low, GateResult(20, 18, True))
+    unproven = capped_because(low, GateResult(20, 18, False, reason="oracle 18/20"))
     assert unproven == "unproven: the oracle does not do it (18/20); no proof that a policy cannot"
     assert "infeasible" not in unproven and "certified" not in unproven
+    # The gate admitted it (at 90 %): doable, yet the oracle is below the ceiling target on these init states.
+    admitted = capped_because(low, GateResult(20, 18, True))
+    assert admitted == "doable, but the oracle does only 18/20 of these init states"
     fine = Rate("t", 20, 5, 0, 1, oracle_successes=19, oracle_episodes=20)
     assert capped_because(fine, GateResult(20, 19, True)) is None
-    assert capped_because(fine, GateResult(20, 19, False, proof="…")) == "infeasible (proof)"
+    assert capped_because(fine, GateResult(20, 19, False, proof="…")) == "infeasible: a proof that no policy can do it"
     assert capped_because(fine, None) is None
     searched = GateResult(20, 3, True, demonstration="demos/drawer.npz")
-    assert "unproven" not in capped_because(Rate("t", 20, 5, 0, 1, oracle_successes=3, oracle_episodes=20), searched)
+    shown = capped_because(Rate("t", 20, 5, 0, 1, oracle_successes=3, oracle_episodes=20), searched)
+    assert shown == "doable by a searched demonstration; the oracle does 3/20 of these init states"
 
 
 def _record_many(registry: str, worker: int) -> None:

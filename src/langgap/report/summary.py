@@ -342,8 +342,9 @@ def confusion(records: list[EpisodeRecord]) -> dict[str, dict[str, dict[str, int
 
 
 def capped_because(task_rate: Rate, gate: GateResult | None) -> str | None:
-    """Why a task is marked ⚠ (None: it is not): proven infeasible, or an oracle below `CEILING_TARGET` on
-    the run's init states (unproven: the oracle does not do it, no proof that a policy cannot)."""
+    """Why a task is marked ⚠ (None: it is not), led by its verdict's word: proven infeasible, its starts do not
+    come to rest, or an oracle below `langgap.vocabulary.CEILING_TARGET` on the run's init states
+    (`GateResult.capped_because`)."""
     return None if gate is None else gate.capped_because(task_rate.oracle_successes, task_rate.oracle_episodes)
 
 
@@ -383,7 +384,7 @@ class RunResults:
     card: dict[str, str]  # the protocol card (`CARD_ITEMS`)
     spread: list[SpreadRow]  # between-seed spread (runs with --repeats)
     clips: list[Clip]  # filmed episodes (`--video`)
-    capped: dict[str, str]  # task -> why it is marked ⚠ (unproven: oracle below target; or infeasible (proof))
+    capped: dict[str, str]  # task -> why it is marked ⚠ (`capped_because`)
     other_stack: dict[str, list[str]]  # task -> how its verdict's physics stack differs from its episodes'
     gate_source: str  # where the verdicts behind Oracle % and ⚠ come from (`Run.gate_source`)
     against_originals: PairedTest | None  # extended episodes against their sources' (`against_sources`)

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 from langgap.catalog.labels import DIMENSION_LABEL, EXTENDED_DIMENSIONS, SPLIT_LABEL, SUITE_LABEL, SUITE_ORDER, label
 from langgap.records import JUDGED_OUTCOMES, Outcome, Privilege
+from langgap.report.answer import percent
 from langgap.report.card import CARD_ITEMS
 from langgap.report.published import Published
 from langgap.report.stats import PairedTest, Rate
@@ -19,6 +20,7 @@ from langgap.report.summary import (
     TaskRow,
     shown_dimensions,
 )
+from langgap.vocabulary import SWITCH_RATE, Verdict
 
 SOURCE_LABEL = {"original": "Original (LIBERO)", "extended": "Extended (LangGap)", "total": "Total"}
 OUTCOME_LABEL = {
@@ -414,7 +416,7 @@ def switch_table(run: RunResults) -> Table | None:
     if not run.switches:
         return None
     headers = ["K", "Dimension", "Episodes", *(f"{name.capitalize()} %, 95% CI" for name in SWITCH_CLASSES)]
-    headers += ["Gaps", f"{CAPPED_MARK} unproven at K"]
+    headers += ["Gaps", f"{CAPPED_MARK} {Verdict.UNPROVEN} at K"]
     rows = [
         [
             str(row.k),
@@ -434,7 +436,9 @@ def switch_table(run: RunResults) -> Table | None:
     if unproven:
         named = ", ".join(f"{task} at K={k}" for k, task in unproven[:SHOWN_UNPROVEN])
         more = len(unproven) - SHOWN_UNPROVEN
-        title += f"; {CAPPED_MARK} the switch gate (oracle ≥ 95 % under switch:K) has not accepted {named}"
+        title += (
+            f"; {CAPPED_MARK} the switch gate (oracle ≥ {percent(SWITCH_RATE)} under switch:K) has not accepted {named}"
+        )
         title += f" and {more} more (the JSON report's `switches` lists them)" if more > 0 else ""
     return Table(title, headers, rows)
 
