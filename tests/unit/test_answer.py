@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import pytest
 
 from langgap.catalog.task import GateResult
+from langgap.records import Outcome
 from langgap.report import load_runs, render, summarize
 from tests.support.harness import run_cli
 from tests.support.reports import SOURCE, TASKS, episode, memoriser, reader, write_run
@@ -73,6 +75,26 @@ def test_runs_without_extended_tasks_or_without_original_success_say_what_cannot
     assert text.startswith("my-vla (n) does no original task, so the gap cannot be measured: 0 % on original tasks")
 
 
+def test_a_run_of_switch_episodes_only_says_what_the_policy_did_after_the_switch(tmp_path):
+    """A `switch:K` episode of an extended task asks for another task first: the run has extended tasks, under
+    the switch, and its sentence says whether the policy followed the switch or went on with the first task."""
+    persisted = [
+        replace(r, outcome=Outcome.PERSISTED) if r.kind == "extended" and r.judged else r
+        for r in memoriser(condition="switch:20")
+    ]
+    followed = reader(condition="switch:60")
+    (text,) = _answers(write_run(tmp_path / "switched", "my-vla", persisted + followed))
+    assert text == (
+        "my-vla (switched): no episode under the given instruction; its extended tasks ran only under a switch "
+        "(another task's instruction first, their own from policy step K): at K=20 it did the task switched to in "
+        "0 % [0, 35] of 7 extended episodes and went on with the first instruction's task in 100 % [65, 100]; at "
+        "K=60 it did the task switched to in 88 % [53, 98] of 8 extended episodes and went on with the first "
+        "instruction's task in 0 % [0, 32] (a policy that reads its instruction does the task switched to; one "
+        "that ignores it goes on with the first)."
+    )
+    assert "no extended tasks" not in text
+
+
 @pytest.fixture
 def runs(tmp_path):
     return [
@@ -112,7 +134,6 @@ def test_summary_honours_format_and_allow_mismatch(tmp_path, runs):
 def test_no_verdict_when_every_extended_task_asks_for_its_originals_goal(tmp_path):
     """A rewording of the original's own goal (LIBERO-Plus's language variants, paraphrases) is done as well by a
     policy that ignores its instruction: such tasks alone cannot show that it reads."""
-    from dataclasses import replace
 
     reworded = [replace(episode(RAMEKIN, k, success=True, reached={SOURCE: 5}), dimension="language") for k in range(4)]
     originals = [episode(SOURCE, k, success=True, reached={SOURCE: 5}) for k in range(4)]

@@ -24,7 +24,7 @@ from langgap.catalog.switch_verdicts import SwitchVerdicts, accepted
 from langgap.catalog.task import SAME_GOAL_DIMENSIONS, GateResult
 from langgap.engine.plan import SWITCH, repeat_of, switch_step
 from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Outcome, Privilege, achieved
-from langgap.report.answer import Answer
+from langgap.report.answer import Answer, Switched
 from langgap.report.card import PROTOCOL_ITEMS, protocol_card
 from langgap.report.load import Run
 from langgap.report.stats import PairedTest, Rate
@@ -431,6 +431,11 @@ class RunResults:
             self.gaps,
             self.same_goal_only,
             self.reworded if self.mixed else 0,
+            tuple(
+                Switched(row.k, row.classes["success"], row.classes["persisted"])
+                for row in self.switches
+                if row.group == "extended"
+            ),
         )
 
 
