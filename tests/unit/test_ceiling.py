@@ -92,7 +92,27 @@ def test_reports_show_the_ceiling_and_mark_a_task_the_oracle_fails_as_unproven(t
     # the oracle failing a task shows nothing about other policies: neither the header nor the notes say so
     assert "infeasible (proof)" not in markdown and "certified" not in markdown
     assert "caps what any policy can show" not in markdown
-    assert "⚠ marks a task the oracle does not do at 95 % on these init states (unproven" in markdown
+    assert "⚠ marks a task the oracle does on fewer than 95 % of these init states" in markdown
+
+
+def test_the_warning_legend_is_shown_with_a_warning_only_plain_and_with_both_rates(tmp_path):
+    from langgap.report.tables import CAPPED_NOTE, notes, selection_text
+
+    fine = load_runs([_run(tmp_path, "fine", {BOWL: 2}, {BOWL: ACCEPTED})])
+    markdown = FORMATS["md"](summarize(fine), None)
+    assert "⚠ marks" not in markdown and "--tasks feasible (the default)" in markdown
+    (tmp_path / "other").mkdir()  # catalogs are cached by path: another registry
+    warned = load_runs([_run(tmp_path / "other", "warned", {DRAWER: 0, BOWL: 2}, {DRAWER: UNPROVEN, BOWL: ACCEPTED})])
+    summary = summarize(warned)
+    assert CAPPED_NOTE in FORMATS["md"](summary, None) and CAPPED_NOTE in notes(summary, None)
+    # which rate is which: ⚠ below the ceiling target on the run's init states; the gate admits at its own rate
+    assert "⚠ marks a task the oracle does on fewer than 95 % of these init states" in CAPPED_NOTE
+    assert "the oracle, with searched demonstrations, does at least 90 % of its init states" in CAPPED_NOTE
+    # the terminal shows the notes and the header as they are: no Markdown code quotes
+    (run,) = summary.runs
+    run.spec["selection"] = "spatial/s2/*"
+    assert not [note for note in notes(summary, None) if "`" in note] and "`" not in selection_text(run)
+    assert "tasks: 'spatial/s2/*'; ⚠" in selection_text(run)
 
 
 def test_reports_mark_a_ceiling_whose_verdict_was_made_on_another_stack(tmp_path):

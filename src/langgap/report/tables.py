@@ -20,7 +20,7 @@ from langgap.report.summary import (
     TaskRow,
     shown_dimensions,
 )
-from langgap.vocabulary import SWITCH_RATE, Verdict
+from langgap.vocabulary import CEILING_TARGET, FEASIBLE_RATE, SWITCH_RATE, Verdict
 
 SOURCE_LABEL = {"original": "Original (LIBERO)", "extended": "Extended (LangGap)", "total": "Total"}
 OUTCOME_LABEL = {
@@ -45,17 +45,23 @@ CEILING_NOTE = (
     "Oracle % is the scripted oracle's success on the same tasks and init states (the feasibility verdicts "
     "stored with the run when it was created); Relative % is the rate as a share of it."
 )
+# The notes are plain text: the terminal shows them as they are, so they quote no command in Markdown's backticks.
 SELECTION_NOTE = (
-    "Tasks: `--tasks feasible` (the default) runs the tasks the feasibility gate accepted; `--tasks all` adds "
-    "those it rejected. Either way, ⚠ marks a task the oracle does not do at 95 % on these init states "
-    "(unproven: no proof that a policy cannot) or one proven infeasible (its proof and assumptions: "
-    "`langgap tasks show ID`)."
+    f"Tasks: --tasks feasible (the default) runs the tasks the feasibility gate found {Verdict.DOABLE}; --tasks all "
+    f"adds the others ({Verdict.UNPROVEN}, {Verdict.INFEASIBLE} or {Verdict.UNSETTLED})."
+)
+CAPPED_NOTE = (
+    f"⚠ marks a task the oracle does on fewer than {percent(CEILING_TARGET)} of these init states, or one the gate "
+    f"found {Verdict.INFEASIBLE} (its proof and assumptions: langgap tasks show ID) or {Verdict.UNSETTLED} (its "
+    f"starts do not come to rest). The gate admits a task as {Verdict.DOABLE} when the oracle, with searched "
+    f"demonstrations, does at least {percent(FEASIBLE_RATE)} of its init states, so a {Verdict.DOABLE} task can "
+    f"carry ⚠ too; one the oracle does not do, with no proof that a policy cannot, is {Verdict.UNPROVEN}."
 )
 
 STACK_NOTE = (
     "≠ marks a task whose feasibility verdict (its Oracle % and ⚠) was made on another physics stack than these "
     "episodes: other package versions, start or image conventions, stepping or seed scheme "
-    "(`langgap report --json`: other_stack_tasks; `langgap tasks show ID`)."
+    "(langgap report --format json: other_stack_tasks; langgap tasks show ID)."
 )
 
 
@@ -65,15 +71,17 @@ def selection_text(run: RunResults) -> str:
     if selection in (None, "feasible"):
         chosen = "feasible (the default)"
     else:
-        chosen = f"a list of {len(selection.split(','))}" if "," in selection else f"`{selection}`"
+        chosen = f"a list of {len(selection.split(','))}" if "," in selection else repr(selection)
     capped = "; ".join(f"{task} ({why})" for task, why in sorted(run.capped.items()))
     return f"tasks: {chosen}" + (f"; ⚠ {capped}" if capped else "") + f"; {run.gate_source}"
 
 
 def notes(summary: Summary, published: Published | None, *, ceiling: bool = True) -> list[str]:
-    """The notes printed with the tables (`ceiling`: with those that explain the oracle columns and ⚠)."""
+    """The notes printed with the tables (`ceiling`: with those that explain the task selection, the oracle
+    columns and ⚠, the last only when a task is marked ⚠)."""
     shown = [
         (SELECTION_NOTE, ceiling),
+        (CAPPED_NOTE, ceiling and any(run.capped for run in summary.runs)),
         (CEILING_NOTE, ceiling),
         (STACK_NOTE, ceiling and any(run.other_stack for run in summary.runs)),
         *((note, privilege in summary.privileges) for privilege, note in PRIVILEGE_NOTES.items()),
@@ -439,7 +447,7 @@ def switch_table(run: RunResults) -> Table | None:
         title += (
             f"; {CAPPED_MARK} the switch gate (oracle ≥ {percent(SWITCH_RATE)} under switch:K) has not accepted {named}"
         )
-        title += f" and {more} more (the JSON report's `switches` lists them)" if more > 0 else ""
+        title += f" and {more} more (the JSON report's switches section lists them)" if more > 0 else ""
     return Table(title, headers, rows)
 
 
