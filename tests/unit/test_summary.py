@@ -77,11 +77,33 @@ def test_condition_and_run_comparisons_are_paired(summary):
     assert comparison.agreement == pytest.approx(5 / 11) and comparison.kappa == pytest.approx(8 / 74)
 
 
-def test_the_run_comparison_table_shows_agreement_and_kappa(summary):
+def test_agreement_and_kappa_are_shown_only_for_one_spec_run_twice(tmp_path, summary):
+    """Cohen's κ of two runs is a test-retest figure: one spec run twice, never two policies (blind vs my-vla)."""
     from langgap.report.tables import comparison_table
 
-    table = comparison_table(summary)
-    assert table.headers[-2:] == ["Agree %", "κ"] and table.rows[0][-2:] == ["45.5", "0.11"]
+    assert not summary.comparisons[0].retest and comparison_table(summary).headers[-1] == "p"
+    markdown = render([run.path for run in summary.runs], "md")
+    assert summary.to_dict()["comparisons"][0]["kappa"] is None and "κ" not in markdown
+    # The same spec twice (a policy that samples: one episode came out otherwise), and the same policy with other
+    # arguments (another spec, though its protocol card, and so its pairing, is the same).
+    again = [
+        dataclasses.replace(r, success=False, outcome=Outcome.NO_GOAL_REACHED) if r.task_id == SOURCE else r
+        for r in reader()
+    ]
+    runs = [
+        write_run(tmp_path / "first", "my-vla", reader()),
+        write_run(tmp_path / "again", "my-vla", again),
+        write_run(tmp_path / "other", "my-vla", reader(), policy_args={"temperature": "0.5"}),
+    ]
+    retest = summarize(load_runs(runs))
+    assert [t.retest for t in retest.comparisons] == [True, False]
+    table = comparison_table(retest)
+    assert table.headers[-2:] == ["Agree %", "κ"] and "one run spec run twice (test-retest)" in table.title
+    # 8 of 12 pairs agree; chance gives (11 x 7 + 1 x 5) / 144: κ = (96 - 82) / (144 - 82)
+    assert table.rows[0][-2:] == ["66.7", "0.23"] and table.rows[1][-2:] == ["", ""]
+    compared = retest.to_dict()["comparisons"]
+    assert compared[0]["kappa"] == pytest.approx(14 / 62) and compared[1]["agreement"] is None
+    assert "| Agree % | κ |" in render(runs, "md")
 
 
 def test_privileged_runs_are_marked(summary):

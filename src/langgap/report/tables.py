@@ -462,12 +462,17 @@ def comparison_table(summary: Summary) -> Table | None:
         return Table(title, ["Run", "Differs in"], rows)
     if not summary.comparisons:
         return None
-    headers = ["Comparison", "Pairs", "First %", "Second %", "Only first", "Only second", "p", "Agree %", "κ"]
+    headers = ["Comparison", "Pairs", "First %", "Second %", "Only first", "Only second", "p"]
     title = "Runs compared on matched episodes (McNemar)"
     if summary.mismatches:
         title += " — protocols differ: " + "; ".join(f"{n}: {', '.join(i)}" for n, i in summary.mismatches.items())
-    rows = [[*_paired_cells(t), pct(t.agreement), "–" if t.kappa is None else f"{t.kappa:.2f}"]
-            for t in summary.comparisons]  # fmt: skip
+    rows = [_paired_cells(t) for t in summary.comparisons]
+    if any(t.retest for t in summary.comparisons):
+        # Agreement and κ are a test-retest: shown for runs of one spec only, blank beside any other run.
+        title += "; Agree % and κ: one run spec run twice (test-retest)"
+        headers += ["Agree %", "κ"]
+        for row, t in zip(rows, summary.comparisons, strict=True):
+            row += [pct(t.agreement), "–" if t.kappa is None else f"{t.kappa:.2f}"] if t.retest else ["", ""]
     return Table(title, headers, rows)
 
 
