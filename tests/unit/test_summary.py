@@ -106,9 +106,10 @@ def test_agreement_and_kappa_are_shown_only_for_one_spec_run_twice(tmp_path, sum
     assert "| Agree % | κ |" in render(runs, "md")
 
 
-def test_privileged_runs_are_marked(summary):
+def test_runs_are_named_by_label_and_policy_once_and_privileged_runs_are_marked(summary):
     assert [run.privilege for run in summary.runs] == [Privilege.GOAL, Privilege.NONE]
-    assert summary.runs[0].label == "blind (blind) †" and summary.runs[1].label == "my-vla (vla)"
+    # run directory `blind` of policy blind: the name once, not "blind (blind)"; directory `vla` of policy my-vla
+    assert summary.runs[0].label == "blind †" and summary.runs[1].label == "vla (my-vla)"
     assert [run["privilege"] for run in summary.to_dict()["runs"]] == ["goal", "none"]
 
 
@@ -117,11 +118,11 @@ def test_a_learned_policy_that_reads_simulator_state_is_not_called_a_scripted_re
     blind = write_run(tmp_path / "blind", "blind", memoriser(sees_state=True, sees_goal=True))
     summary = summarize(load_runs([bc, blind]))
     assert [run.privilege for run in summary.runs] == [Privilege.STATE, Privilege.GOAL]
-    assert [run.label for run in summary.runs] == ["small-bc (bc) ‡", "blind (blind) †"]
+    assert [run.label for run in summary.runs] == ["bc (small-bc) ‡", "blind †"]
     assert summary.runs[0].card["privileged"] == "reads simulator state (not told the goal)"
     assert summary.runs[1].card["privileged"] == "told the goal (a scripted reference)"
     markdown = render([bc], "md")
-    assert "| small-bc (bc) ‡ |" in markdown and "‡ reads simulator state" in markdown
+    assert "| bc (small-bc) ‡ |" in markdown and "‡ reads simulator state" in markdown
     assert "scripted reference" not in markdown and "†" not in markdown
 
 
@@ -138,7 +139,7 @@ def test_runs_whose_protocols_differ_are_not_paired_unless_allowed(tmp_path):
     first = write_run(tmp_path / "a", "blind", memoriser())
     other = write_run(tmp_path / "b", "my-vla", reader(), physics={"mujoco": "3.3.0"}, seed=7)
     refused = summarize(load_runs([first, other]))
-    assert refused.mismatches == {"my-vla (b)": ["seeds", "physics"]} and refused.refused
+    assert refused.mismatches == {"b (my-vla)": ["seeds", "physics"]} and refused.refused
     assert refused.comparisons == []
     allowed = summarize(load_runs([first, other]), allow_mismatch=True)
     assert not allowed.refused and allowed.comparisons[0].pairs == 11
