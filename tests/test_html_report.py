@@ -30,7 +30,7 @@ _FACTS = (
       .map(r => [...r.cells].map(c => c.textContent));
   return {
     titles: [...document.querySelectorAll("section h2")].map(h => h.textContent),
-    table_vii: rows(section("Table VII")),
+    table_vii: rows(section("Success on extended tasks by dimension")),
     answers: [...document.querySelectorAll("#answer p")].map(p => p.textContent),
     stacks: Object.fromEntries([...document.querySelectorAll("#outcome-chart g.stack")].map(g =>
       [g.dataset.run + " / " + g.dataset.group, [...g.querySelectorAll("rect.segment")].map(r =>
@@ -88,7 +88,7 @@ def test_the_html_report_in_a_real_browser(tmp_path):
         # Sorting: a click on a column header orders the rows by it, a second click reverses them.
         column = page.evaluate("""(() => {
 """ + _SECTION + """
-          const tasks = section("Per task — my-vla");
+          const tasks = section("Success per task — vla");
           const header = [...tasks.querySelectorAll("th")].find(th => th.textContent === "Rate %");
           const read = () => [...tasks.querySelectorAll("tbody tr")].map(r => parseFloat(r.cells[6].textContent));
           header.click(); const up = read(); header.click(); return [up, read()];
@@ -97,7 +97,8 @@ def test_the_html_report_in_a_real_browser(tmp_path):
         # Filtering: typing in a table's filter box hides the rows that do not match.
         page.evaluate("""(() => {
 """ + _SECTION + """
-          const input = section("Table VII").querySelector("input.filter"); input.value = "smolvla";
+          const input = section("Success on extended tasks by dimension").querySelector("input.filter");
+          input.value = "smolvla";
           input.dispatchEvent(new Event("input"));
         })()""")  # fmt: skip
         assert [row[0] for row in page.evaluate(_FACTS)["table_vii"]] == [
@@ -106,7 +107,7 @@ def test_the_html_report_in_a_real_browser(tmp_path):
         # Per-column filters: the drop-downs of the per-task table combine (and with the text box).
         shown = page.evaluate("""(() => {
 """ + _SECTION + """
-          const tasks = section("Per task — blind");
+          const tasks = section("Success per task — blind");
           const choose = (name, value) => {
             const select = tasks.querySelector(`select[aria-label="${name}"]`); select.value = value;
             select.dispatchEvent(new Event("input"));

@@ -47,13 +47,25 @@ def test_csv_rows_are_the_json_rate_rows(runs):
 
 
 def test_markdown_and_latex_hold_the_papers_tables_and_mark_privileged_runs(runs):
-    markdown = render(runs, "md")
-    for title in ("Table II", "Table VI", "Table VII", "What the policy did instead", "Per task", "Confusion"):
-        assert title in markdown
+    markdown, latex = render(runs, "md"), render(runs, "latex")
+    # Each heading says what its table holds, then the paper's table it reproduces.
+    headings = (
+        "Success by data source, suite and dimension — blind † (the paper's Table II)",
+        "Success per suite, original vs extended tasks — success %, 95% CI (the paper's Table VI)",
+        "Success on extended tasks by dimension — success %, 95% CI, (tasks) (the paper's Table VII)",
+        "Success by data source and dimension — π0.5 as published (the paper's Table II)",
+        "What the policy did instead — blind †",
+        "Success per task — vla (my-vla)",
+        "Confusion (intended × achieved) — blind †",
+    )
+    for heading in headings:
+        assert f"### {heading}" in markdown
+        escaped = heading.replace("%", r"\%").replace("†", r"$^\dagger$").replace("×", r"$\times$")
+        assert r"\caption{" + escaped in latex
+    assert not [line for line in markdown.splitlines() if line.startswith("### Table")]
     assert "| blind † |" in markdown and "not a policy under test" in markdown
     assert "| 0.0 [0.0, 56.1] (1 gaps) (1) |" in markdown  # change target: 0/3, one gap, one task
     assert "†" not in render(runs[1:], "md")
-    latex = render(runs, "latex")
     assert r"\toprule" in latex and r"blind $^\dagger$" in latex
     assert sorted(FORMATS) == ["csv", "json", "latex", "md"]
 

@@ -149,6 +149,11 @@ def _rate_rows(rates: list[Rate], names: dict[str, str]) -> list[list[str]]:
     ]
 
 
+def paper_table(title: str, table: str) -> str:
+    """A heading that says what its table holds, then which of the paper's tables it reproduces."""
+    return f"{title} (the paper's {table})"
+
+
 def _heading(text: str) -> list[str]:
     return [f"*{text}*", *[""] * (len(_RATE_HEADERS) - 1)]
 
@@ -161,11 +166,14 @@ SUITE_KIND_LABEL = {
 
 
 def source_table(run: RunResults) -> Table:
-    """Table II: by data source, by suite and by perturbation dimension, each beside the oracle's ceiling."""
+    """Success by data source, by suite and by perturbation dimension, each beside the oracle's ceiling (the
+    paper's Table II)."""
     rows = [_heading("By data source"), *_rate_rows(run.by_source, SOURCE_LABEL)]
     rows += [_heading("By suite"), *_rate_rows(run.by_suite, SUITE_KIND_LABEL)]
     rows += [_heading("By perturbation dimension"), *_rate_rows(run.by_dimension, DIMENSION_LABEL)]
-    return Table(f"Table II — {run.label}: by data source, suite and dimension", _RATE_HEADERS, rows)
+    return Table(
+        paper_table(f"Success by data source, suite and dimension — {run.label}", "Table II"), _RATE_HEADERS, rows
+    )
 
 
 def _published_cells(values: dict[str, float], keys: list[str]) -> list[str]:
@@ -173,8 +181,8 @@ def _published_cells(values: dict[str, float], keys: list[str]) -> list[str]:
 
 
 def suite_table(summary: Summary, published: Published | None = None) -> Table:
-    """Table VI: per suite, original vs extended, one row per run (libero_10 has no extended tasks);
-    the paper's rows below them when `published` is given."""
+    """Success per suite, original vs extended, one row per run (libero_10 has no extended tasks; the paper's
+    Table VI); the paper's rows below them when `published` is given."""
     keys = [f"{s}/{k}" for s in SUITE_ORDER for k in ("original", "extended") if (s, k) != ("libero_10", "extended")]
     headers = ["Method"]
     headers += [f"{SUITE_LABEL[k.split('/')[0]]} {'Orig' if k.endswith('original') else 'Ext'}" for k in keys]
@@ -186,11 +194,13 @@ def suite_table(summary: Summary, published: Published | None = None) -> Table:
     for row in published.suites if published else []:
         cells = _published_cells(row.values, [*keys, "original", "extended"])
         rows.append([published.label(row.method, "Table VI"), *cells])
-    return Table("Table VI — per suite (success %, 95% CI)", [*headers, "Total Orig", "Total Ext"], rows)
+    title = paper_table("Success per suite, original vs extended tasks — success %, 95% CI", "Table VI")
+    return Table(title, [*headers, "Total Orig", "Total Ext"], rows)
 
 
 def dimension_table(summary: Summary, published: Published | None = None) -> Table:
-    """Table VII: extended tasks by dimension, one row per run; the paper's rows below when `published` is given."""
+    """Success on extended tasks by dimension, one row per run (the paper's Table VII); the paper's rows below
+    when `published` is given."""
     headers = ["Method", *(DIMENSION_LABEL[d] for d in EXTENDED_DIMENSIONS), "Total"]
     rows = []
     for run in summary.runs:
@@ -201,11 +211,12 @@ def dimension_table(summary: Summary, published: Published | None = None) -> Tab
     for row in published.dimensions if published else []:
         cells = _published_cells(row.values, [*EXTENDED_DIMENSIONS, "extended"])
         rows.append([published.label(row.method, "Table VII"), *cells])
-    return Table("Table VII — extended tasks by dimension (success %, 95% CI, (tasks))", headers, rows)
+    title = paper_table("Success on extended tasks by dimension — success %, 95% CI, (tasks)", "Table VII")
+    return Table(title, headers, rows)
 
 
 def beyond_table(summary: Summary) -> Table | None:
-    """Table VII's form for the dimensions beyond the paper's that the runs have (`langgap-beyond`'s ordering,
+    """`dimension_table`'s form for the dimensions beyond the paper's that the runs have (`langgap-beyond`'s ordering,
     negation, paraphrase, attribute reference; other catalogs' such as libero-pro's task and language); None
     when they have none."""
     beyond = shown_dimensions(summary.runs)[len(EXTENDED_DIMENSIONS) :]
@@ -216,7 +227,9 @@ def beyond_table(summary: Summary) -> Table | None:
         by_dim = {r.group: r for r in run.by_dimension}
         rows.append([run.label, *(rate_cell(r) + f" ({r.tasks})" if (r := by_dim.get(d)) else "–" for d in beyond)])
     headers = ["Method", *(label(DIMENSION_LABEL, d) for d in beyond)]
-    return Table("Beyond Table VII — other dimensions (success %, 95% CI, (tasks))", headers, rows)
+    return Table(
+        "Success on extended tasks by the dimensions beyond the paper's — success %, 95% CI, (tasks)", headers, rows
+    )
 
 
 def _side_by_side_label(row: dict[str, RunResults]) -> str:
@@ -261,18 +274,22 @@ def published_appendix_table(summary: Summary, published: Published) -> Table:
         rows.append(row)
     method = published.label(published.appendix_method, "appendix")
     headers = ["Dimension", "Tasks", method, *(run.label for run in summary.runs)]
-    return Table(f"Per-task detail — {method} beside your runs (same tasks)", headers, rows)
+    title = f"Success per group of tasks — {published.appendix_method} as published, beside your runs on the same tasks"
+    return Table(paper_table(title, "appendix"), headers, rows)
 
 
 def published_diagnostic_table(published: Published) -> Table:
-    """Table II as published (its episode counts, with the Wilson intervals they imply)."""
+    """The paper's Table II as published (its episode counts, with the Wilson intervals they imply)."""
     names = {**DIMENSION_LABEL, **SOURCE_LABEL}
-    title = f"Table II — {published.label(published.diagnostic_method, 'Table II')}: by data source and dimension"
+    title = paper_table(
+        f"Success by data source and dimension — {published.diagnostic_method} as published", "Table II"
+    )
     return Table(title, _RATE_HEADERS, _rate_rows(published.diagnostic, names))
 
 
 def split_table(run: RunResults) -> Table:
-    return Table(f"Training vs held-out — {run.label}", _RATE_HEADERS, _rate_rows(run.by_split, SPLIT_LABEL))
+    title = f"Success on training vs held-out tasks — {run.label}"
+    return Table(title, _RATE_HEADERS, _rate_rows(run.by_split, SPLIT_LABEL))
 
 
 def mde_table(run: RunResults) -> Table:
@@ -364,7 +381,7 @@ def task_table(run: RunResults) -> Table:
     headers = ["Suite", "Dimension", "Split", "Task", "Instruction", "Success", "Rate %", "95% CI", "Gaps"]
     headers += ["Oracle %", "Relative %", "Mostly did instead", "Episodes"]
     filters = ("Suite", "Dimension", "Split", "Mostly did instead")
-    return Table(f"Per task — {run.label}", headers, rows, filters)
+    return Table(f"Success per task — {run.label}", headers, rows, filters)
 
 
 def video_table(run: RunResults) -> Table | None:
