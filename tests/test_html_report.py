@@ -30,7 +30,7 @@ _FACTS = (
       .map(r => [...r.cells].map(c => c.textContent));
   return {
     titles: [...document.querySelectorAll("section h2")].map(h => h.textContent),
-    table_vii: rows(section("Table VII")),
+    table_vii: rows(section("Success on extended tasks by dimension")),
     answers: [...document.querySelectorAll("#answer p")].map(p => p.textContent),
     stacks: Object.fromEntries([...document.querySelectorAll("#outcome-chart g.stack")].map(g =>
       [g.dataset.run + " / " + g.dataset.group, [...g.querySelectorAll("rect.segment")].map(r =>
@@ -72,23 +72,23 @@ def test_the_html_report_in_a_real_browser(tmp_path):
         # Every table of the Markdown report is on the page, and its data is the JSON report's.
         assert facts["titles"] == [t.title for t in full_report(summary, load_published())]
         assert facts["data"] == report
-        vla_row = next(row for row in facts["table_vii"] if row[0] == "my-vla (vla)")
-        extended = next(r for r in report["by_source"] if r["run"] == "my-vla (vla)" and r["id"] == "extended")
+        vla_row = next(row for row in facts["table_vii"] if row[0] == "vla (my-vla)")
+        extended = next(r for r in report["by_source"] if r["run"] == "vla (my-vla)" and r["id"] == "extended")
         assert vla_row[-1].startswith(f"{100 * extended['rate']:.1f} [{100 * extended['ci_low']:.1f}, ")
         # The page opens with the answer, one sentence per run (the JSON report's).
         assert facts["answers"] == [a["text"] for a in report["answers"]]
-        assert facts["answers"][1].startswith("my-vla (vla) reads its instruction: 100 % on original tasks")
+        assert facts["answers"][1].startswith("vla (my-vla) reads its instruction: 100 % on original tasks")
         # One stacked outcome bar per run and dimension (original, change object, change target), each full height.
         assert len(facts["stacks"]) == 2 * 3
         heights = {name: sum(h for _, h in segments) for name, segments in facts["stacks"].items()}
         assert max(heights.values()) == pytest.approx(min(heights.values()), abs=0.2)
-        assert facts["stacks"]["blind (blind) † / change_object"] == [["did_source_task", heights[next(iter(heights))]]]
-        stove = [outcome for outcome, _ in facts["stacks"]["my-vla (vla) / change_target"]]
+        assert facts["stacks"]["blind † / change_object"] == [["did_source_task", heights[next(iter(heights))]]]
+        stove = [outcome for outcome, _ in facts["stacks"]["vla (my-vla) / change_target"]]
         assert stove == ["success", "no_goal_reached"]
         # Sorting: a click on a column header orders the rows by it, a second click reverses them.
         column = page.evaluate("""(() => {
 """ + _SECTION + """
-          const tasks = section("Per task — my-vla");
+          const tasks = section("Success per task — vla");
           const header = [...tasks.querySelectorAll("th")].find(th => th.textContent === "Rate %");
           const read = () => [...tasks.querySelectorAll("tbody tr")].map(r => parseFloat(r.cells[6].textContent));
           header.click(); const up = read(); header.click(); return [up, read()];
@@ -97,7 +97,8 @@ def test_the_html_report_in_a_real_browser(tmp_path):
         # Filtering: typing in a table's filter box hides the rows that do not match.
         page.evaluate("""(() => {
 """ + _SECTION + """
-          const input = section("Table VII").querySelector("input.filter"); input.value = "smolvla";
+          const input = section("Success on extended tasks by dimension").querySelector("input.filter");
+          input.value = "smolvla";
           input.dispatchEvent(new Event("input"));
         })()""")  # fmt: skip
         assert [row[0] for row in page.evaluate(_FACTS)["table_vii"]] == [
@@ -106,7 +107,7 @@ def test_the_html_report_in_a_real_browser(tmp_path):
         # Per-column filters: the drop-downs of the per-task table combine (and with the text box).
         shown = page.evaluate("""(() => {
 """ + _SECTION + """
-          const tasks = section("Per task — blind");
+          const tasks = section("Success per task — blind");
           const choose = (name, value) => {
             const select = tasks.querySelector(`select[aria-label="${name}"]`); select.value = value;
             select.dispatchEvent(new Event("input"));

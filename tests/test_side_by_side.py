@@ -63,7 +63,7 @@ def test_one_policys_runs_on_two_catalogs_are_side_by_side_in_every_format(runs,
 
     markdown = _report(*paired, "--no-published")
     answers = [line for line in markdown.splitlines() if " reads its instruction" in line]
-    assert [a.split(" ")[1] for a in answers] == ["(blind-99)", "(blind-pro)"]  # one opening sentence per run
+    assert [a.split(" ")[0] for a in answers] == ["blind-99", "blind-pro"]  # one opening sentence per run
     table = markdown.split("### Side by side")[1].split("\n### ")[0]
     assert "| Policy | langgap99: Original | langgap99: Spatial Description | langgap99: All extended |" in table
     pro = "libero-pro: Original | libero-pro: Task (LIBERO-PRO) | libero-pro: Language | libero-pro: All extended"
@@ -89,7 +89,7 @@ def test_one_policys_runs_on_two_catalogs_are_side_by_side_in_every_format(runs,
 def test_runs_of_different_policies_on_different_catalogs_keep_being_reported_one_by_one(runs):
     data = json.loads(_report(runs["oracle-99"], runs["blind-pro"], "--format", "json"))
     assert data["side_by_side"] == [] and data["comparisons_refused"]
-    assert data["protocol_mismatches"] == {"blind (blind-pro)": ["catalog", "catalog hash"]}
+    assert data["protocol_mismatches"] == {"blind-pro (blind)": ["catalog", "catalog hash"]}
     markdown = _report(runs["oracle-99"], runs["blind-pro"])
     assert "Side by side" not in markdown and "Runs not compared" in markdown
     # With a third run that puts blind on two catalogs, oracle gets its own row, empty on libero-pro.
@@ -110,7 +110,7 @@ def test_what_blind_did_instead_on_libero_pro_is_its_sources_task(runs):
     data = json.loads(_report(runs["blind-pro"], "--format", "json"))
     outcomes = {o["group"]: o for o in data["outcomes"]}
     assert outcomes["task"]["did_source_task"] == 1.0 and outcomes["language"]["success"] == 1.0
-    (scene,) = data["confusion"]["blind (blind-pro)"].values()  # the three tasks share one scene
+    (scene,) = data["confusion"]["blind-pro (blind)"].values()  # the three tasks share one scene
     assert scene["spatial/s0/pro-task"] == {PRO_SOURCE: 1} and sorted(scene) == sorted(rows)
     (answer,) = data["answers"]
     # The answer rests on the extended tasks that ask for another goal (the run mixes in a rewording): of the

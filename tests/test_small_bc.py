@@ -104,7 +104,7 @@ def test_eval_runs_small_bc_in_a_worker(checkpoint, tmp_path):
     # A learned policy that read simulator state, never told the goal: so recorded, so reported.
     assert (row["sees_state"], row["sees_goal"]) == (1, 0)
     report = run_cli("report", str(run), "--format", "md").stdout
-    assert "small-bc (run) ‡" in report and "‡ reads simulator state" in report
+    assert "run (small-bc) ‡" in report and "‡ reads simulator state" in report
     assert "scripted reference" not in report
 
 

@@ -48,7 +48,7 @@ def test_the_switch_gate_records_counts_and_marks_verdicts_per_task_and_k(two_ta
     gate = ("validate", EXTENDED, "--catalog", catalog, "--inits", "1", "--workers", "0", "--no-progress")
     result = run_cli(*gate, "--condition", "switch:5", "--condition", "switch:200", "--record")
     assert result.returncode == 1, result.stderr  # a task unproven at one K: the gate does not pass
-    assert "switch gate: 1 accepted, 1 unproven" in result.stdout
+    assert "switch gate: 1 doable, 1 unproven" in result.stdout
     verdicts = read_switch_verdicts(registry)
     assert set(verdicts) == {EXTENDED} and set(verdicts[EXTENDED]) == {"switch:5", "switch:200"}
     assert verdicts[EXTENDED]["switch:5"].feasible and verdicts[EXTENDED]["switch:5"].successes == 1
@@ -60,17 +60,17 @@ def test_the_switch_gate_records_counts_and_marks_verdicts_per_task_and_k(two_ta
     assert late.physics == physics_stack("exact")  # each verdict records the stack it was made on
     assert not registry.with_name("two.gate.json").exists()  # apart from the plain verdicts
     shown = run_cli("tasks", "show", "--catalog", catalog, EXTENDED)
-    assert "switch gate  switch:5: oracle 1/1 on init states 0–0: accepted" in shown.stdout
-    assert "switch gate  switch:200: oracle 0/1 on init states 0–0: rejected, unproven" in shown.stdout
+    assert "switch gate  switch:5: oracle 1/1 on init states 0–0: doable\n" in shown.stdout
+    assert "switch gate  switch:200: oracle 0/1 on init states 0–0: unproven\n" in shown.stdout
     shown_json = json.loads(run_cli("tasks", "show", "--catalog", catalog, EXTENDED, "--json").stdout)
     assert shown_json["switch_gate"]["switch:200"]["feasible"] is False
 
     counted = run_cli("tasks", "gate", "--catalog", catalog, "--condition", "switch:5", "--condition", "switch:200")
     assert counted.returncode == 0, counted.stderr
     at_5, at_200 = counted.stdout.split("\nswitch:200:\n")
-    # total row: tasks, gated, accepted, rejected, infeasible (proof), unproven
+    # total row: tasks, gated, doable, unproven, infeasible, unsettled
     assert at_5.splitlines()[-2].split()[2:8] == ["2", "1", "1", "0", "0", "0"]
-    assert at_200.splitlines()[-2].split()[2:8] == ["2", "1", "0", "1", "0", "1"]
+    assert at_200.splitlines()[-2].split()[2:8] == ["2", "1", "0", "1", "0", "0"]
     assert "1 of 2 task(s) not gated at switch:5" in at_5
 
     # A run of the task under both K: its report marks K=200 (not gated there) and not K=5.

@@ -92,7 +92,27 @@ def test_reports_show_the_ceiling_and_mark_a_task_the_oracle_fails_as_unproven(t
     # the oracle failing a task shows nothing about other policies: neither the header nor the notes say so
     assert "infeasible (proof)" not in markdown and "certified" not in markdown
     assert "caps what any policy can show" not in markdown
-    assert "⚠ marks a task the oracle does not do at 95 % on these init states (unproven" in markdown
+    assert "⚠ marks a task the oracle does on fewer than 95 % of these init states" in markdown
+
+
+def test_the_warning_legend_is_shown_with_a_warning_only_plain_and_with_both_rates(tmp_path):
+    from langgap.report.tables import CAPPED_NOTE, notes, selection_text
+
+    fine = load_runs([_run(tmp_path, "fine", {BOWL: 2}, {BOWL: ACCEPTED})])
+    markdown = FORMATS["md"](summarize(fine), None)
+    assert "⚠ marks" not in markdown and "--tasks feasible (the default)" in markdown
+    (tmp_path / "other").mkdir()  # catalogs are cached by path: another registry
+    warned = load_runs([_run(tmp_path / "other", "warned", {DRAWER: 0, BOWL: 2}, {DRAWER: UNPROVEN, BOWL: ACCEPTED})])
+    summary = summarize(warned)
+    assert CAPPED_NOTE in FORMATS["md"](summary, None) and CAPPED_NOTE in notes(summary, None)
+    # which rate is which: ⚠ below the ceiling target on the run's init states; the gate admits at its own rate
+    assert "⚠ marks a task the oracle does on fewer than 95 % of these init states" in CAPPED_NOTE
+    assert "the oracle, with searched demonstrations, does at least 90 % of its init states" in CAPPED_NOTE
+    # the terminal shows the notes and the header as they are: no Markdown code quotes
+    (run,) = summary.runs
+    run.spec["selection"] = "spatial/s2/*"
+    assert not [note for note in notes(summary, None) if "`" in note] and "`" not in selection_text(run)
+    assert "tasks: 'spatial/s2/*'; ⚠" in selection_text(run)
 
 
 def test_reports_mark_a_ceiling_whose_verdict_was_made_on_another_stack(tmp_path):
@@ -113,25 +133,42 @@ def test_reports_mark_a_task_with_a_proof_infeasible(tmp_path):
     proven = GateResult(50, 0, False, reason="oracle 0/50", inits=50, failed_inits=range(50), proof="Out of reach")
     runs = load_runs([_run(tmp_path, "vla", {DRAWER: 0, BOWL: 2}, {DRAWER: proven, BOWL: ACCEPTED})])
     (run,) = summarize(runs).runs
-    assert run.capped == {DRAWER: "infeasible (proof)"}
+    assert run.capped == {DRAWER: "infeasible: a proof that no policy can do it"}
     markdown = FORMATS["md"](summarize(runs), None)
-    assert f"⚠ {DRAWER} (infeasible (proof))" in markdown and "unproven: the oracle" not in markdown
+    assert f"⚠ {DRAWER} (infeasible: a proof that no policy can do it)" in markdown
+    assert "unproven: the oracle" not in markdown
 
 
-def test_a_task_is_marked_by_a_low_oracle_as_unproven_or_by_a_proof_as_infeasible():
+def test_reports_mark_a_task_whose_starts_do_not_come_to_rest_unsettled(tmp_path):
+    """The oracle did it on every init state; the gate rejected it for its starts: ⚠, as unsettled, not unproven."""
+    restless = dataclasses.replace(ACCEPTED, feasible=False, reason="scene settles", made_by="")
+    runs = load_runs([_run(tmp_path, "vla", {DRAWER: 0, BOWL: 2}, {DRAWER: restless, BOWL: ACCEPTED})])
+    (run,) = summarize(runs).runs
+    assert run.capped == {DRAWER: "unsettled: its starts do not come to rest (the oracle did it 4/4)"}
+    markdown = FORMATS["md"](summarize(runs), None)
+    assert f"| {DRAWER} ⚠ |" in markdown and f"⚠ {DRAWER} (unsettled: its starts do not come to rest" in markdown
+    assert "unproven" not in markdown.split("\n\n")[1]  # the run's header line
+    assert json.loads(FORMATS["json"](summarize(runs), None))["runs"][0]["capped_tasks"] == run.capped
+
+
+def test_a_task_is_marked_by_a_low_oracle_by_its_verdict_or_by_a_proof_as_infeasible():
     from langgap.report.stats import Rate
     from langgap.report.summary import capped_because
 
     low = Rate("t", 20, 5, 0, 1, oracle_successes=18, oracle_episodes=20)
-    unproven = capped_because(low, GateResult(20, 18, True))
+    unproven = capped_because(low, GateResult(20, 18, False, reason="oracle 18/20"))
     assert unproven == "unproven: the oracle does not do it (18/20); no proof that a policy cannot"
     assert "infeasible" not in unproven and "certified" not in unproven
+    # The gate admitted it (at 90 %): doable, yet the oracle is below the ceiling target on these init states.
+    admitted = capped_because(low, GateResult(20, 18, True))
+    assert admitted == "doable, but the oracle does only 18/20 of these init states"
     fine = Rate("t", 20, 5, 0, 1, oracle_successes=19, oracle_episodes=20)
     assert capped_because(fine, GateResult(20, 19, True)) is None
-    assert capped_because(fine, GateResult(20, 19, False, proof="…")) == "infeasible (proof)"
+    assert capped_because(fine, GateResult(20, 19, False, proof="…")) == "infeasible: a proof that no policy can do it"
     assert capped_because(fine, None) is None
     searched = GateResult(20, 3, True, demonstration="demos/drawer.npz")
-    assert "unproven" not in capped_because(Rate("t", 20, 5, 0, 1, oracle_successes=3, oracle_episodes=20), searched)
+    shown = capped_because(Rate("t", 20, 5, 0, 1, oracle_successes=3, oracle_episodes=20), searched)
+    assert shown == "doable by a searched demonstration; the oracle does 3/20 of these init states"
 
 
 def _record_many(registry: str, worker: int) -> None:

@@ -29,17 +29,19 @@ SEARCHED = GateResult(
 
 
 def test_each_verdict_says_what_shows_it():
-    assert ORACLE.evidence == f"oracle 50/50 init states (made by {MADE_BY})"
+    assert ORACLE.evidence == f"doable: oracle 50/50 init states (made by {MADE_BY})"
     assert UNPROVEN.evidence == "unproven: the oracle does not do it (17/50); no proof that a policy cannot"
-    assert PROVEN.evidence == "proof of impossibility: Out of reach, on init state 0: …"
+    assert PROVEN.evidence == "infeasible: a proof that no policy can do it: Out of reach, on init state 0: …"
     assert SEARCHED.evidence == (
-        f"oracle 46/50 init states (made by {MADE_BY}); "
+        f"doable: oracle 46/50 init states (made by {MADE_BY}); "
         "searched demonstration on init state(s) 3, 7: demonstrations/langgap99/spatial/s2/x"
     )
     # a demonstration shows nothing unless the verdict it belongs to is feasible
     assert dataclasses.replace(UNPROVEN, demonstration="demos/x.hdf5").evidence == UNPROVEN.evidence
+    # rejected by another check than the oracle's rate: unproven, and not "the oracle does not do it (5/5)"
     rejected = GateResult(5, 5, False, reason="goal false at t0")
-    assert rejected.evidence.startswith("unproven: ") and rejected.evidence.endswith(
+    assert rejected.evidence == (
+        "unproven: the gate's checks fail (the oracle did it 5/5); no proof that a policy cannot; "
         "the gate's reason: goal false at t0"
     )
     for verdict in (ORACLE, UNPROVEN, SEARCHED, rejected):
@@ -79,6 +81,7 @@ def test_tasks_show_prints_the_evidence(tmp_path, capsys, verdict):
 def test_tasks_show_calls_a_rejected_task_unproven_unless_proven(tmp_path, capsys):
     main(["tasks", "show", DRAWER, "--catalog", str(_registry(tmp_path / "unproven", {DRAWER: UNPROVEN}))])
     out = capsys.readouterr().out
-    assert "rejected, unproven" in out and "infeasible" not in out and "certif" not in out
+    assert "gate         oracle 17/50 on init states 0–49: unproven\n" in out
+    assert "infeasible" not in out and "certif" not in out
     main(["tasks", "show", DRAWER, "--catalog", str(_registry(tmp_path / "proven", {DRAWER: PROVEN}))])
-    assert "rejected, infeasible (proof)" in capsys.readouterr().out
+    assert "gate         oracle 0/50 on init states 0–49: infeasible\n" in capsys.readouterr().out

@@ -63,7 +63,7 @@ def test_a_proof_is_recorded_for_a_task_the_oracle_fails(registry, monkeypatch):
     assert asked == [[DRAWER]]  # the provers run only where the oracle is below the gate's rate
     verdicts = read_verdicts(registry)
     assert verdicts[DRAWER].proof == PROOF.text() and not verdicts[DRAWER].feasible
-    assert verdicts[DRAWER].capped_because(0, 5) == "infeasible (proof)"
+    assert verdicts[DRAWER].capped_because(0, 5) == "infeasible: a proof that no policy can do it"
     assert verdicts[BOWL].proof == "" and verdicts[BOWL].feasible
 
 

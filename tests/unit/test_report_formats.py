@@ -25,7 +25,7 @@ def test_json_is_the_summary(runs):
     summary = summarize(load_runs(runs))
     report = json.loads(render(runs, "json"))
     assert report == json.loads(json.dumps(summary.to_dict()))
-    blind_dims = {row["id"]: row for row in report["per_dimension"] if row["run"] == "blind (blind)"}
+    blind_dims = {row["id"]: row for row in report["per_dimension"] if row["run"] == "blind"}
     assert blind_dims["change_target"]["gaps"] == 1 and blind_dims["change_target"]["episodes"] == 3
     assert report["comparisons"][0]["pairs"] == 11
 
@@ -43,18 +43,30 @@ def test_csv_rows_are_the_json_rate_rows(runs):
             source["gaps"],
         )
         assert float(row["ci_high"]) == pytest.approx(source["ci_high"], abs=1e-4)
-    assert {row["run"]: row["privilege"] for row in rows} == {"blind (blind)": "goal", "my-vla (vla)": "none"}
+    assert {row["run"]: row["privilege"] for row in rows} == {"blind": "goal", "vla (my-vla)": "none"}
 
 
 def test_markdown_and_latex_hold_the_papers_tables_and_mark_privileged_runs(runs):
-    markdown = render(runs, "md")
-    for title in ("Table II", "Table VI", "Table VII", "What the policy did instead", "Per task", "Confusion"):
-        assert title in markdown
-    assert "| blind (blind) † |" in markdown and "not a policy under test" in markdown
+    markdown, latex = render(runs, "md"), render(runs, "latex")
+    # Each heading says what its table holds, then the paper's table it reproduces.
+    headings = (
+        "Success by data source, suite and dimension — blind † (the paper's Table II)",
+        "Success per suite, original vs extended tasks — success %, 95% CI (the paper's Table VI)",
+        "Success on extended tasks by dimension — success %, 95% CI, (tasks) (the paper's Table VII)",
+        "Success by data source and dimension — π0.5 as published (the paper's Table II)",
+        "What the policy did instead — blind †",
+        "Success per task — vla (my-vla)",
+        "Confusion (intended × achieved) — blind †",
+    )
+    for heading in headings:
+        assert f"### {heading}" in markdown
+        escaped = heading.replace("%", r"\%").replace("†", r"$^\dagger$").replace("×", r"$\times$")
+        assert r"\caption{" + escaped in latex
+    assert not [line for line in markdown.splitlines() if line.startswith("### Table")]
+    assert "| blind † |" in markdown and "not a policy under test" in markdown
     assert "| 0.0 [0.0, 56.1] (1 gaps) (1) |" in markdown  # change target: 0/3, one gap, one task
     assert "†" not in render(runs[1:], "md")
-    latex = render(runs, "latex")
-    assert r"\toprule" in latex and r"blind (blind) $^\dagger$" in latex
+    assert r"\toprule" in latex and r"blind $^\dagger$" in latex
     assert sorted(FORMATS) == ["csv", "json", "latex", "md"]
 
 
@@ -99,7 +111,7 @@ def test_allow_mismatch_on_the_command_line_pairs_runs_whose_protocols_differ(tm
     other = write_run(tmp_path / "b", "my-vla", reader(), physics={"mujoco": "3.3.0"})
     refused = run_cli("report", str(first), "--compare", str(other), "--no-published")
     assert (
-        "Runs not compared: their protocols differ" in refused.stdout and "| my-vla (b) | physics |" in refused.stdout
+        "Runs not compared: their protocols differ" in refused.stdout and "| b (my-vla) | physics |" in refused.stdout
     )
     allowed = run_cli("report", str(first), "--compare", str(other), "--no-published", "--allow-mismatch")
-    assert "Runs compared on matched episodes (McNemar) — protocols differ: my-vla (b): physics" in allowed.stdout
+    assert "Runs compared on matched episodes (McNemar) — protocols differ: b (my-vla): physics" in allowed.stdout

@@ -35,7 +35,7 @@ def test_a_policys_runs_on_two_catalogs_get_one_row_with_a_column_group_per_cata
     rows = json.loads(render(runs, "json"))["side_by_side"]
     pro = {r["id"]: r for r in rows if r["row"] == 0 and r["catalog"] == "libero-pro"}
     assert (pro["extended"]["successes"], pro["extended"]["episodes"], pro["extended"]["gaps"]) == (0, 7, 1)
-    assert pro["extended"]["run"] == "my-vla (vla-pro)" and pro["extended"]["policy"] == "my-vla"
+    assert pro["extended"]["run"] == "vla-pro (my-vla)" and pro["extended"]["policy"] == "my-vla"
 
 
 def test_runs_of_different_policies_on_different_catalogs_are_not_side_by_side(tmp_path):
@@ -57,6 +57,6 @@ def test_each_run_is_paired_with_the_blind_run_on_its_own_catalog(tmp_path):
         _run(tmp_path, "vla-pro", "my-vla", "libero-pro", reader()),
     ]
     answers = {a["run"]: a for a in json.loads(render(runs, "json"))["answers"]}
-    against = answers["my-vla (vla-pro)"]["against_blind"]
+    against = answers["vla-pro (my-vla)"]["against_blind"]
     assert (against["pairs"], against["successes_a"], against["successes_b"]) == (7, 0, 6)  # blind-pro's episodes
-    assert answers["blind (blind-99)"]["against_blind"] is None  # blind-pro is on another catalog
+    assert answers["blind-99 (blind)"]["against_blind"] is None  # blind-pro is on another catalog

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import pytest
@@ -77,7 +78,9 @@ def test_cohen_kappa(both, only_a, only_b, neither, kappa):
     assert cohen_kappa(both, only_a, only_b, neither) == pytest.approx(kappa)
 
 
-def test_paired_agreement_and_kappa_come_from_the_pairs():
-    test = PairedTest("a vs b", pairs=50, successes_a=25, successes_b=30, only_a=5, only_b=10, changed=0)
+def test_paired_agreement_and_kappa_come_from_the_pairs_and_are_reported_for_a_retest_only():
+    test = PairedTest("a vs b", pairs=50, successes_a=25, successes_b=30, only_a=5, only_b=10, changed=0, retest=True)
     assert test.agreement == pytest.approx(0.7) and test.kappa == pytest.approx(0.4)
     assert test.as_dict()["agreement"] == pytest.approx(0.7) and test.as_dict()["kappa"] == pytest.approx(0.4)
+    other = dataclasses.replace(test, retest=False)  # two different runs: agreement is no test-retest figure
+    assert other.as_dict()["agreement"] is None and other.as_dict()["kappa"] is None

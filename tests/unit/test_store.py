@@ -141,7 +141,7 @@ def test_a_schema_2_store_reads_its_privileged_flag_as_both_privileges(tmp_path,
     assert read == record(sees_state=privileged, sees_goal=privileged)
     assert privilege([read]) == (Privilege.GOAL if privileged else Privilege.NONE)
     (shown,) = load_runs([directory])  # and it still reports
-    assert results(shown).label == ("oracle (old) †" if privileged else "oracle (old)")
+    assert results(shown).label == ("old (oracle) †" if privileged else "old (oracle)")
 
 
 def test_a_schema_3_store_reads_each_episode_s_one_instruction_as_its_timeline(tmp_path):

@@ -77,16 +77,39 @@ def test_condition_and_run_comparisons_are_paired(summary):
     assert comparison.agreement == pytest.approx(5 / 11) and comparison.kappa == pytest.approx(8 / 74)
 
 
-def test_the_run_comparison_table_shows_agreement_and_kappa(summary):
+def test_agreement_and_kappa_are_shown_only_for_one_spec_run_twice(tmp_path, summary):
+    """Cohen's κ of two runs is a test-retest figure: one spec run twice, never two policies (blind vs my-vla)."""
     from langgap.report.tables import comparison_table
 
-    table = comparison_table(summary)
-    assert table.headers[-2:] == ["Agree %", "κ"] and table.rows[0][-2:] == ["45.5", "0.11"]
+    assert not summary.comparisons[0].retest and comparison_table(summary).headers[-1] == "p"
+    markdown = render([run.path for run in summary.runs], "md")
+    assert summary.to_dict()["comparisons"][0]["kappa"] is None and "κ" not in markdown
+    # The same spec twice (a policy that samples: one episode came out otherwise), and the same policy with other
+    # arguments (another spec, though its protocol card, and so its pairing, is the same).
+    again = [
+        dataclasses.replace(r, success=False, outcome=Outcome.NO_GOAL_REACHED) if r.task_id == SOURCE else r
+        for r in reader()
+    ]
+    runs = [
+        write_run(tmp_path / "first", "my-vla", reader()),
+        write_run(tmp_path / "again", "my-vla", again),
+        write_run(tmp_path / "other", "my-vla", reader(), policy_args={"temperature": "0.5"}),
+    ]
+    retest = summarize(load_runs(runs))
+    assert [t.retest for t in retest.comparisons] == [True, False]
+    table = comparison_table(retest)
+    assert table.headers[-2:] == ["Agree %", "κ"] and "one run spec run twice (test-retest)" in table.title
+    # 8 of 12 pairs agree; chance gives (11 x 7 + 1 x 5) / 144: κ = (96 - 82) / (144 - 82)
+    assert table.rows[0][-2:] == ["66.7", "0.23"] and table.rows[1][-2:] == ["", ""]
+    compared = retest.to_dict()["comparisons"]
+    assert compared[0]["kappa"] == pytest.approx(14 / 62) and compared[1]["agreement"] is None
+    assert "| Agree % | κ |" in render(runs, "md")
 
 
-def test_privileged_runs_are_marked(summary):
+def test_runs_are_named_by_label_and_policy_once_and_privileged_runs_are_marked(summary):
     assert [run.privilege for run in summary.runs] == [Privilege.GOAL, Privilege.NONE]
-    assert summary.runs[0].label == "blind (blind) †" and summary.runs[1].label == "my-vla (vla)"
+    # run directory `blind` of policy blind: the name once, not "blind (blind)"; directory `vla` of policy my-vla
+    assert summary.runs[0].label == "blind †" and summary.runs[1].label == "vla (my-vla)"
     assert [run["privilege"] for run in summary.to_dict()["runs"]] == ["goal", "none"]
 
 
@@ -95,11 +118,11 @@ def test_a_learned_policy_that_reads_simulator_state_is_not_called_a_scripted_re
     blind = write_run(tmp_path / "blind", "blind", memoriser(sees_state=True, sees_goal=True))
     summary = summarize(load_runs([bc, blind]))
     assert [run.privilege for run in summary.runs] == [Privilege.STATE, Privilege.GOAL]
-    assert [run.label for run in summary.runs] == ["small-bc (bc) ‡", "blind (blind) †"]
+    assert [run.label for run in summary.runs] == ["bc (small-bc) ‡", "blind †"]
     assert summary.runs[0].card["privileged"] == "reads simulator state (not told the goal)"
     assert summary.runs[1].card["privileged"] == "told the goal (a scripted reference)"
     markdown = render([bc], "md")
-    assert "| small-bc (bc) ‡ |" in markdown and "‡ reads simulator state" in markdown
+    assert "| bc (small-bc) ‡ |" in markdown and "‡ reads simulator state" in markdown
     assert "scripted reference" not in markdown and "†" not in markdown
 
 
@@ -116,7 +139,7 @@ def test_runs_whose_protocols_differ_are_not_paired_unless_allowed(tmp_path):
     first = write_run(tmp_path / "a", "blind", memoriser())
     other = write_run(tmp_path / "b", "my-vla", reader(), physics={"mujoco": "3.3.0"}, seed=7)
     refused = summarize(load_runs([first, other]))
-    assert refused.mismatches == {"my-vla (b)": ["seeds", "physics"]} and refused.refused
+    assert refused.mismatches == {"b (my-vla)": ["seeds", "physics"]} and refused.refused
     assert refused.comparisons == []
     allowed = summarize(load_runs([first, other]), allow_mismatch=True)
     assert not allowed.refused and allowed.comparisons[0].pairs == 11

@@ -1,9 +1,10 @@
 """How much of a catalog the feasibility gate has proven: its verdicts counted per suite and dimension.
 
-A task is *gated* when a verdict is recorded for it, *accepted* when the gate kept it (the oracle met
-the gate's rate, or a searched demonstration did it), *infeasible (proof)* when it was rejected with a
-proof that no policy can do it (`langgap.proofs`), and *unproven* when it was rejected without one: a
-task nobody has yet shown to be doable or impossible.
+A task is *gated* when a verdict is recorded for it; each gated task is counted under its verdict's word
+(`langgap.vocabulary.Verdict`): doable (the gate kept it: the oracle met the gate's rate, or a searched
+demonstration did it), unproven (rejected without a proof: nobody has yet shown it doable or impossible),
+infeasible (rejected with a proof that no policy can do it, `langgap.proofs`) or unsettled (rejected
+because its starts do not come to rest).
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from dataclasses import dataclass
 
 from langgap.catalog.task import DIMENSIONS, Task
 from langgap.stack import SUITES
+from langgap.vocabulary import Verdict
 
 TOTAL = "total"
 EVERY = "all"
@@ -26,30 +28,20 @@ class GateCount:
     dimension: str
     tasks: int
     gated: int
-    accepted: int
-    infeasible: int  # rejected with a proof of impossibility
+    verdicts: dict[Verdict, int]  # gated tasks per verdict (every verdict, 0 included)
     episodes: int  # the oracle's, over the gated tasks
     successes: int
-
-    @property
-    def rejected(self) -> int:
-        return self.gated - self.accepted
-
-    @property
-    def unproven(self) -> int:
-        """Rejected tasks with no proof of impossibility."""
-        return self.rejected - self.infeasible
 
 
 def _count(suite: str, dimension: str, tasks: list[Task]) -> GateCount:
     gated = [t.gate for t in tasks if t.gate is not None]
+    found = Counter(g.verdict for g in gated)
     return GateCount(
         suite=suite,
         dimension=dimension,
         tasks=len(tasks),
         gated=len(gated),
-        accepted=sum(g.feasible for g in gated),
-        infeasible=sum(not g.feasible and bool(g.proof) for g in gated),
+        verdicts={v: found[v] for v in Verdict},
         episodes=sum(g.episodes for g in gated),
         successes=sum(g.successes for g in gated),
     )
@@ -72,12 +64,12 @@ def gate_counts(tasks: list[Task]) -> list[GateCount]:
     return counts
 
 
-HEADER = ("suite", "dimension", "tasks", "gated", "accepted", "rejected", "infeasible (proof)", "unproven", "oracle")
+HEADER = ("suite", "dimension", "tasks", "gated", *Verdict, "oracle")
 
 
 def _cells(count: GateCount) -> tuple[str, ...]:
     oracle = f"{count.successes}/{count.episodes}" if count.episodes else "-"
-    numbers = (count.tasks, count.gated, count.accepted, count.rejected, count.infeasible, count.unproven)
+    numbers = (count.tasks, count.gated, *(count.verdicts[v] for v in Verdict))
     return (count.suite, count.dimension, *map(str, numbers), oracle)
 
 

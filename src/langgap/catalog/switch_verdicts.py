@@ -4,7 +4,7 @@ A `switch:K` episode starts under another task's instruction and switches to the
 step K (`langgap.engine.plan`). That the task is doable from its start (the plain verdict,
 `langgap.catalog.verdicts`) does not show it is doable from where K steps of another task leave the
 scene, so `langgap validate --condition switch:K --record` records a verdict per task *and K*: the
-oracle followed the switch on at least `SWITCH_RATE` of the init states, else *unproven* (never
+oracle followed the switch on at least `langgap.vocabulary.SWITCH_RATE` of the init states, else *unproven* (never
 infeasible: the oracle failing shows nothing about other policies). They are kept in their own file so
 that re-recording the plain verdicts never touches them, and the other way round.
 
@@ -22,8 +22,6 @@ from langgap.atomic import write_text_atomically
 from langgap.catalog.task import GateResult
 from langgap.catalog.verdicts import exclusive, read_bytes, snapshot_file
 from langgap.errors import CatalogError
-
-SWITCH_RATE = 0.95  # the oracle's share of init states that accepts a task at one K
 
 # task id -> condition (`switch:K`) -> verdict
 SwitchVerdicts = dict[str, dict[str, GateResult]]

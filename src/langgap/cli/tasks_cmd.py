@@ -10,14 +10,15 @@ from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
 from langgap.catalog.task import (
     DEFAULT_STYLE,
     DIMENSIONS,
-    INFEASIBLE,
     INSTRUCTION_STYLES,
     KINDS,
     SAME_TRIAL,
     SPLITS,
     Task,
+    verdict_counts,
 )
 from langgap.stack import SUITES
+from langgap.vocabulary import Verdict
 
 
 def add_catalog_option(parser) -> None:
@@ -125,18 +126,26 @@ def run_list(args) -> int:
         print(json.dumps([t.to_dict(args.style) for t in tasks], indent=1))
         return 0
     width = max((len(t.id) for t in tasks), default=2)
-    print(f"{'id':<{width}}  {'paper':>5}  {'dimension':<19}  {'split':<8}  gate  instruction ({args.style})")
+    verdict = max(map(len, Verdict))
+    print(
+        f"{'id':<{width}}  {'paper':>5}  {'dimension':<19}  {'split':<8}  {'gate':<{verdict}}  "
+        f"instruction ({args.style})"
+    )
     for t in tasks:
         paper = "-" if t.paper_id is None else str(t.paper_id)
-        gate = "-" if t.gate is None else ("ok" if t.feasible else "no")
-        print(f"{t.id:<{width}}  {paper:>5}  {t.dimension:<19}  {t.split:<8}  {gate:<4}  {t.instruction(args.style)}")
+        gate = "-" if t.gate is None else t.gate.verdict
+        print(
+            f"{t.id:<{width}}  {paper:>5}  {t.dimension:<19}  {t.split:<8}  {gate:<{verdict}}  "
+            f"{t.instruction(args.style)}"
+        )
     by_kind = Counter(t.kind for t in tasks)
     by_dim = Counter(t.dimension for t in tasks if t.kind == "extended")
+    rejected = [t.gate.verdict for t in tasks if not t.feasible]
     print(
         f"\n{len(tasks)} tasks: {by_kind['original']} original, {by_kind['extended']} extended"
         + (" (" + ", ".join(f"{d} {n}" for d, n in sorted(by_dim.items())) + ")" if by_dim else "")
-        + f"; {sum(not t.feasible for t in tasks)} rejected by the feasibility gate (gate: no): "
-        + f"{sum(bool(t.gate and t.gate.proof) for t in tasks)} {INFEASIBLE}, the others unproven"
+        + f"; {len(rejected)} rejected by the feasibility gate"
+        + (f" ({verdict_counts(rejected, always=())})" if rejected else "")
     )
     return 0
 
@@ -220,7 +229,7 @@ def run_gate(args) -> int:
     ungated = sum(t.gate is None for t in tasks)
     if ungated:
         print(
-            f"{ungated} of {len(tasks)} task(s) not gated: unproven until the gate runs "
+            f"{ungated} of {len(tasks)} task(s) not gated: {Verdict.UNPROVEN} until the gate runs "
             f"(langgap validate --catalog {args.catalog} --record)"
         )
     taken = [t for t in tasks if t.gate is not None and t.gate.inherited_from]
@@ -271,7 +280,8 @@ def _switch_gate_counts(args, tasks: list[Task]) -> int:
         ungated = sum(t.gate is None and t.id not in alone for t in at_k)
         if ungated:
             print(
-                f"{ungated} of {len(tasks)} task(s) not gated at {condition}: unproven until the switch gate runs "
+                f"{ungated} of {len(tasks)} task(s) not gated at {condition}: {Verdict.UNPROVEN} until the switch gate "
+                "runs "
                 f"(langgap validate --catalog {args.catalog} --condition {condition} --record)"
             )
         if alone:
@@ -357,13 +367,10 @@ def _gate_lines(gate) -> list[str]:
     if gate is None:
         return ["not validated (langgap validate --record)"]
     where = f" on init states 0–{gate.inits - 1}" if gate.inits else ""
-    if gate.feasible:
-        verdict = "accepted"
-        if gate.demonstrated:
-            shown = ", ".join(map(str, gate.demonstrated_inits))
-            verdict += f" (searched demonstrations do init state(s) {shown}, which the oracle failed)"
-    else:
-        verdict = f"rejected, {INFEASIBLE}" if gate.proof else "rejected, unproven"
+    verdict = str(gate.verdict)
+    if gate.demonstrated:
+        shown = ", ".join(map(str, gate.demonstrated_inits))
+        verdict += f" (searched demonstrations do init state(s) {shown}, which the oracle failed)"
     lines = [f"oracle {gate.successes}/{gate.episodes}{where}: {verdict}"]
     if gate.reason:
         lines.append(f"why: {gate.reason}")

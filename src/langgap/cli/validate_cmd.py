@@ -6,13 +6,14 @@ import json
 from dataclasses import asdict
 from pathlib import Path
 
-from langgap.catalog.task import INFEASIBLE, SAME_TRIAL, unproven
+from langgap.catalog.task import SAME_TRIAL
 from langgap.cli.eval_cmd import add_stepping_option, print_switch_note
 from langgap.cli.execution_flags import add_execution_options, add_share_rollouts_option, execution_options
 from langgap.cli.tasks_cmd import add_catalog_option
 from langgap.errors import LangGapError
-from langgap.gate.rows import FEASIBLE_RATE, FULL_INITS
+from langgap.gate.rows import FULL_INITS
 from langgap.search import BUDGET
+from langgap.vocabulary import FEASIBLE_RATE, SWITCH_RATE, Verdict
 
 DEFAULT_POLICY = "oracle"
 
@@ -59,8 +60,8 @@ def add_parser(subparsers) -> None:
         action="append",
         metavar="switch:K",
         help="the switch gate instead (repeatable): per task and K, the oracle must follow an instruction switched "
-        "at policy step K on 95%% of the init states, else the task is unproven at that K; --record keeps the "
-        "verdicts in <registry>.switch-gate.json",
+        f"at policy step K on {SWITCH_RATE:.0%}% of the init states, else the task is {Verdict.UNPROVEN} at that K; "
+        "--record keeps the verdicts in <registry>.switch-gate.json",
     )
     add_share_rollouts_option(parser)
     parser.add_argument("--out", metavar="FILE", help="write the report as JSON (a row per task, the claims)")
@@ -148,10 +149,8 @@ def run(args) -> int:
     if args.record:
         proofs = prove_rejected(args.catalog, found.rows, args.inits)
         for row in found.rows:
-            if row.id in proofs:
-                print(f"{row.id}: {INFEASIBLE}: {proofs[row.id]}")
-            elif row.short:
-                print(f"{row.id}: {unproven(row.successes, row.episodes)}")
+            if not row.feasible:
+                print(f"{row.id}: {row.verdict(args.inits, proof=proofs.get(row.id, '')).evidence}")
         options = dict(inits=args.inits, policy=policy, stepping=args.stepping, proofs=proofs)
         path = record(args.catalog, found.rows, **options)
         print(f"recorded verdicts in {path}")

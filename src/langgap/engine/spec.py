@@ -123,8 +123,7 @@ class RunSpec:
 
     def differences(self, stored: dict) -> list[str]:
         """The fields in which a stored spec (`to_dict` form) differs from this one."""
-        mine = self.to_dict()
-        return [f.name for f in fields(self) if stored.get(f.name) != mine[f.name]]
+        return spec_differences(stored, self.to_dict())
 
     def describe_differences(self, stored: dict, names: list[str]) -> str:
         """One line naming each differing field with its stored and given values."""
@@ -135,6 +134,12 @@ class RunSpec:
 
         mine = self.to_dict()
         return "; ".join(f"{n}: stored {short(stored.get(n))}, given {short(mine[n])}" for n in names)
+
+
+def spec_differences(a: dict, b: dict) -> list[str]:
+    """The `RunSpec` fields in which two specs in their stored (`RunSpec.to_dict`) form differ. None: the two are
+    one spec, a run's identity (`--resume` continues a run only under its own)."""
+    return [f.name for f in fields(RunSpec) if a.get(f.name) != b.get(f.name)]
 
 
 @dataclass(frozen=True)

@@ -8,9 +8,10 @@ from pathlib import Path
 
 from langgap.catalog.catalog import load_catalog, registry_path
 from langgap.catalog.verdicts import record_verdicts
-from langgap.gate.rows import FEASIBLE_RATE, TaskValidation
+from langgap.gate.rows import TaskValidation
 from langgap.stack import DEFAULT_STEPPING, physics_stack
 from langgap.version import code_version
+from langgap.vocabulary import FEASIBLE_RATE
 
 
 def beside_registry(path: Path, catalog_name: str) -> str:

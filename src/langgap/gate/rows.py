@@ -8,12 +8,11 @@ from typing import Protocol
 import numpy as np
 
 from langgap.catalog.catalog import Catalog
-from langgap.catalog.task import GateResult, Task
+from langgap.catalog.task import SETTLE_CHECK, GateResult, Task, verdict_of
 from langgap.goals import Goal, plain_atoms
 from langgap.records import EpisodeRecord
+from langgap.vocabulary import FEASIBLE_RATE, Verdict
 
-FEASIBLE_RATE = 0.90
-TARGET_RATE = 0.95
 FULL_INITS = 50
 SETTLE_TOLERANCE_M = 0.002
 
@@ -45,6 +44,11 @@ class TaskValidation:
     failed_inits: list[int] = field(default_factory=list)  # judged episodes the oracle failed
     demonstrated_inits: list[int] = field(default_factory=list)  # of those, shown doable by a searched episode
     demonstration: str = ""  # where those demonstrations lie, relative to the registry's directory
+
+    @property
+    def word(self) -> Verdict:
+        """The row's verdict as a word (`verdict_of`; never infeasible: proofs are sought when it is recorded)."""
+        return verdict_of(self.feasible, "", self.reason)
 
     @property
     def short(self) -> bool:
@@ -122,7 +126,7 @@ def task_row(
         "goal false at t0": t0 == 0,
         "source goal false at end": source_at_end == 0,
         "env builds": len(done) > 0 and len(done) == len(records),
-        "scene settles": drift <= SETTLE_TOLERANCE_M,
+        SETTLE_CHECK: drift <= SETTLE_TOLERANCE_M,
     }
     failed = [name for name, ok in checks.items() if not ok]
     reason = "; ".join(failed)

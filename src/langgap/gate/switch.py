@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from langgap.catalog.catalog import load_catalog, registry_path
-from langgap.catalog.switch_verdicts import SWITCH_RATE, SwitchVerdicts, record_switch_verdicts
-from langgap.catalog.task import GateResult
+from langgap.catalog.switch_verdicts import SwitchVerdicts, record_switch_verdicts
+from langgap.catalog.task import GateResult, verdict_counts, verdict_of
 from langgap.engine.evaluate import evaluate
 from langgap.engine.plan import switch_step
 from langgap.engine.spec import ExecutionOptions, RunSpec
@@ -27,6 +27,7 @@ from langgap.gate.rows import gate_result
 from langgap.records import EpisodeRecord
 from langgap.stack import DEFAULT_STEPPING
 from langgap.store import RunStore
+from langgap.vocabulary import SWITCH_RATE, Verdict
 
 
 @dataclass
@@ -47,6 +48,11 @@ class SwitchGateRow:
     @property
     def feasible(self) -> bool:
         return bool(self.episodes) and not self.gaps and self.rate >= SWITCH_RATE
+
+    @property
+    def word(self) -> Verdict:
+        """The row's verdict as a word: doable or unproven at this K (`verdict_of`)."""
+        return verdict_of(self.feasible, "", self.reason)
 
     @property
     def reason(self) -> str:
@@ -133,12 +139,11 @@ def switch_table_text(rows: list[SwitchGateRow]) -> str:
     width = max((len(r.id) for r in rows), default=4)
     lines = [f"{'task':<{width}}  {'condition':<10}  {'oracle':>9}  {'rate':>6}  verdict"]
     for r in rows:
-        verdict = "ok" if r.feasible else f"unproven ({r.reason})"
+        verdict = r.word if r.feasible else f"{r.word} ({r.reason})"
         oracle = f"{r.successes:>4}/{r.episodes:<4}"
         lines.append(f"{r.id:<{width}}  {r.condition:<10}  {oracle}  {100 * r.rate:>5.1f}%  {verdict}")
-    accepted = sum(r.feasible for r in rows)
     lines.append(
-        f"switch gate: {accepted} accepted, {len(rows) - accepted} unproven (task and K pairs; the oracle must reach "
+        f"switch gate: {verdict_counts([r.word for r in rows])} (task and K pairs; the oracle must reach "
         f"{SWITCH_RATE:.0%})"
     )
     return "\n".join(lines)

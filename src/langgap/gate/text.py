@@ -5,9 +5,11 @@ from __future__ import annotations
 from collections import Counter
 from dataclasses import asdict
 
+from langgap.catalog.task import verdict_counts
 from langgap.gate.claims import Claim
-from langgap.gate.rows import TARGET_RATE, TaskValidation
+from langgap.gate.rows import TaskValidation
 from langgap.gate.validation import Validation
+from langgap.vocabulary import CEILING_TARGET, Verdict
 
 
 def claims_text(claims: list[Claim]) -> str:
@@ -30,9 +32,9 @@ def table_text(rows: list[TaskValidation]) -> str:
     width = max((len(r.id) for r in rows), default=4)
     lines = [f"{'task':<{width}}  {'oracle':>9}  {'rate':>6}  {'steps':>11}  verdict"]
     for r in rows:
-        verdict = "ok" if r.feasible else f"REJECTED ({r.reason})"
-        if r.feasible and r.rate < TARGET_RATE:
-            verdict = f"ok, below the {TARGET_RATE:.0%} target"
+        verdict = r.word if r.feasible else f"{r.word} ({r.reason})"
+        if r.feasible and r.rate < CEILING_TARGET:
+            verdict += f", the oracle below the {CEILING_TARGET:.0%} ceiling target"
         if r.demonstrated_inits:
             verdict += f"; searched demonstrations on init state(s) {', '.join(map(str, r.demonstrated_inits))}"
         lines.append(
@@ -41,21 +43,22 @@ def table_text(rows: list[TaskValidation]) -> str:
         )
     episodes = sum(r.episodes for r in rows)
     successes = sum(r.successes for r in rows)
-    below = [r.id for r in rows if r.rate < TARGET_RATE]
+    below = [r.id for r in rows if r.rate < CEILING_TARGET]
     lines.append(
         f"{len(rows)} tasks, {successes}/{episodes} oracle successes "
-        f"({100 * successes / max(1, episodes):.1f}%); {sum(not r.feasible for r in rows)} rejected; "
-        f"{len(below)} below {TARGET_RATE:.0%}"
+        f"({100 * successes / max(1, episodes):.1f}%); {verdict_counts(r.word for r in rows)}; "
+        f"the oracle below {CEILING_TARGET:.0%} on {len(below)}"
     )
     return "\n".join(lines)
 
 
 def gate_summary(rows: list[TaskValidation]) -> str:
-    """Accepted / rejected counts, rejections grouped by the checks they failed."""
-    rejected = [r for r in rows if not r.feasible]
-    lines = [f"gate: {len(rows) - len(rejected)} accepted, {len(rejected)} rejected"]
-    for reason, count in Counter(
-        r.reason.split(";")[0].split(" ")[0] if r.reason.startswith("oracle") else r.reason for r in rejected
+    """The verdicts counted, the rejected ones grouped by verdict and the checks they failed."""
+    lines = [f"gate: {verdict_counts(r.word for r in rows)}"]
+    for (word, reason), count in Counter(
+        (r.word, r.reason.split(";")[0].split(" ")[0] if r.reason.startswith("oracle") else r.reason)
+        for r in rows
+        if not r.feasible
     ).most_common():
-        lines.append(f"  rejected {count:>4}: {reason}")
+        lines.append(f"  {word:<{max(map(len, Verdict))}} {count:>4}: {reason}")
     return "\n".join(lines)

@@ -5,6 +5,8 @@ extended ones (with the extended rate's interval and the paired test), the oracl
 extended tasks, and how often the policy did the scene's original task instead (the default-task
 rate, with its interval). The verdict word compares the extended rate with the original one:
 `READS` of it or more reads the instruction, `WEAKLY` or more reads it weakly, less hardly reads it.
+A run whose extended tasks ran only under a switch (`switch:K`) says, per K, how often the policy did
+the task switched to and how often it went on with the first instruction's.
 """
 
 from __future__ import annotations
@@ -32,6 +34,25 @@ def p_text(test: PairedTest) -> str:
 
 
 @dataclass(frozen=True)
+class Switched:
+    """A run's extended episodes under one `switch:K`: the share that did the task switched to, and the share
+    that went on with the task the first instruction asked for (`persisted`)."""
+
+    k: int
+    success: Rate
+    persisted: Rate
+
+    @property
+    def text(self) -> str:
+        success, persisted = self.success, self.persisted
+        return (
+            f"at K={self.k} it did the task switched to in {percent(success.rate)} {interval(success)} of "
+            f"{success.episodes} extended episodes and went on with the first instruction's task in "
+            f"{percent(persisted.rate)} {interval(persisted)}"
+        )
+
+
+@dataclass(frozen=True)
 class Answer:
     """What one run's opening sentence says (every number from the summary)."""
 
@@ -44,6 +65,7 @@ class Answer:
     gaps: int
     same_goal_only: bool = False  # every extended task asks for its source's goal in other words
     reworded_left_out: int = 0  # extended tasks left out of `extended`: rewordings of their source's goal
+    switched: tuple[Switched, ...] = ()  # extended episodes under each `switch:K` of the run, in K order
 
     @property
     def verdict(self) -> str | None:
@@ -82,6 +104,8 @@ class Answer:
         """The sentence."""
         original, extended = self.original, self.extended
         on_originals = f"{percent(original.rate)} on original tasks" if original.episodes else "no original tasks"
+        if not extended.episodes and self.switched:
+            return self._switched_only(on_originals)
         if not extended.episodes:
             return (
                 f"{self.label}: {on_originals} {interval(original)}; the run has no extended tasks, so it does not "
@@ -106,6 +130,16 @@ class Answer:
         return (
             f"{head}: {on_originals} vs {percent(extended.rate)} {interval(extended)} on {self._which()}"
             f"{self._tests()}; {oracle}; {self._instead()}{gaps}{self._left_out()}."
+        )
+
+    def _switched_only(self, on_originals: str) -> str:
+        """The sentence of a run whose extended tasks ran only under a switch: what it did after each K."""
+        original = self.original
+        head = f"{on_originals} {interval(original)}" if original.episodes else "no episode under the given instruction"
+        return (
+            f"{self.label}: {head}; its extended tasks ran only under a switch (another task's instruction first, "
+            f"their own from policy step K): {'; '.join(s.text for s in self.switched)} (a policy that reads its "
+            "instruction does the task switched to; one that ignores it goes on with the first)."
         )
 
     def _which(self) -> str:

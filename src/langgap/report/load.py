@@ -22,7 +22,7 @@ from langgap.store import RunStore
 class Run:
     """One stored run, as reports see it."""
 
-    name: str  # shown in tables: the policy and the run directory's name
+    name: str  # shown in tables (`run_name`)
     path: Path
     spec: dict  # the run spec (`config` in stores written before run specs)
     records: list[EpisodeRecord]
@@ -72,6 +72,12 @@ def live_switch_gates(spec: dict) -> SwitchVerdicts:
         return {}
 
 
+def run_name(policy: str, label: str) -> str:
+    """How reports name a run: its label (its directory's name) with its policy after it, `pi05-ft (openpi)`,
+    or the policy's name once when the label is that name, `oracle`."""
+    return policy if label == policy else f"{label} ({policy})"
+
+
 def load_runs(paths: list[str | Path]) -> list[Run]:
     """Read runs from their stores (while they are being written, too)."""
     runs = []
@@ -85,6 +91,6 @@ def load_runs(paths: list[str | Path]) -> list[Run]:
         # Runs stored before the snapshot kept switch verdicts read the live file, as for the plain ones.
         switch = (snapshot or {}).get("switch")
         switch_gates = live_switch_gates(spec) if switch is None else snapshot_switch_gates(switch)
-        name = f"{spec.get('policy', '?')} ({Path(path).name})"
+        name = run_name(str(spec.get("policy", "?")), Path(path).name)
         runs.append(Run(name, Path(path), spec, records, gates, hashes, switch_gates))
     return runs

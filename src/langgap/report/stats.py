@@ -119,6 +119,8 @@ class PairedTest:
     only_a: int  # pairs where only the first succeeded
     only_b: int
     changed: int  # pairs whose achieved task differs
+    # The two sides are one run spec run twice: only then are `agreement` and `kappa` a test-retest, and reported.
+    retest: bool = False
 
     @property
     def p_value(self) -> float:
@@ -141,7 +143,7 @@ class PairedTest:
             "rate_a": self.successes_a / self.pairs,
             "rate_b": self.successes_b / self.pairs,
             "p_value": self.p_value,
-            "agreement": self.agreement,
-            "kappa": self.kappa,
+            "agreement": self.agreement if self.retest else None,
+            "kappa": self.kappa if self.retest else None,
             "changed_behaviour": self.changed / self.pairs,
         }

@@ -23,8 +23,9 @@ from langgap.catalog.labels import (
 from langgap.catalog.switch_verdicts import SwitchVerdicts, accepted
 from langgap.catalog.task import SAME_GOAL_DIMENSIONS, GateResult
 from langgap.engine.plan import SWITCH, repeat_of, switch_step
+from langgap.engine.spec import spec_differences
 from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Outcome, Privilege, achieved
-from langgap.report.answer import Answer
+from langgap.report.answer import Answer, Switched
 from langgap.report.card import PROTOCOL_ITEMS, protocol_card
 from langgap.report.load import Run
 from langgap.report.stats import PairedTest, Rate
@@ -263,8 +264,11 @@ def switch_rows(records: list[EpisodeRecord], verdicts: SwitchVerdicts | None = 
     return rows
 
 
-def paired(name: str, a: dict[tuple, EpisodeRecord], b: dict[tuple, EpisodeRecord]) -> PairedTest | None:
-    """McNemar over the keys judged in both `a` and `b` (None when there are none)."""
+def paired(
+    name: str, a: dict[tuple, EpisodeRecord], b: dict[tuple, EpisodeRecord], *, retest: bool = False
+) -> PairedTest | None:
+    """McNemar over the keys judged in both `a` and `b` (None when there are none); `retest`: they are the
+    episodes of one run spec run twice (`PairedTest.retest`)."""
     keys = [k for k in a if k in b and a[k].judged and b[k].judged]
     if not keys:
         return None
@@ -276,6 +280,7 @@ def paired(name: str, a: dict[tuple, EpisodeRecord], b: dict[tuple, EpisodeRecor
         only_a=sum(a[k].success and not b[k].success for k in keys),
         only_b=sum(b[k].success and not a[k].success for k in keys),
         changed=sum(achieved(a[k]) != achieved(b[k]) for k in keys),
+        retest=retest,
     )
 
 
@@ -342,8 +347,9 @@ def confusion(records: list[EpisodeRecord]) -> dict[str, dict[str, dict[str, int
 
 
 def capped_because(task_rate: Rate, gate: GateResult | None) -> str | None:
-    """Why a task is marked ⚠ (None: it is not): proven infeasible, or an oracle below `CEILING_TARGET` on
-    the run's init states (unproven: the oracle does not do it, no proof that a policy cannot)."""
+    """Why a task is marked ⚠ (None: it is not), led by its verdict's word: proven infeasible, its starts do not
+    come to rest, or an oracle below `langgap.vocabulary.CEILING_TARGET` on the run's init states
+    (`GateResult.capped_because`)."""
     return None if gate is None else gate.capped_because(task_rate.oracle_successes, task_rate.oracle_episodes)
 
 
@@ -383,7 +389,7 @@ class RunResults:
     card: dict[str, str]  # the protocol card (`CARD_ITEMS`)
     spread: list[SpreadRow]  # between-seed spread (runs with --repeats)
     clips: list[Clip]  # filmed episodes (`--video`)
-    capped: dict[str, str]  # task -> why it is marked ⚠ (unproven: oracle below target; or infeasible (proof))
+    capped: dict[str, str]  # task -> why it is marked ⚠ (`capped_because`)
     other_stack: dict[str, list[str]]  # task -> how its verdict's physics stack differs from its episodes'
     gate_source: str  # where the verdicts behind Oracle % and ⚠ come from (`Run.gate_source`)
     against_originals: PairedTest | None  # extended episodes against their sources' (`against_sources`)
@@ -430,6 +436,11 @@ class RunResults:
             self.gaps,
             self.same_goal_only,
             self.reworded if self.mixed else 0,
+            tuple(
+                Switched(row.k, row.classes["success"], row.classes["persisted"])
+                for row in self.switches
+                if row.group == "extended"
+            ),
         )
 
 
@@ -638,6 +649,13 @@ def protocol_differences(a: RunResults, b: RunResults) -> list[str]:
     return [item for item in PROTOCOL_ITEMS if a.card[item] != b.card[item]]
 
 
+def same_spec(a: RunResults, b: RunResults) -> bool:
+    """Whether two runs are one run spec run twice — the same policy and arguments, catalog, tasks, init states,
+    seeds, conditions, style and physics (`langgap.engine.spec.spec_differences`) and the same policy
+    configuration (its hash): their paired outcomes are then a test-retest."""
+    return not spec_differences(a.spec, b.spec) and a.card["policy config hash"] == b.card["policy config hash"]
+
+
 BLIND_POLICY = "blind"  # the reference that does the scene's original task whatever it is asked
 
 
@@ -658,7 +676,10 @@ def summarize(runs: list[Run], *, allow_mismatch: bool = False) -> Summary:
     refused = bool(mismatches) and not allow_mismatch
     comparisons = []
     if not refused:
-        tests = (paired(f"{runs[0].name} vs {other.name}", keyed(runs[0]), keyed(other)) for other in runs[1:])
+        tests = (
+            paired(f"{runs[0].name} vs {run.name}", keyed(runs[0]), keyed(run), retest=same_spec(first, other))
+            for run, other in zip(runs[1:], results_[1:], strict=True)
+        )
         comparisons = [t for t in tests if t is not None]
     blinds = [
         (run, result) for run, result in zip(runs, results_, strict=True) if run.spec.get("policy") == BLIND_POLICY

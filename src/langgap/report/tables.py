@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 from langgap.catalog.labels import DIMENSION_LABEL, EXTENDED_DIMENSIONS, SPLIT_LABEL, SUITE_LABEL, SUITE_ORDER, label
 from langgap.records import JUDGED_OUTCOMES, Outcome, Privilege
+from langgap.report.answer import percent
 from langgap.report.card import CARD_ITEMS
 from langgap.report.published import Published
 from langgap.report.stats import PairedTest, Rate
@@ -19,6 +20,7 @@ from langgap.report.summary import (
     TaskRow,
     shown_dimensions,
 )
+from langgap.vocabulary import CEILING_TARGET, FEASIBLE_RATE, SWITCH_RATE, Verdict
 
 SOURCE_LABEL = {"original": "Original (LIBERO)", "extended": "Extended (LangGap)", "total": "Total"}
 OUTCOME_LABEL = {
@@ -43,17 +45,23 @@ CEILING_NOTE = (
     "Oracle % is the scripted oracle's success on the same tasks and init states (the feasibility verdicts "
     "stored with the run when it was created); Relative % is the rate as a share of it."
 )
+# The notes are plain text: the terminal shows them as they are, so they quote no command in Markdown's backticks.
 SELECTION_NOTE = (
-    "Tasks: `--tasks feasible` (the default) runs the tasks the feasibility gate accepted; `--tasks all` adds "
-    "those it rejected. Either way, ⚠ marks a task the oracle does not do at 95 % on these init states "
-    "(unproven: no proof that a policy cannot) or one proven infeasible (its proof and assumptions: "
-    "`langgap tasks show ID`)."
+    f"Tasks: --tasks feasible (the default) runs the tasks the feasibility gate found {Verdict.DOABLE}; --tasks all "
+    f"adds the others ({Verdict.UNPROVEN}, {Verdict.INFEASIBLE} or {Verdict.UNSETTLED})."
+)
+CAPPED_NOTE = (
+    f"⚠ marks a task the oracle does on fewer than {percent(CEILING_TARGET)} of these init states, or one the gate "
+    f"found {Verdict.INFEASIBLE} (its proof and assumptions: langgap tasks show ID) or {Verdict.UNSETTLED} (its "
+    f"starts do not come to rest). The gate admits a task as {Verdict.DOABLE} when the oracle, with searched "
+    f"demonstrations, does at least {percent(FEASIBLE_RATE)} of its init states, so a {Verdict.DOABLE} task can "
+    f"carry ⚠ too; one the oracle does not do, with no proof that a policy cannot, is {Verdict.UNPROVEN}."
 )
 
 STACK_NOTE = (
     "≠ marks a task whose feasibility verdict (its Oracle % and ⚠) was made on another physics stack than these "
     "episodes: other package versions, start or image conventions, stepping or seed scheme "
-    "(`langgap report --json`: other_stack_tasks; `langgap tasks show ID`)."
+    "(langgap report --format json: other_stack_tasks; langgap tasks show ID)."
 )
 
 
@@ -63,15 +71,17 @@ def selection_text(run: RunResults) -> str:
     if selection in (None, "feasible"):
         chosen = "feasible (the default)"
     else:
-        chosen = f"a list of {len(selection.split(','))}" if "," in selection else f"`{selection}`"
+        chosen = f"a list of {len(selection.split(','))}" if "," in selection else repr(selection)
     capped = "; ".join(f"{task} ({why})" for task, why in sorted(run.capped.items()))
     return f"tasks: {chosen}" + (f"; ⚠ {capped}" if capped else "") + f"; {run.gate_source}"
 
 
 def notes(summary: Summary, published: Published | None, *, ceiling: bool = True) -> list[str]:
-    """The notes printed with the tables (`ceiling`: with those that explain the oracle columns and ⚠)."""
+    """The notes printed with the tables (`ceiling`: with those that explain the task selection, the oracle
+    columns and ⚠, the last only when a task is marked ⚠)."""
     shown = [
         (SELECTION_NOTE, ceiling),
+        (CAPPED_NOTE, ceiling and any(run.capped for run in summary.runs)),
         (CEILING_NOTE, ceiling),
         (STACK_NOTE, ceiling and any(run.other_stack for run in summary.runs)),
         *((note, privilege in summary.privileges) for privilege, note in PRIVILEGE_NOTES.items()),
@@ -139,6 +149,11 @@ def _rate_rows(rates: list[Rate], names: dict[str, str]) -> list[list[str]]:
     ]
 
 
+def paper_table(title: str, table: str) -> str:
+    """A heading that says what its table holds, then which of the paper's tables it reproduces."""
+    return f"{title} (the paper's {table})"
+
+
 def _heading(text: str) -> list[str]:
     return [f"*{text}*", *[""] * (len(_RATE_HEADERS) - 1)]
 
@@ -151,11 +166,14 @@ SUITE_KIND_LABEL = {
 
 
 def source_table(run: RunResults) -> Table:
-    """Table II: by data source, by suite and by perturbation dimension, each beside the oracle's ceiling."""
+    """Success by data source, by suite and by perturbation dimension, each beside the oracle's ceiling (the
+    paper's Table II)."""
     rows = [_heading("By data source"), *_rate_rows(run.by_source, SOURCE_LABEL)]
     rows += [_heading("By suite"), *_rate_rows(run.by_suite, SUITE_KIND_LABEL)]
     rows += [_heading("By perturbation dimension"), *_rate_rows(run.by_dimension, DIMENSION_LABEL)]
-    return Table(f"Table II — {run.label}: by data source, suite and dimension", _RATE_HEADERS, rows)
+    return Table(
+        paper_table(f"Success by data source, suite and dimension — {run.label}", "Table II"), _RATE_HEADERS, rows
+    )
 
 
 def _published_cells(values: dict[str, float], keys: list[str]) -> list[str]:
@@ -163,8 +181,8 @@ def _published_cells(values: dict[str, float], keys: list[str]) -> list[str]:
 
 
 def suite_table(summary: Summary, published: Published | None = None) -> Table:
-    """Table VI: per suite, original vs extended, one row per run (libero_10 has no extended tasks);
-    the paper's rows below them when `published` is given."""
+    """Success per suite, original vs extended, one row per run (libero_10 has no extended tasks; the paper's
+    Table VI); the paper's rows below them when `published` is given."""
     keys = [f"{s}/{k}" for s in SUITE_ORDER for k in ("original", "extended") if (s, k) != ("libero_10", "extended")]
     headers = ["Method"]
     headers += [f"{SUITE_LABEL[k.split('/')[0]]} {'Orig' if k.endswith('original') else 'Ext'}" for k in keys]
@@ -176,11 +194,13 @@ def suite_table(summary: Summary, published: Published | None = None) -> Table:
     for row in published.suites if published else []:
         cells = _published_cells(row.values, [*keys, "original", "extended"])
         rows.append([published.label(row.method, "Table VI"), *cells])
-    return Table("Table VI — per suite (success %, 95% CI)", [*headers, "Total Orig", "Total Ext"], rows)
+    title = paper_table("Success per suite, original vs extended tasks — success %, 95% CI", "Table VI")
+    return Table(title, [*headers, "Total Orig", "Total Ext"], rows)
 
 
 def dimension_table(summary: Summary, published: Published | None = None) -> Table:
-    """Table VII: extended tasks by dimension, one row per run; the paper's rows below when `published` is given."""
+    """Success on extended tasks by dimension, one row per run (the paper's Table VII); the paper's rows below
+    when `published` is given."""
     headers = ["Method", *(DIMENSION_LABEL[d] for d in EXTENDED_DIMENSIONS), "Total"]
     rows = []
     for run in summary.runs:
@@ -191,11 +211,12 @@ def dimension_table(summary: Summary, published: Published | None = None) -> Tab
     for row in published.dimensions if published else []:
         cells = _published_cells(row.values, [*EXTENDED_DIMENSIONS, "extended"])
         rows.append([published.label(row.method, "Table VII"), *cells])
-    return Table("Table VII — extended tasks by dimension (success %, 95% CI, (tasks))", headers, rows)
+    title = paper_table("Success on extended tasks by dimension — success %, 95% CI, (tasks)", "Table VII")
+    return Table(title, headers, rows)
 
 
 def beyond_table(summary: Summary) -> Table | None:
-    """Table VII's form for the dimensions beyond the paper's that the runs have (`langgap-beyond`'s ordering,
+    """`dimension_table`'s form for the dimensions beyond the paper's that the runs have (`langgap-beyond`'s ordering,
     negation, paraphrase, attribute reference; other catalogs' such as libero-pro's task and language); None
     when they have none."""
     beyond = shown_dimensions(summary.runs)[len(EXTENDED_DIMENSIONS) :]
@@ -206,7 +227,9 @@ def beyond_table(summary: Summary) -> Table | None:
         by_dim = {r.group: r for r in run.by_dimension}
         rows.append([run.label, *(rate_cell(r) + f" ({r.tasks})" if (r := by_dim.get(d)) else "–" for d in beyond)])
     headers = ["Method", *(label(DIMENSION_LABEL, d) for d in beyond)]
-    return Table("Beyond Table VII — other dimensions (success %, 95% CI, (tasks))", headers, rows)
+    return Table(
+        "Success on extended tasks by the dimensions beyond the paper's — success %, 95% CI, (tasks)", headers, rows
+    )
 
 
 def _side_by_side_label(row: dict[str, RunResults]) -> str:
@@ -251,18 +274,22 @@ def published_appendix_table(summary: Summary, published: Published) -> Table:
         rows.append(row)
     method = published.label(published.appendix_method, "appendix")
     headers = ["Dimension", "Tasks", method, *(run.label for run in summary.runs)]
-    return Table(f"Per-task detail — {method} beside your runs (same tasks)", headers, rows)
+    title = f"Success per group of tasks — {published.appendix_method} as published, beside your runs on the same tasks"
+    return Table(paper_table(title, "appendix"), headers, rows)
 
 
 def published_diagnostic_table(published: Published) -> Table:
-    """Table II as published (its episode counts, with the Wilson intervals they imply)."""
+    """The paper's Table II as published (its episode counts, with the Wilson intervals they imply)."""
     names = {**DIMENSION_LABEL, **SOURCE_LABEL}
-    title = f"Table II — {published.label(published.diagnostic_method, 'Table II')}: by data source and dimension"
+    title = paper_table(
+        f"Success by data source and dimension — {published.diagnostic_method} as published", "Table II"
+    )
     return Table(title, _RATE_HEADERS, _rate_rows(published.diagnostic, names))
 
 
 def split_table(run: RunResults) -> Table:
-    return Table(f"Training vs held-out — {run.label}", _RATE_HEADERS, _rate_rows(run.by_split, SPLIT_LABEL))
+    title = f"Success on training vs held-out tasks — {run.label}"
+    return Table(title, _RATE_HEADERS, _rate_rows(run.by_split, SPLIT_LABEL))
 
 
 def mde_table(run: RunResults) -> Table:
@@ -354,7 +381,7 @@ def task_table(run: RunResults) -> Table:
     headers = ["Suite", "Dimension", "Split", "Task", "Instruction", "Success", "Rate %", "95% CI", "Gaps"]
     headers += ["Oracle %", "Relative %", "Mostly did instead", "Episodes"]
     filters = ("Suite", "Dimension", "Split", "Mostly did instead")
-    return Table(f"Per task — {run.label}", headers, rows, filters)
+    return Table(f"Success per task — {run.label}", headers, rows, filters)
 
 
 def video_table(run: RunResults) -> Table | None:
@@ -414,7 +441,7 @@ def switch_table(run: RunResults) -> Table | None:
     if not run.switches:
         return None
     headers = ["K", "Dimension", "Episodes", *(f"{name.capitalize()} %, 95% CI" for name in SWITCH_CLASSES)]
-    headers += ["Gaps", f"{CAPPED_MARK} unproven at K"]
+    headers += ["Gaps", f"{CAPPED_MARK} {Verdict.UNPROVEN} at K"]
     rows = [
         [
             str(row.k),
@@ -434,8 +461,10 @@ def switch_table(run: RunResults) -> Table | None:
     if unproven:
         named = ", ".join(f"{task} at K={k}" for k, task in unproven[:SHOWN_UNPROVEN])
         more = len(unproven) - SHOWN_UNPROVEN
-        title += f"; {CAPPED_MARK} the switch gate (oracle ≥ 95 % under switch:K) has not accepted {named}"
-        title += f" and {more} more (the JSON report's `switches` lists them)" if more > 0 else ""
+        title += (
+            f"; {CAPPED_MARK} the switch gate (oracle ≥ {percent(SWITCH_RATE)} under switch:K) has not accepted {named}"
+        )
+        title += f" and {more} more (the JSON report's switches section lists them)" if more > 0 else ""
     return Table(title, headers, rows)
 
 
@@ -450,12 +479,17 @@ def comparison_table(summary: Summary) -> Table | None:
         return Table(title, ["Run", "Differs in"], rows)
     if not summary.comparisons:
         return None
-    headers = ["Comparison", "Pairs", "First %", "Second %", "Only first", "Only second", "p", "Agree %", "κ"]
+    headers = ["Comparison", "Pairs", "First %", "Second %", "Only first", "Only second", "p"]
     title = "Runs compared on matched episodes (McNemar)"
     if summary.mismatches:
         title += " — protocols differ: " + "; ".join(f"{n}: {', '.join(i)}" for n, i in summary.mismatches.items())
-    rows = [[*_paired_cells(t), pct(t.agreement), "–" if t.kappa is None else f"{t.kappa:.2f}"]
-            for t in summary.comparisons]  # fmt: skip
+    rows = [_paired_cells(t) for t in summary.comparisons]
+    if any(t.retest for t in summary.comparisons):
+        # Agreement and κ are a test-retest: shown for runs of one spec only, blank beside any other run.
+        title += "; Agree % and κ: one run spec run twice (test-retest)"
+        headers += ["Agree %", "κ"]
+        for row, t in zip(rows, summary.comparisons, strict=True):
+            row += [pct(t.agreement), "–" if t.kappa is None else f"{t.kappa:.2f}"] if t.retest else ["", ""]
     return Table(title, headers, rows)
 
 
