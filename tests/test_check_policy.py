@@ -1,5 +1,5 @@
-"""`langgap check-policy`: each broken policy fails its check with a fix (exit 1), good ones pass (exit 0), and an
-openpi server's inputs are shown as sent.
+"""`langgap check-policy`: each broken policy fails its check with a fix (exit 1), good ones pass (exit 0), an
+openpi server's inputs are shown as sent, and `langgap eval` names the check when its policy fails.
 
 The policies without cameras or privileges share one environment (`check_policy(env=...)`); the CLI runs are
 the few that show what only the command line does.
@@ -11,11 +11,12 @@ import numpy as np
 import pytest
 
 import tests.support.policies as policies
+from langgap.cli.main import main
 from langgap.engine.policy_check import EPISODE_CHECKS, UPRIGHT, check_policy
 from langgap.engine.rollout import env_options_for
 from langgap.policies.simple import NoopPolicy
 from langgap.sim.env import TaskEnv
-from tests.support.harness import run_cli
+from tests.support.harness import TINY_TASK, run_cli
 from tests.support.servers import free_port, helper_server, running, subprocess_env
 
 SUPPORT = "tests.support.policies"
@@ -168,3 +169,20 @@ def test_an_openpi_server_s_inputs_are_shown_as_sent(tmp_path):
     assert "observation/image uint8 (224, 224, 3), observation/wrist_image uint8 (224, 224, 3)" in sends
     page = report.page()
     assert "chunk 5, replan 5" in page and "close, close again" in page
+
+
+def test_eval_names_check_policy_when_its_policy_fails(short_catalog, tmp_path, capsys):
+    run = ("eval", "--catalog", short_catalog, "--tasks", TINY_TASK, "--episodes", "1", "--workers", "0")
+    quiet = ("--no-progress", "--quiet")
+    command = f"langgap check-policy {SUPPORT}:%s --catalog {short_catalog} --tasks {TINY_TASK}"
+    # A malformed action: the run goes on (a policy_error), and says how to find why.
+    assert main([*run, "--policy", f"{SUPPORT}:NanPolicy", "--run", str(tmp_path / "nan"), *quiet]) == 0
+    assert f"policy errors: 1, gaps: 0; check the policy in a minute with {command % 'NanPolicy'}" in (
+        capsys.readouterr().out
+    )
+    # An exception in act: the run stops, and its one error line says the same.
+    stop = ("--max-attempts", "1", "--max-failure-streak", "1")
+    assert main([*run, "--policy", f"{SUPPORT}:RaisingPolicy", "--run", str(tmp_path / "raise"), *stop, *quiet]) == 4
+    (error,) = capsys.readouterr().err.splitlines()
+    assert error.startswith("error: stopped after 1 episodes in a row failed with: RuntimeError: model exploded")
+    assert error.endswith(f"; check the policy in a minute with {command % 'RaisingPolicy'}")
