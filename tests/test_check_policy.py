@@ -91,6 +91,30 @@ def test_a_broken_policy_fails_its_check_with_a_fix_and_exit_1(env, policy, args
         )
 
 
+@pytest.mark.parametrize(
+    ("policy", "failed", "message", "fix"),
+    [
+        ("SpeclessPolicy", "interface", "no spec", "give the class spec = PolicySpec(...)"),
+        (
+            "UnbuildablePolicy",
+            "build",
+            "the constructor raised FileNotFoundError: no checkpoint at /nowhere (",
+            "fix the exception in the constructor",
+        ),
+        ("UnknownCameraPolicy", "spec", "unknown camera(s) ['frontview']", "declare cameras LIBERO has"),
+        ("HugeImagePolicy", "spec", "image size must be in 16..1024, got 2048", "an image_size in 16..1024"),
+    ],
+)
+def test_a_policy_that_cannot_run_an_episode_fails_before_one(policy, failed, message, fix):
+    """Nothing is simulated: the check says what stops every episode, and shows the rest as not run."""
+    report = check_policy(f"{SUPPORT}:{policy}")
+    assert report.exit_code == 1
+    (found,) = report.failed
+    assert found.name == failed and message in found.detail and fix in found.remedy, report.page()
+    assert all(c.ok is None for c in report.checks if c.name in EPISODE_CHECKS)
+    assert len(report.heading) == 1  # no episode ran
+
+
 def test_a_slow_policy_s_latency_gives_the_timeout_that_would_fit(env):
     """The latency verdict and the estimate come from the measured calls: 150 ms per call make a 520-step
     libero_10 episode (520 calls) take over 78 s, more than half of a 60 s timeout; the timeout it names (whole

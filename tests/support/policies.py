@@ -307,3 +307,26 @@ class ClosesOncePolicy(NoopPolicy):
         if self.closed:
             raise RuntimeError("already closed")
         self.closed = True
+
+
+class SpeclessPolicy:
+    """Acts, but declares no spec."""
+
+    def reset(self, context):
+        pass
+
+    def act(self, observation):
+        return np.zeros(7)
+
+
+class UnknownCameraPolicy(NoopPolicy):
+    """Asks for a camera LIBERO does not have (its spec cannot be made)."""
+
+    def __init__(self):
+        self.spec = PolicySpec(cameras=("frontview",))
+
+
+class HugeImagePolicy(NoopPolicy):
+    """Asks for images larger than the renderer makes."""
+
+    spec = PolicySpec(cameras=("agentview",), image_size=2048)

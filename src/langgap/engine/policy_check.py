@@ -176,7 +176,12 @@ def check_policy(
         return PolicyCheck(heading, checks, time.perf_counter() - began)
     heading[0] += f": {_class_name(policy)}, built in {duration(time.perf_counter() - began)}"
     checker = _Checker(policy, name, loaded, plan, style, timeout_s)
-    checks = checker.run(env)
+    try:
+        checks = checker.run(env)
+    finally:
+        if not checker.closed and callable(close := getattr(policy, "close", None)):
+            with contextlib.suppress(Exception):  # a check that failed says what is wrong; this is clean-up
+                close()
     if checker.ran:
         heading.append(checker.episode_line())
     return PolicyCheck(heading, checks, time.perf_counter() - began)
@@ -275,12 +280,14 @@ class _Failed(Exception):
 class _Checker:
     """One policy's checks, in the order `run` shows them."""
 
-    def __init__(self, policy: Policy, name: str, catalog: Catalog, plan: list[PlannedEpisode], style, timeout_s):
+    def __init__(
+        self, policy: Policy, name: str, catalog: Catalog, plan: list[PlannedEpisode], style: str, timeout_s: float
+    ):
         self.policy, self.name, self.catalog, self.plan, self.style = policy, name, catalog, plan, style
         self.timeout_s = timeout_s
         self.planned = plan[0]
         self.task = catalog.get(self.planned.key.task_id)
-        self.watched = _Watched(policy)
+        self.watched: _Watched  # once the policy is known to have a spec (`run`)
         self.ran = False  # whether the check episodes started
         self.closed = False  # whether the lifecycle check closed the policy
 
@@ -289,6 +296,7 @@ class _Checker:
         interface = self._interface()
         if not interface.ok:
             return [interface]
+        self.watched = _Watched(self.policy)
         spec, options = self._spec()
         checks = [interface, spec, self._privileges()]
         if options is None:
@@ -305,9 +313,6 @@ class _Checker:
         finally:
             if own:
                 env.close()
-            if not self.closed and callable(close := getattr(self.policy, "close", None)):
-                with contextlib.suppress(Exception):  # a check that failed already says what is wrong
-                    close()
 
     def episode_line(self) -> str:
         """What the check ran, for the heading."""
