@@ -7,7 +7,7 @@ import dataclasses
 
 import pytest
 
-from langgap.engine.policy_check import Timing, duration
+from langgap.engine.policy_timing import EpisodeTimes, Timing, duration
 from langgap.policies.base import config_hash, policy_config
 from langgap.policies.simple import NoopPolicy
 
@@ -22,6 +22,15 @@ def test_an_episode_is_its_start_its_calls_and_its_steps():
     assert TIMING.episode_s(220) == pytest.approx(0.3 + 0.5 + 43 * 0.1 + 220 * 0.01)
     one_per_call = dataclasses.replace(TIMING, actions_per_call=1)
     assert one_per_call.episode_s(520) == pytest.approx(0.3 + 0.5 + 519 * 0.1 + 520 * 0.01)
+
+
+def test_the_first_call_of_all_is_a_warm_up_and_each_episode_s_first_its_opening():
+    first = EpisodeTimes(calls=(3.0, 0.1, 0.2, 0.1), steps=20, start_s=0.4, simulator_s=0.2)
+    second = EpisodeTimes(calls=(0.5, 0.1, 0.3, 0.1), steps=20, start_s=0.2, simulator_s=0.6)
+    timing = Timing.measured([first, second])
+    assert (timing.warmup_s, timing.opening_s, timing.call_s, timing.slowest_s, timing.others) == (3, 0.5, 0.1, 0.3, 6)
+    assert timing.step_s == pytest.approx(0.02) and timing.start_s == pytest.approx(0.3)
+    assert timing.actions_per_call == 5
 
 
 @pytest.mark.parametrize(

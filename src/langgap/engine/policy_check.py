@@ -5,21 +5,13 @@ The policy is built as a worker builds it and run through the engine's own code 
 episode eval would plan for the selection (its first task, init state 0, the run's seed), with the
 environment cut to `CHECK_CALLS` policy calls. The episode runs twice, the policy reset once more in between,
 so one short run shows the spec, what the policy receives and sends, its actions, its lifecycle, whether the
-same seed gives the same actions, and its latency, from which the run's wall time is computed.
-
-Latency fails when the run's longest episode, at the measured per-call and per-step times, would take more
-than 1/`TIMEOUT_MARGIN` of eval's per-episode `--timeout`: eval kills such an episode as an infrastructure
-failure, retries it, stores a gap and stops the run after a few in a row. The margin is there because the
-check times one episode in an otherwise idle process, while eval's workers share cores (and a policy's
-device), and a call's latency varies from call to call.
+same seed gives the same actions, and its latency, from which the run's wall time is computed
+(`langgap.engine.policy_timing`).
 """
 
 from __future__ import annotations
 
 import contextlib
-import math
-import os
-import statistics
 import time
 import traceback
 from collections import Counter
@@ -36,14 +28,17 @@ from langgap.checks import Check, check_lines
 from langgap.engine.context import planned_context
 from langgap.engine.episode import execute_episode
 from langgap.engine.plan import PlannedEpisode, build_plan
-from langgap.engine.rollout import env_options_for
-from langgap.engine.spec import (
-    DEFAULT_FAILURE_STREAK,
-    DEFAULT_MAX_ATTEMPTS,
-    DEFAULT_TIMEOUT_S,
-    PAPER_EPISODES,
-    SpecError,
+from langgap.engine.policy_timing import (
+    RETRIED,
+    EpisodeTimes,
+    StepLimits,
+    Timing,
+    duration,
+    latency_check,
+    wall_time_check,
 )
+from langgap.engine.rollout import env_options_for
+from langgap.engine.spec import DEFAULT_TIMEOUT_S, PAPER_EPISODES, SpecError
 from langgap.errors import LangGapError, SimulationError
 from langgap.policies import policy_class, policy_kwargs
 from langgap.policies.base import Policy, PolicyOutputError, PolicySpec, PolicySpecError, as_action_chunk
@@ -51,15 +46,9 @@ from langgap.records import EpisodeRecord, Outcome
 from langgap.sim.env import ACTION_LIMIT, CAMERAS, EnvOptions, Observation, TaskEnv
 
 CHECK_CALLS = 4  # policy calls per check episode: the first (often a warm-up) and three more to time
-TIMEOUT_MARGIN = 2.0  # the run's longest episode must fit this many times into eval's --timeout
 UPRIGHT = (
     "images upright: LIBERO's render rotated 180°, the orientation of openpi's LIBERO example and of LeRobot's "
     "LIBERO pipeline"
-)
-# What eval does with an episode whose policy raises or that runs past its timeout (an infrastructure failure).
-RETRIED = (
-    f"eval attempts such an episode {DEFAULT_MAX_ATTEMPTS} times, then stores a gap, and stops the run after "
-    f"{DEFAULT_FAILURE_STREAK} in a row"
 )
 SPEC_REMEDY = (
     f"declare cameras LIBERO has ({', '.join(CAMERAS)}), each once, an image_size in 16..1024, 1 <= replan <= chunk"
@@ -96,46 +85,6 @@ class PolicyCheck:
             verdict += f", {skipped} not run"
         lines = [*self.heading, *(line for check in self.checks for line in check_lines(check))]
         return "\n".join([*lines, f"check-policy: {verdict} ({duration(self.seconds)})"])
-
-
-@dataclass(frozen=True)
-class Timing:
-    """What the check's episodes measured, and what it makes of an episode."""
-
-    warmup_s: float  # the policy's very first call (loading, compiling)
-    opening_s: float  # an episode's first call after that (the second episode's): a policy's per-episode set-up
-    call_s: float  # every other call: the median
-    slowest_s: float  # every other call: the slowest
-    others: int  # how many other calls there were
-    step_s: float  # one simulator step, its cameras' rendering included
-    start_s: float  # an episode's start: reset, settle, the policy's reset
-    actions_per_call: float  # actions executed per policy call
-
-    def calls(self, max_steps: int) -> int:
-        """The policy calls of an episode played to a step limit of `max_steps`."""
-        return math.ceil(max_steps / self.actions_per_call)
-
-    def episode_s(self, max_steps: int) -> float:
-        """The wall time of an episode played to a step limit of `max_steps` (after the policy's warm-up)."""
-        calls = self.opening_s + (self.calls(max_steps) - 1) * self.call_s
-        return self.start_s + calls + max_steps * self.step_s
-
-
-def duration(seconds: float) -> str:
-    """`seconds` for a person: 0.42 ms, 12 ms, 3.2 s, 45 s, 12 min, 5 h 10 min, 2 d 3 h."""
-    if seconds < 0.01:
-        return f"{seconds * 1000:.2g} ms"
-    if seconds < 1:
-        return f"{seconds * 1000:.0f} ms"
-    if seconds < 60:
-        return f"{seconds:.2g} s" if seconds < 10 else f"{seconds:.0f} s"
-    hours, minutes = divmod(round(seconds / 60), 60)
-    if not hours:
-        return f"{minutes} min"
-    if hours < 24:
-        return f"{hours} h {minutes} min" if minutes else f"{hours} h"
-    days, hours = divmod(hours + (minutes >= 30), 24)
-    return f"{days} d {hours} h" if hours else f"{days} d"
 
 
 def check_policy(
@@ -248,15 +197,12 @@ class _Episode:
     began: float
     ended: float
 
-    @property
-    def start_s(self) -> float:
-        """Reset, settle and the policy's reset: up to the first call."""
-        return (self.calls[0].started if self.calls else self.ended) - self.began
-
-    @property
-    def simulator_s(self) -> float:
-        """The steps: from the first call to the end, the policy's calls left out."""
-        return self.ended - self.began - self.start_s - sum(c.seconds for c in self.calls)
+    def times(self) -> EpisodeTimes:
+        """The episode's calls, its start (up to the first call) and its steps (the rest, calls left out)."""
+        calls = tuple(c.seconds for c in self.calls)
+        start = (self.calls[0].started if self.calls else self.ended) - self.began
+        simulator = self.ended - self.began - start - sum(calls)
+        return EpisodeTimes(calls=calls, steps=self.record.steps, start_s=start, simulator_s=simulator)
 
     def policy_error(self, spec: PolicySpec) -> PolicyOutputError | None:
         """The engine's verdict on the output that ended the episode as a policy error (None: none did)."""
@@ -386,8 +332,16 @@ class _Checker:
         checks.append(lifecycle)
         episodes = [first] if second is None else [first, second]
         checks.append(self._determinism(first, second))
-        timing = _timing(episodes)
-        checks += [self._latency(timing), self._wall_time(timing)]
+        timing = Timing.measured([episode.times() for episode in episodes])
+        limits: StepLimits = Counter()
+        for planned in self.plan:
+            task = self.catalog.get(planned.key.task_id)
+            limits[task.suite, task.max_steps] += 1
+        tasks = len({planned.key.task_id for planned in self.plan})
+        checks += [
+            latency_check(timing, limits, self.timeout_s),
+            wall_time_check(timing, limits, tasks, self.catalog.name),
+        ]
         return checks
 
     def _episode(self, env: TaskEnv, which: str) -> _Episode:
@@ -507,67 +461,10 @@ class _Checker:
         )
         return Check("determinism", False, f"{same} gave other actions from {differs}", remedy)
 
-    def _latency(self, timing: Timing) -> Check:
-        task = max((self.catalog.get(t) for t in _task_ids(self.plan)), key=lambda t: t.max_steps)
-        longest = timing.episode_s(task.max_steps)
-        limit = self.timeout_s / TIMEOUT_MARGIN
-        detail = (
-            f"a call takes {duration(timing.call_s)} (median of {timing.others}, the slowest "
-            f"{duration(timing.slowest_s)}), an episode's first {duration(timing.opening_s)}, the very first "
-            f"{duration(timing.warmup_s)}; a simulator step {duration(timing.step_s)}\n"
-            f"the run's longest episode ({task.suite}, {task.max_steps} steps, {timing.calls(task.max_steps)} "
-            f"calls) takes about {duration(longest)}"
-        )
-        timeout = f"eval's --timeout {self.timeout_s:g} s per episode"
-        if longest <= limit:
-            return Check("latency", True, f"{detail}: within half of {timeout}")
-        detail += f", more than half of {timeout}: {RETRIED}"
-        remedy = (
-            f"make act faster (a GPU, a smaller model), execute more actions per call (replan), or give eval "
-            f"--timeout {60 * math.ceil(longest * TIMEOUT_MARGIN / 60)} or more"
-        )
-        return Check("latency", False, detail, remedy)
-
-    def _wall_time(self, timing: Timing) -> Check:
-        tasks_run = (self.catalog.get(planned.key.task_id) for planned in self.plan)
-        limits = Counter((task.suite, task.max_steps) for task in tasks_run)
-        total = sum(n * timing.episode_s(steps) for (_, steps), n in limits.items())
-        tasks = len(_task_ids(self.plan))
-        per_suite = ", ".join(
-            f"{suite} {steps} steps ({timing.calls(steps)} calls) ≈ {duration(timing.episode_s(steps))}"
-            for suite, steps in sorted(limits, key=lambda limit: limit[1])
-        )
-        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-        lines = [
-            f"eval's plan: {len(self.plan):,} episodes ({tasks} task{'s' * (tasks > 1)} × {len(self.plan) // tasks} "
-            f"init states of "
-            f"{self.catalog.name}); an episode to its step limit: {per_suite}",
-            f"about {duration(total)} with 1 worker if every episode runs to its step limit (one that succeeds "
-            "ends sooner); N workers take about 1/N of it while each has a core and the policy's device keeps "
-            f"up (here {cores} core(s): --workers {cores} ≈ {duration(total / cores)})",
-        ]
-        return Check("wall time", True, "\n".join(lines))
-
 
 def short_steps(max_steps: int, spec: PolicySpec) -> int:
     """The step limit of a check episode for a task of `max_steps` steps."""
     return min(max_steps, CHECK_CALLS * spec.replan)
-
-
-def _timing(episodes: list[_Episode]) -> Timing:
-    warmup = episodes[0].calls[0].seconds
-    others = [call.seconds for episode in episodes for call in episode.calls[1:]] or [warmup]
-    steps = sum(episode.record.steps for episode in episodes)
-    return Timing(
-        warmup_s=warmup,
-        opening_s=episodes[-1].calls[0].seconds,
-        call_s=statistics.median(others),
-        slowest_s=max(others),
-        others=len(others),
-        step_s=sum(episode.simulator_s for episode in episodes) / steps,
-        start_s=statistics.fmean(episode.start_s for episode in episodes),
-        actions_per_call=steps / sum(len(episode.calls) for episode in episodes),
-    )
 
 
 def _first_difference(first: list[_Call], second: list[_Call], spec: PolicySpec) -> str | None:
@@ -581,10 +478,6 @@ def _first_difference(first: list[_Call], second: list[_Call], spec: PolicySpec)
     if len(first) != len(second):
         return f"call {min(len(first), len(second)) + 1} on ({len(first)} then {len(second)} calls)"
     return None
-
-
-def _task_ids(plan: list[PlannedEpisode]) -> list[str]:
-    return list(dict.fromkeys(p.key.task_id for p in plan))
 
 
 def _described(value) -> str:
