@@ -88,7 +88,7 @@ def test_policy_sees_what_lerobot_libero_pipeline_gives(policy, catalog):
         env.reset(2, seed=4)
         env.settle(capture=policy.spec.cameras)
         policy.reset(context)
-        ours = policy.observation_batch(env.observe(policy.spec.cameras))
+        ours = policy.model_inputs(env.observe(policy.spec.cameras))
         theirs = lerobot_libero_batch(env, context.instruction)
         raw = env.sim.render(camera_name="agentview", width=IMAGE_SIZE, height=IMAGE_SIZE)
     assert set(ours) == {"observation.images.image", "observation.images.image2", "observation.state", "task"}
@@ -100,6 +100,27 @@ def test_policy_sees_what_lerobot_libero_pipeline_gives(policy, catalog):
     assert ours["observation.state"].shape == (1, 8)
     torch.testing.assert_close(ours["observation.state"], theirs["observation.state"], atol=1e-6, rtol=0)
     assert ours["task"] == theirs["task"] == [task.instruction()]
+
+
+def test_check_policy_shows_what_a_checkpoint_is_given_and_passes(checkpoint):
+    """`langgap check-policy lerobot`: the page names the batch the checkpoint's preprocessor gets (the keys, dtypes
+    and shapes of `test_policy_sees_what_lerobot_libero_pipeline_gives`), and the reseeded sampling policy gives the
+    same actions on the same episode."""
+    from langgap.engine.policy_check import check_policy
+
+    report = check_policy("lerobot", {"path": str(checkpoint.parent), "threads": "1"})
+    assert report.exit_code == 0, report.page()
+    (inputs,) = [c.detail for c in report.checks if c.name == "inputs"]
+    image = f"float32 (1, 3, {IMAGE_SIZE}, {IMAGE_SIZE})"
+    sends = (
+        f"sends observation.images.image {image}, observation.images.image2 {image}, observation.state float32 (1, 8)"
+    )
+    assert f"{sends}, task ['pick up the black bowl between the plate and the ramekin and place it on the plate']" in (
+        inputs
+    )
+    assert f"agentview uint8 ({IMAGE_SIZE}, {IMAGE_SIZE}, 3)" in inputs
+    (determinism,) = [c.detail for c in report.checks if c.name == "determinism"]
+    assert "gave the same actions" in determinism
 
 
 def _episode(policy, catalog, init_index: int, seed: int) -> np.ndarray:
@@ -135,15 +156,15 @@ def test_the_task_string_is_the_instruction_in_force_and_a_switch_drops_the_queu
     task, switch = short_task(catalog), 3  # before the first chunk of n_action_steps is played out
     sibling = catalog.get(SIBLING_ID).instruction()
     tasks, inferences = [], []
-    batch, chunk = policy.observation_batch, policy.model.predict_action_chunk
-    policy.observation_batch = lambda observation: (b := batch(observation)) and tasks.append(b["task"]) or b
+    batch, chunk = policy.model_inputs, policy.model.predict_action_chunk
+    policy.model_inputs = lambda observation: (b := batch(observation)) and tasks.append(b["task"]) or b
     policy.model.predict_action_chunk = lambda *args, **kwargs: inferences.append(len(tasks)) or chunk(*args, **kwargs)
     try:
         with TaskEnv(task, env_options_for(policy)) as env:
             context = task_context(task, catalog, init_index=0, seed=1, instruction=sibling)
             result = run_episode(env, policy, context, changes=((switch, task.instruction()),))
     finally:
-        del policy.observation_batch, policy.model.predict_action_chunk
+        del policy.model_inputs, policy.model.predict_action_chunk
     assert result.instructions == [(0, sibling), (switch, task.instruction())]
     assert tasks == [[sibling]] * switch + [[task.instruction()]] * (STEPS - switch)
     assert inferences[:2] == [1, switch + 1]  # asked anew at the switch, not after the old chunk ran out

@@ -5,13 +5,13 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
 
 import numpy as np
 
 from langgap import stack
 from langgap.catalog.catalog import available_catalogs, load_catalog
 from langgap.catalog.files import task_bddl_path
+from langgap.checks import Check
 
 # A generated (extended) task, used to prove generated BDDL loads, resets and renders.
 PROBE_TASK = "spatial/s0/black-bowl-2-on-plate"
@@ -19,14 +19,6 @@ PROBE_TASK = "spatial/s0/black-bowl-2-on-plate"
 CANARY_TASK = "spatial/s5/black-bowl-1-on-plate"
 CANARY_OBJECT = "akita_black_bowl_1"
 CANARY_TOLERANCE_M = 0.001
-
-
-@dataclass
-class Check:
-    name: str
-    ok: bool
-    detail: str
-    remedy: str = ""
 
 
 def _versions() -> Check:

@@ -83,6 +83,7 @@ _SMALL_BC_CLI = "tests/test_small_bc.py::test_training_is_deterministic_and_chec
 _HDF5_CLI = "tests/test_hdf5.py::test_cli_refuses_to_overwrite_and_rejects_what_is_not_a_collection"
 _SERVE = "tests/test_flags.py::test_serve_binds_the_host_and_port_it_is_given"
 _SHARED_ROLLOUTS = "tests/test_shared_rollouts.py::test_shared_rollouts_give_each_episode_its_own_record"
+_CHECK_POLICY_CLI = "tests/test_check_policy.py::test_the_oracle_passes_from_the_command_line_with_every_flag"
 _LEROBOT_EXPORT = "tests/test_lerobot_demos.py::test_export_lerobot_cli_writes_the_dataset_it_is_told"
 
 
@@ -195,6 +196,22 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     ),
     "eval --no-progress": (ProvenBy(_EVAL_FLAGS),),
     "eval --quiet": (ProvenBy(_EVAL_FLAGS),),
+    # -- check-policy -----------------------------------------------------------------------------------
+    "check-policy --policy-arg": (
+        Refused(("check-policy", "random", "--policy-arg", "temperature=3"), "no argument 'temperature'"),
+        Refused(("check-policy", "oracle", "--policy-arg", "noise=-1"), "noise must be >= 0"),  # reaches the policy
+    ),
+    "check-policy --catalog": (ProvenBy(_CHECK_POLICY_CLI),),
+    "check-policy --style": (ProvenBy(_CHECK_POLICY_CLI),),
+    "check-policy --tasks": (ProvenBy(_CHECK_POLICY_CLI),),
+    "check-policy --episodes": (
+        ProvenBy(_CHECK_POLICY_CLI),
+        Refused(("check-policy", "noop", "--episodes", "51"), "out of range"),
+    ),
+    "check-policy --timeout": (
+        ProvenBy(_CHECK_POLICY_CLI),
+        Refused(("check-policy", "noop", "--timeout", "0"), "--timeout must be positive"),
+    ),
     # -- serve ------------------------------------------------------------------------------------------
     "serve --policy": (ProvenBy(_SERVE),),
     "serve --policy-arg": (

@@ -272,3 +272,61 @@ class Reach:
         start = len(self.shown) * self.spec.replan
         self.shown.append(observation.images)
         return self.actions[start : start + self.spec.chunk]
+
+
+class OutOfRangePolicy(NoopPolicy):
+    """Moves 2.5 along x: past the action bounds, so robosuite clips it (an action not unnormalised)."""
+
+    def act(self, observation):
+        return np.array([2.5, 0, 0, 0, 0, 0, -1.0])
+
+
+class UnseededRandomPolicy(RandomPolicy):
+    """`random` that never reseeds at reset: another episode on the same seed gets other actions, and it does not
+    declare itself stochastic."""
+
+    def reset(self, context):
+        pass
+
+
+class DeclaredStochasticPolicy(UnseededRandomPolicy):
+    """The same, declaring it (`PolicySpec.stochastic`)."""
+
+    def __init__(self):
+        super().__init__()
+        self.spec = dataclasses.replace(self.spec, stochastic=True)
+
+
+class ClosesOncePolicy(NoopPolicy):
+    """Holds still; its `close` raises the second time."""
+
+    def __init__(self):
+        self.closed = False
+
+    def close(self):
+        if self.closed:
+            raise RuntimeError("already closed")
+        self.closed = True
+
+
+class SpeclessPolicy:
+    """Acts, but declares no spec."""
+
+    def reset(self, context):
+        pass
+
+    def act(self, observation):
+        return np.zeros(7)
+
+
+class UnknownCameraPolicy(NoopPolicy):
+    """Asks for a camera LIBERO does not have (its spec cannot be made)."""
+
+    def __init__(self):
+        self.spec = PolicySpec(cameras=("frontview",))
+
+
+class HugeImagePolicy(NoopPolicy):
+    """Asks for images larger than the renderer makes."""
+
+    spec = PolicySpec(cameras=("agentview",), image_size=2048)

@@ -9,15 +9,12 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
+    from langgap.checks import check_lines
     from langgap.doctor import run_checks
 
     failed = 0
     for check in run_checks():
-        verdict = "ok  " if check.ok else "FAIL"
-        print(f"[{verdict}] {check.name:<15} {check.detail}", flush=True)
-        if not check.ok:
-            failed += 1
-            if check.remedy:
-                print(f"       {'':<15} fix: {check.remedy}", flush=True)
+        print("\n".join(check_lines(check)), flush=True)
+        failed += not check.ok
     print(f"doctor: {'all checks passed' if not failed else f'{failed} check(s) failed'}")
     return 1 if failed else 0

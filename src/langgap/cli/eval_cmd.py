@@ -122,6 +122,7 @@ def add_stepping_option(parser) -> None:
 
 def run(args) -> int:
     from langgap.engine.evaluate import evaluate
+    from langgap.engine.scheduler import RunStopped
     from langgap.engine.spec import RunSpec
 
     if args.extend and not args.resume:
@@ -149,11 +150,16 @@ def run(args) -> int:
         share_rollouts=args.share_rollouts,
     )
     print_switch_note(spec.catalog, spec.tasks, spec.conditions, spec.style)
-    summary = evaluate(spec, args.run, options, resume=args.resume, extend=args.extend)
+    try:
+        summary = evaluate(spec, args.run, options, resume=args.resume, extend=args.extend)
+    except RunStopped as exc:
+        raise RunStopped(f"{exc}; {check_hint(spec)}") from None
     print(
         f"run {summary.run}: {summary.planned} planned, {summary.skipped} already stored, {summary.ran} run "
         f"({summary.successes} successes, {summary.gaps} gaps)"
     )
+    if summary.policy_errors or summary.gaps:
+        print(f"policy errors: {summary.policy_errors}, gaps: {summary.gaps}; {check_hint(spec)}")
     if summary.rollouts:
         print(f"shared rollouts: {summary.shared} episodes in {summary.rollouts} rollouts")
     if summary.policy_server:
@@ -171,6 +177,14 @@ def run(args) -> int:
 
         print(diagnosis_text([summary.run]))
     return 0 if summary.complete else EXIT_GAPS
+
+
+def check_hint(spec) -> str:
+    """Where to look when a run's policy failed: `langgap check-policy` for the run's policy, catalog and tasks."""
+    from langgap.cli.check_policy_cmd import command_line
+
+    command = command_line(spec.policy, spec.policy_args, spec.catalog, spec.selection)
+    return f"check the policy in a minute with {command}"
 
 
 def print_switch_note(catalog_name: str, task_ids, conditions: tuple[str, ...], style: str = "libero") -> None:

@@ -9,6 +9,7 @@ import sys
 
 from langgap.cli import (
     bddl_cmd,
+    check_policy_cmd,
     collect_cmd,
     doctor_cmd,
     eval_cmd,
@@ -28,6 +29,7 @@ from langgap.errors import LangGapError
 VERBS = (
     tasks_cmd,
     eval_cmd,
+    check_policy_cmd,
     serve_cmd,
     report_cmd,
     validate_cmd,

@@ -17,7 +17,7 @@ from langgap.engine.pools import WorkerPool, make_pool
 from langgap.engine.runner import RunnerSetup
 from langgap.engine.sharing import SharedRollout, policy_spec, share_rollouts
 from langgap.engine.spec import PLAN_FIELDS, ExecutionOptions, RunSpec, SpecError
-from langgap.records import EpisodeRecord, Status
+from langgap.records import EpisodeRecord, Outcome, Status
 from langgap.store import RunStore
 from langgap.version import code_version
 
@@ -32,6 +32,7 @@ class RunSummary:
     ran: int = 0
     successes: int = 0
     gaps: int = 0
+    policy_errors: int = 0  # episodes that ended on a malformed action (outcome `policy_error`)
     policy_server: dict = field(default_factory=dict)  # a shared policy's counters (Ray): calls, queries
     filmed: int = 0  # episodes with a clip among those `--video` chose
     shared: int = 0  # episodes run inside shared rollouts (`--share-rollouts`)
@@ -234,4 +235,5 @@ def _counted(records: Iterable[EpisodeRecord], summary: RunSummary) -> Iterator[
         summary.ran += 1
         summary.successes += record.success
         summary.gaps += record.status == Status.GAP
+        summary.policy_errors += record.outcome == Outcome.POLICY_ERROR
         yield record

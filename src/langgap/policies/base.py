@@ -30,6 +30,10 @@ from langgap.sim.env import ACTION_DIM, CAMERAS, Observation
 from langgap.sim.privileged_schema import PrivilegedState
 
 
+class PolicySpecError(ValueError):
+    """A `PolicySpec` declares what LIBERO or the engine cannot give: an unknown camera, replan outside 1..chunk."""
+
+
 @dataclass(frozen=True)
 class PolicySpec:
     """What a policy observes and how it chunks actions.
@@ -41,6 +45,10 @@ class PolicySpec:
     told no instruction, no condition and, of the answer, only the source task's goal (`for_policy`),
     so every task of one scene that shares an init state, seed and source gets the same actions from
     it, and those tasks may share one rollout (`--share-rollouts`).
+    `stochastic=True` declares a policy whose actions may differ between two runs of the same episode (same
+    init state and seed), e.g. one that samples without reseeding per episode; by default a policy is taken
+    to act the same given the episode's seed (`langgap check-policy` checks it), as re-runs and the replays
+    that film `--video` clips assume.
     """
 
     cameras: tuple[str, ...] = ()
@@ -50,13 +58,14 @@ class PolicySpec:
     chunk: int = 1
     replan: int = 1
     reads_instruction: bool = True
+    stochastic: bool = False
 
     def __post_init__(self) -> None:
         unknown = [c for c in self.cameras if c not in CAMERAS]
         if unknown:
-            raise ValueError(f"unknown camera(s) {unknown}; LIBERO has {', '.join(CAMERAS)}")
+            raise PolicySpecError(f"unknown camera(s) {unknown}; LIBERO has {', '.join(CAMERAS)}")
         if not 1 <= self.replan <= self.chunk:
-            raise ValueError(f"need 1 <= replan <= chunk, got replan={self.replan}, chunk={self.chunk}")
+            raise PolicySpecError(f"need 1 <= replan <= chunk, got replan={self.replan}, chunk={self.chunk}")
 
 
 @dataclass(frozen=True)
@@ -143,7 +152,8 @@ def simulator_state(observation: Observation, policy: str) -> PrivilegedState:
 
 @runtime_checkable
 class Policy(Protocol):
-    """Implement `spec`, `reset` and `act`; `close` and `config` are optional (see `policy_config`)."""
+    """Implement `spec`, `reset` and `act`; `close` and `config` are optional (see `policy_config`). A `close`
+    must be safe to call twice (the second call does nothing), as a file's is."""
 
     spec: PolicySpec
 
@@ -153,7 +163,11 @@ class Policy(Protocol):
 
 
 class PolicyOutputError(ValueError):
-    """A policy returned something that is not a finite (7,) or (k, 7) action array."""
+    """A policy returned something that is not a finite (7,) or (k, 7) action array; `remedy` says how to fix it."""
+
+    def __init__(self, message: str, remedy: str = ""):
+        super().__init__(message)
+        self.remedy = remedy
 
 
 def as_action_chunk(output, spec: PolicySpec) -> np.ndarray:
@@ -166,28 +180,41 @@ def as_action_chunk(output, spec: PolicySpec) -> np.ndarray:
     try:
         actions = np.asarray(output, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise PolicyOutputError(f"policy returned a non-numeric action: {exc}") from None
+        raise PolicyOutputError(
+            f"policy returned a non-numeric action: {exc}", "return a NumPy float array (or nested lists of numbers)"
+        ) from None
     if actions.ndim == 1:
         actions = actions[None, :]
     if actions.ndim != 2 or actions.shape[1] != ACTION_DIM or actions.shape[0] < 1:
         raise PolicyOutputError(
-            f"policy returned shape {tuple(np.shape(output))}; expected ({ACTION_DIM},) or (k, {ACTION_DIM})"
+            f"policy returned shape {tuple(np.shape(output))}; expected ({ACTION_DIM},) or (k, {ACTION_DIM})",
+            f"return one action of {ACTION_DIM} numbers (3 position deltas, 3 rotation deltas, the gripper) "
+            f"as ({ACTION_DIM},), or a chunk of them as (k, {ACTION_DIM})",
         )
     if actions.shape[0] > spec.chunk:
         raise PolicyOutputError(
-            f"policy returned a chunk of {actions.shape[0]} actions; its spec declares chunk={spec.chunk}"
+            f"policy returned a chunk of {actions.shape[0]} actions; its spec declares chunk={spec.chunk}",
+            f"return at most {spec.chunk} actions per call, or declare PolicySpec(chunk={actions.shape[0]}) "
+            "with the replan you mean",
         )
     if not np.all(np.isfinite(actions)):
-        raise PolicyOutputError("policy returned a non-finite action (NaN or inf)")
+        raise PolicyOutputError(
+            "policy returned a non-finite action (NaN or inf)",
+            "find where the model makes NaN or inf (a division by a zero std when unnormalising, diverged weights, "
+            "an uninitialised buffer)",
+        )
     return actions
+
+
+# Spec fields that say how the engine may run a policy (share rollouts, replay an episode), not how it acts: a
+# truthful declaration changes no action, so they are left out of `policy_config` and stored runs keep their hash.
+ENGINE_DECLARATIONS = ("reads_instruction", "stochastic")
 
 
 def policy_config(policy) -> dict:
     """A JSON-able description of a policy's configuration (its `config()` if it has one, plus its spec)."""
     config = policy.config() if hasattr(policy, "config") else {}
-    # `reads_instruction` says how the engine may run a policy, not how it acts (a truthful declaration
-    # changes no action): left out, so stored runs keep their config hash.
-    spec = {k: v for k, v in asdict(policy.spec).items() if k != "reads_instruction"}
+    spec = {k: v for k, v in asdict(policy.spec).items() if k not in ENGINE_DECLARATIONS}
     return {"class": f"{type(policy).__module__}.{type(policy).__qualname__}", "spec": spec, **config}
 
 

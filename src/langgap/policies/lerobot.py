@@ -139,7 +139,7 @@ class LeRobotPolicy:
         self._context = context
         self._instruction = context.instruction
 
-    def observation_batch(self, observation: Observation) -> dict:
+    def model_inputs(self, observation: Observation) -> dict:
         """The batch LeRobot's LIBERO pipeline hands the policy's preprocessor (after `LiberoProcessorStep`)."""
         batch = {IMAGE_PREFIX + CAMERA_KEYS[c]: image_tensor(observation.images[c]) for c in self.cameras}
         batch[STATE_KEY] = self._torch.from_numpy(np.asarray(observation.state, dtype=np.float32)).unsqueeze(0)
@@ -153,7 +153,7 @@ class LeRobotPolicy:
         if instruction != self._instruction:
             self.model.reset()
             self._instruction = instruction
-        batch = self.preprocessor(self.observation_batch(observation))
+        batch = self.preprocessor(self.model_inputs(observation))
         with self._torch.inference_mode():
             action = self.model.select_action(batch)
         action = self.postprocessor(action)

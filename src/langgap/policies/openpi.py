@@ -194,7 +194,7 @@ class OpenpiPolicy:
         the chunk this client declares for it)."""
         if self._context is None:
             raise PolicyServerError("openpi: act() before reset()")
-        reply = self._connection.call(self._request(observation))
+        reply = self._connection.call(self.model_inputs(observation))
         try:
             actions = protocol.actions_from_reply(reply)
         except protocol.ProtocolError as exc:
@@ -210,7 +210,9 @@ class OpenpiPolicy:
     def close(self) -> None:
         self._connection.close()
 
-    def _request(self, observation: Observation) -> dict:
+    def model_inputs(self, observation: Observation) -> dict:
+        """The request sent to the server for `observation` (after `reset`): the openpi LIBERO keys, and
+        LangGap's extension keys for a LangGap server."""
         # The prompt is the instruction in force at this step: it can change mid-episode.
         prompt = current_instruction(observation, self._context)
         request: dict = {protocol.STATE_KEY: observation.state, protocol.PROMPT_KEY: prompt}

@@ -47,6 +47,9 @@ CAMERAS = ("agentview", "robot0_eye_in_hand")
 SETTLE_STEPS = 10
 SETTLE_ACTION = np.array([0, 0, 0, 0, 0, 0, -1], dtype=np.float64)
 ACTION_DIM = 7
+# Every action component's range: robosuite's OSC_POSE controller clips its input to [-1, 1] (input_max 1)
+# and the gripper is -1 open, +1 closed, so a larger value moves the robot no further than the limit.
+ACTION_LIMIT = 1.0
 # The robosuite observable whose sampling marks the substep at which robosuite samples every observable
 # (its cameras too): the end-effector position, part of the state LangGap sends.
 _SAMPLED_WITH = "robot0_eef_pos"
