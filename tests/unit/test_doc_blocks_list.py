@@ -3,7 +3,10 @@ reason and still exists (a stale entry would hide nothing, and a renamed block w
 
 from __future__ import annotations
 
+import re
+
 from tests.support.doc_blocks import NOT_RUN, PAGES, RUN_LANGUAGES, SLOW_PAGES, blocks, runnable
+from tests.support.harness import REPO
 
 
 def test_every_fence_names_its_language():
@@ -33,3 +36,31 @@ def test_every_skipped_block_exists_and_says_why():
 def test_the_readme_quick_start_is_run():
     commands = "".join(b.code for b in runnable("README.md"))
     assert "langgap eval --policy oracle" in commands and "langgap report" in commands
+
+
+def test_no_command_hides_in_an_indented_block():
+    """An indented code block is a block the docs' tests do not see: commands go in fenced ones."""
+    indented = []
+    for page in PAGES:
+        fenced = {line for b in blocks(page) for line in range(b.line, b.line + b.code.count("\n") + 2)}
+        for number, line in enumerate((REPO / page).read_text().splitlines(), start=1):
+            if number not in fenced and line.startswith(("    langgap ", "    ./", "    .venv/")):
+                indented.append(f"{page}:{number}")
+    assert indented == []
+
+
+def test_tables_hold_no_escaped_pipe_in_code_and_synopses_fit_the_page():
+    """Inside a code span, Markdown keeps `\\|` literally; a usage line past 100 characters scrolls sideways."""
+    escaped = [
+        f"{page}:{n}"
+        for page in PAGES
+        for n, line in enumerate((REPO / page).read_text().splitlines(), 1)
+        if line.startswith("|") and re.search(r"`[^`]*\\\|[^`]*`", line)
+    ]
+    assert escaped == []
+    synopses = [
+        b for page in PAGES for b in blocks(page) if b.language == "text" and b.first_line.startswith("langgap ")
+    ]
+    assert synopses
+    wide = [b.where for b in synopses if max(map(len, b.code.splitlines())) > 100]
+    assert wide == []
