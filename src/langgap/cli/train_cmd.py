@@ -23,7 +23,7 @@ def add_parser(subparsers) -> None:
     bc.add_argument("--seed", type=int, help="training seed (default: 0)")
     bc.add_argument("--threads", type=int, help="torch CPU threads (default: 2)")
     bc.add_argument("--loss", choices=("l1", "mse"), help="regression loss on the action chunk (default: l1)")
-    bc.set_defaults(handler=run_small_bc, smoke=("steps",))
+    bc.set_defaults(handler=run_small_bc, smoke=("steps", "collected_tasks"))
 
     lr = kinds.add_parser(
         "lerobot", help="launch lerobot-train (PEFT LoRA on pi0.5) for one of the paper's experiments"
