@@ -58,11 +58,11 @@ def _shrink_selection(args) -> str | None:
 
 def _shrink_to_collected(args) -> str | None:
     """Narrow a training selection to the tasks its collections attempted; the note's text, or None."""
+    if args.tasks is None or not args.data:
+        return None
     from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
     from langgap.demos.compact import read_manifest
 
-    if args.tasks is None or not args.data:
-        return None
     selected = [t.id for t in load_catalog(args.catalog or DEFAULT_CATALOG).select(args.tasks)]
     attempted = {task for root in args.data for task in read_manifest(root).get("tasks", {})}
     kept = [t for t in selected if t in attempted]
