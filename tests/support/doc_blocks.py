@@ -63,8 +63,9 @@ RUN_BY: dict[tuple[str, str], str] = {
     ("docs/api.md", "import collections"): "tests/test_api.py::test_the_api_page_example_runs_as_printed",
     ("docs/gymnasium.md", "import gymnasium as gym"): "tests/test_gym.py::test_docs_examples_run_as_shown",
 }
-# Pages whose blocks take minutes even shrunk: they run under -m slow, the others in CI.
-SLOW_PAGES = frozenset()
+# Pages whose blocks take minutes even shrunk, or repeat another page's (index.md and vla.md run the README's
+# quick start and own policy again): they run under -m slow, the others in CI.
+SLOW_PAGES = frozenset({"docs/index.md", "docs/vla.md", "docs/catalogs.md", "docs/training.md", "docs/results.md"})
 
 
 @dataclass(frozen=True)

@@ -57,4 +57,3 @@ def test_training_and_audits_shrink_their_own_counts(monkeypatch):
     assert args.steps == smoke.CAPS["steps"]
     args, _ = _shrunk(monkeypatch, ["tasks", "audit", "--catalog", "libero-pro", "--starts", "50"])
     assert args.starts == 1 and len(args.tasks.split(",")) == 2
-
