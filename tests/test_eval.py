@@ -471,5 +471,8 @@ def test_repeats_run_every_episode_with_more_seeds_and_reports_the_spread(short_
     result = _cli_eval(short_catalog, run, "random", "--episodes", "2", "--repeats", "2", "--tasks", "spatial/s0/open*")
     assert result.returncode == 0, result.stderr
     assert sorted((r["init_index"], r["seed"]) for r in store_rows(run)) == [(0, 0), (0, 1000), (1, 1), (1, 1001)]
+    again = _cli_eval(short_catalog, run, "random", "--episodes", "2", "--repeats", "2", "--tasks", "spatial/s0/open*",
+                      "--resume")  # fmt: skip
+    assert again.returncode == 0 and "4 planned, 4 already stored, 0 run" in again.stdout, again.stdout
     report = run_cli("report", str(run), "--no-published")
     assert "Between-seed spread" in report.stdout and "run seed 0 + init index, 2 repeats" in report.stdout

@@ -215,8 +215,10 @@ def search(
 class SearchTask(Job):
     """The work item of one task's search: the plan entries (init state, seed) the oracle failed, in order.
 
-    Each demonstration found is stored in the runner's output directory under the task's id, read back,
-    replayed on a fresh environment and kept only if it does the task at its recorded step. The search
+    Each demonstration found is stored in the runner's output directory under the task's id, read back and
+    replayed on a fresh environment; only one that does the task at its recorded step counts. One that does not
+    fails the work item with the replay's error: a search is deterministic, so that is a fault to fix (the
+    simulator or the file), never a candidate to pass over. The search
     stops at the task's first init state without one (which bounds a task no candidate does to one
     budget: its other init states would not decide it)."""
 

@@ -97,6 +97,17 @@ def test_done_keys_tell_conditions_apart(tmp_path):
         }
 
 
+def test_done_keys_tell_seeds_apart(tmp_path):
+    """Two judged episodes that differ only in their seed (`--repeats`) are two done keys, each with its seed."""
+    with RunStore.create(tmp_path / "run", {}) as store:
+        store.write(record(seed=0))
+        store.write(record(seed=1000))
+        assert store.done_keys() == {
+            EpisodeKey("spatial/s0/a", 0, 0, "given"),
+            EpisodeKey("spatial/s0/a", 0, 1000, "given"),
+        }
+
+
 def test_a_schema_1_store_opens_for_reading_and_refuses_writing_in_one_line(tmp_path):
     _schema_1_store(tmp_path / "old")
     with RunStore.open(tmp_path / "old") as store:
