@@ -6,10 +6,7 @@ Exit codes: 0 every check passed; 1 a check failed (the page says what, and how 
 
 from __future__ import annotations
 
-import shlex
-
-from langgap.catalog.catalog import DEFAULT_CATALOG
-from langgap.cli.eval_cmd import parse_key_values
+from langgap.cli.policy_options import add_policy_arg_option, parse_key_values
 from langgap.cli.tasks_cmd import add_catalog_options
 from langgap.engine.spec import DEFAULT_TIMEOUT_S, PAPER_EPISODES
 
@@ -22,7 +19,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument(
         "policy", metavar="POLICY", help="policy name (oracle, blind, noop, random, openpi, …) or module:Class"
     )
-    parser.add_argument("--policy-arg", action="append", metavar="K=V", help="policy argument (repeatable)")
+    add_policy_arg_option(parser)
     add_catalog_options(parser)
     parser.add_argument(
         "--tasks",
@@ -61,15 +58,3 @@ def run(args) -> int:
     )
     print(report.page())
     return report.exit_code
-
-
-def command_line(policy: str, policy_args: dict[str, str], catalog: str, tasks: str | None) -> str:
-    """The `langgap check-policy` command that checks `policy` for a run of `tasks` on `catalog`."""
-    words = ["langgap", "check-policy", policy]
-    for key, value in policy_args.items():
-        words += ["--policy-arg", f"{key}={value}"]
-    if catalog != DEFAULT_CATALOG:
-        words += ["--catalog", catalog]
-    if tasks is not None:
-        words += ["--tasks", tasks]
-    return shlex.join(words)

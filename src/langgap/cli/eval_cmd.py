@@ -8,6 +8,7 @@ infrastructure failures with one cause; 2 bad input or another error (nothing st
 from __future__ import annotations
 
 from langgap.cli.execution_flags import add_execution_options, add_share_rollouts_option, execution_options
+from langgap.cli.policy_options import add_policy_arg_option, check_policy_command, parse_key_values
 from langgap.cli.tasks_cmd import add_catalog_options
 from langgap.engine.filming import DEFAULT_VIDEO, VIDEO_DIR, VIDEO_HELP
 from langgap.engine.plan import CONDITION_HELP
@@ -23,23 +24,12 @@ from langgap.stack import DEFAULT_SEED_SCHEME, DEFAULT_STEPPING, SEED_SCHEMES
 EXIT_GAPS = 3
 
 
-def parse_key_values(pairs: list[str] | None, option: str) -> dict[str, str]:
-    """`k=v` strings to a dict; a malformed pair is a one-line error."""
-    out: dict[str, str] = {}
-    for pair in pairs or []:
-        key, sep, value = pair.partition("=")
-        if not sep or not key:
-            raise LangGapError(f"{option} expects key=value, got {pair!r}")
-        out[key] = value
-    return out
-
-
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser("eval", help="evaluate a policy: N episodes per task on fixed init states")
     parser.add_argument(
         "--policy", required=True, help="policy name (oracle, blind, noop, random, openpi, …) or module:Class"
     )
-    parser.add_argument("--policy-arg", action="append", metavar="K=V", help="policy argument (repeatable)")
+    add_policy_arg_option(parser)
     add_catalog_options(parser)
     parser.add_argument(
         "--tasks",
@@ -181,9 +171,7 @@ def run(args) -> int:
 
 def check_hint(spec) -> str:
     """Where to look when a run's policy failed: `langgap check-policy` for the run's policy, catalog and tasks."""
-    from langgap.cli.check_policy_cmd import command_line
-
-    command = command_line(spec.policy, spec.policy_args, spec.catalog, spec.selection)
+    command = check_policy_command(spec.policy, spec.policy_args, spec.catalog, spec.selection)
     return f"check the policy in a minute with {command}"
 
 

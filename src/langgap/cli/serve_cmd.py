@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from langgap.cli.eval_cmd import parse_key_values
+from langgap.cli.policy_options import add_policy_arg_option, parse_key_values
 
 
 def add_parser(subparsers) -> None:
@@ -10,7 +10,7 @@ def add_parser(subparsers) -> None:
         "serve", help="serve a policy over openpi's websocket protocol (for the `openpi` policy elsewhere)"
     )
     parser.add_argument("--policy", required=True, help="policy name (oracle, blind, lerobot, …) or module:Class")
-    parser.add_argument("--policy-arg", action="append", metavar="K=V", help="policy argument (repeatable)")
+    add_policy_arg_option(parser)
     parser.add_argument("--host", default="127.0.0.1", help="address to bind (default: %(default)s, this machine only)")
     parser.add_argument("--port", type=int, required=True, help="port to listen on")
     parser.set_defaults(handler=run)

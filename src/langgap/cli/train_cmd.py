@@ -89,7 +89,7 @@ def run_small_bc(args) -> int:
 
 
 def run_lerobot(args) -> int:
-    from langgap.cli.eval_cmd import parse_key_values
+    from langgap.cli.policy_options import parse_key_values
     from langgap.training.lerobot_train import launch, load_experiment, train_command
 
     experiment = load_experiment(args.config, overrides=parse_key_values(args.set, "--set"))
