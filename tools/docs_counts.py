@@ -19,15 +19,17 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
+import os
 import re
 import shlex
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 PAGES = ("README.md", *sorted(p.relative_to(REPO).as_posix() for p in (REPO / "docs").glob("*.md")))
-REGION = re.compile(r"<!-- generated: (?P<what>[^>]*?) -->(?P<body>.*?)<!-- /generated -->", re.S)
+# A marker quoted in a code span (as the development page quotes it) is text, not a region.
+REGION = re.compile(r"(?<!`)<!-- generated: (?P<what>[^>]*?) -->(?P<body>.*?)<!-- /generated -->", re.S)
 READ_ONLY = ("gate", "audit", "list", "show")
 
 
@@ -47,6 +49,19 @@ def verdicts_phrase(catalog_name: str) -> str:
     return f"{total.tasks:,} tasks: {', '.join(parts)}"
 
 
+@contextlib.contextmanager
+def _unshrunk() -> Iterator[None]:
+    """The real figures, even where `LANGGAP_SMOKE` is set (the docs' tests run this tool as a page shows it)."""
+    from langgap.cli.smoke import ENV
+
+    saved = os.environ.pop(ENV, None)
+    try:
+        yield
+    finally:
+        if saved is not None:
+            os.environ[ENV] = saved
+
+
 def command_output(argv: list[str]) -> str:
     """What `langgap tasks …` prints, run in this process."""
     from langgap.cli.main import main
@@ -56,7 +71,7 @@ def command_output(argv: list[str]) -> str:
     if argv[2] == "audit" and ({"--starts", "--record"} & set(argv)):
         raise CountsError(f"an audit that simulates or records: {shlex.join(argv)}")
     out = io.StringIO()
-    with contextlib.redirect_stdout(out):
+    with contextlib.redirect_stdout(out), _unshrunk():
         code = main(argv[1:])
     if code:
         raise CountsError(f"{shlex.join(argv)} exited {code}")
