@@ -116,7 +116,7 @@ def test_libero_pro_variants_start_from_the_init_states_they_ship(tmp_path):
     ids = {"spatial/s0/black-bowl-1-on-plate", "spatial/s0/pro-task", "spatial/s0/pro-lan"}
     path = short_copy(tmp_path, "libero-pro", ids)
     from langgap.catalog.catalog import load_catalog_file
-    from langgap.start_audit import starts_findings
+    from langgap.validity.starts import starts_findings
 
     catalog = load_catalog_file(path)
     found = starts_findings(catalog, [catalog.get("spatial/s0/pro-lan")], inits=1)
@@ -182,7 +182,7 @@ def test_a_variant_that_repeats_its_sources_trial_takes_its_verdict_and_is_not_r
 
     from langgap.catalog.catalog import gate_snapshot, load_catalog, registry_path
     from langgap.catalog.files import task_bddl_text
-    from langgap.catalog.identity import same_trial
+    from langgap.generation.identity import same_trial
 
     source = load_catalog("langgap99").get("spatial/s0/black-bowl-1-on-plate")
     pro = load_catalog("libero-pro")

@@ -9,20 +9,20 @@ import yaml
 
 from langgap.bddl import parse_bddl, strip_task_sections
 from langgap.catalog import affordances, files, phrasing
-from langgap.catalog.candidates import candidate_goals
 from langgap.catalog.catalog import load_catalog, load_catalog_file
-from langgap.catalog.generate import (
+from langgap.catalog.naming import task_id
+from langgap.catalog.task import GateResult
+from langgap.catalog.verdicts import record_verdicts
+from langgap.cli.main import main
+from langgap.generation.candidates import candidate_goals
+from langgap.generation.generate import (
     FULL_CATALOG,
     FULL_DESCRIPTION,
     default_registry_path,
     generate_tasks,
     write_registry,
 )
-from langgap.catalog.naming import task_id
-from langgap.catalog.registry_writer import registry_data, registry_text
-from langgap.catalog.task import GateResult
-from langgap.catalog.verdicts import record_verdicts
-from langgap.cli.main import main
+from langgap.generation.registry_writer import registry_data, registry_text
 
 # The generated task space, measured: extended tasks per suite and dimension.
 EXPECTED_COUNTS = {

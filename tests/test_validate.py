@@ -10,10 +10,10 @@ import yaml
 from langgap.bddl import Predicate
 from langgap.catalog.catalog import load_catalog_file
 from langgap.engine.spec import ExecutionOptions
-from langgap.gate.rows import goals_exclude
-from langgap.gate.validation import validate
 from langgap.goals import conjunction
 from langgap.stack import physics_stack
+from langgap.validity.rows import goals_exclude
+from langgap.validity.validation import validate
 from langgap.version import code_version
 from tests.support.harness import REPO, run_cli
 

@@ -11,7 +11,9 @@ import pytest
 
 from langgap import stack
 from langgap.bddl import rewrite_task_sections
-from langgap.catalog.audit import (
+from langgap.catalog.packages import states_from_bytes
+from langgap.errors import CatalogError
+from langgap.validity.audit import (
     Finding,
     duplicate_findings,
     goal_findings,
@@ -20,8 +22,6 @@ from langgap.catalog.audit import (
     record_audit,
     scene_findings,
 )
-from langgap.catalog.packages import states_from_bytes
-from langgap.errors import CatalogError
 
 ORIGINAL = stack.bddl_path("libero_spatial", "pick_up_the_black_bowl_on_the_stove_and_place_it_on_the_plate")
 
@@ -182,7 +182,7 @@ def test_pruned_init_files_are_read_as_arrays_and_nothing_else():
 
 
 def test_the_init_states_a_start_finding_names_are_shown_as_ranges():
-    from langgap.start_audit import _inits_text
+    from langgap.validity.starts import _inits_text
 
     assert _inits_text(list(range(50)), 50) == "init state(s) 0–49 (50 of 50)"
     assert _inits_text([0, 1, 2, 3, 7], 10) == "init state(s) 0–3, 7 (5 of 10)"

@@ -8,11 +8,21 @@ import math
 import numpy as np
 import pytest
 
-from langgap import proofs
 from langgap.bddl import Predicate
 from langgap.catalog.catalog import load_catalog
 from langgap.goals import parse_goal
-from langgap.proofs import MAX_STEP_M, PANDA_REACH_M, Body, Facts, Proof, Site, out_of_reach, prove, too_few_steps
+from langgap.validity import proofs
+from langgap.validity.proofs import (
+    MAX_STEP_M,
+    PANDA_REACH_M,
+    Body,
+    Facts,
+    Proof,
+    Site,
+    out_of_reach,
+    prove,
+    too_few_steps,
+)
 
 SHOULDER = (0.0, 0.0, 1.0)
 HAND = 0.13

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from langgap.search import EXPLORE, PRESS_DEPTH_M, TILT_DEG, TURN_DEG, Candidate, Sampler
+from langgap.validity.search import EXPLORE, PRESS_DEPTH_M, TILT_DEG, TURN_DEG, Candidate, Sampler
 
 
 def _press(candidate) -> tuple[float, float, float]:

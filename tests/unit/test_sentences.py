@@ -8,8 +8,8 @@ import pytest
 
 from langgap.catalog import files
 from langgap.catalog.catalog import load_catalog
-from langgap.catalog.sentences import TEMPLATES, sentence_findings, template_counts
 from langgap.goals import And, Atom, Not, Or
+from langgap.validity.sentences import TEMPLATES, sentence_findings, template_counts
 
 NOT_WHERE = "spatial/s0/black-bowl-1-on-plate~not-where"
 NOT_WHAT = "spatial/s5/black-bowl-1-on-plate~not-what"

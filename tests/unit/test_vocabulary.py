@@ -8,9 +8,9 @@ import inspect
 import pytest
 
 import langgap.vocabulary
-from langgap.catalog.coverage import HEADER
 from langgap.catalog.task import GateResult
 from langgap.cli.main import main
+from langgap.validity.coverage import HEADER
 from langgap.vocabulary import CEILING_TARGET, FEASIBLE_RATE, SWITCH_RATE, Verdict
 
 # A verdict of each word, the oracle at 50/50 where the word does not rest on its rate.

@@ -14,10 +14,10 @@ from langgap.stack import installed_differences
 from langgap.vocabulary import CEILING_TARGET, Verdict
 
 KINDS = ("original", "extended")
-# The paper's four dimensions, then the four of the `langgap-beyond` catalog (`catalog/beyond.py`).
+# The paper's four dimensions, then the four of the `langgap-beyond` catalog (`generation/beyond.py`).
 PAPER_DIMENSIONS = ("change_object", "change_target", "spatial_description", "drawer_action")
 BEYOND_DIMENSIONS = ("ordering", "negation", "paraphrase", "attribute_reference")
-# The perturbations of the field's benchmarks read from their packages (`catalog/external.py`): another goal on
+# The perturbations of the field's benchmarks read from their packages (`generation/external.py`): another goal on
 # the same scene (LIBERO-PRO's *task*), and a reworded instruction (LIBERO-PRO's *lan*, LIBERO-Plus's language).
 EXTERNAL_DIMENSIONS = ("task", "language")
 DIMENSIONS = ("original", *PAPER_DIMENSIONS, *BEYOND_DIMENSIONS, *EXTERNAL_DIMENSIONS)
@@ -86,7 +86,7 @@ class GateResult:
     What a verdict shows: a task is doable when a demonstration did it — the oracle, at the gate's
     rate, or `demonstration`, a stored replayable episode (a path relative to the registry's directory)
     that does a task the oracle fails; it is impossible only by `proof`, an argument that holds for
-    every policy, printed with its assumptions (`langgap.proofs`). A task the oracle fails without
+    every policy, printed with its assumptions (`langgap.validity.proofs`). A task the oracle fails without
     either is *unproven*: nobody has shown it doable or impossible. A task whose starts do not come to
     rest is *unsettled*, whatever the oracle did (`verdict`: the word, `langgap.vocabulary.Verdict`).
     """

@@ -8,8 +8,11 @@ from collections import Counter
 from collections.abc import Callable
 
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
-from langgap.catalog.external import EXTERNAL
-from langgap.catalog.generate import (
+from langgap.catalog.task import DIMENSIONS, Task
+from langgap.cli.validate_cmd import add_gate_options, run_gate
+from langgap.errors import LangGapError
+from langgap.generation.external import EXTERNAL
+from langgap.generation.generate import (
     BEYOND_CATALOG,
     FULL_CATALOG,
     GENERATED,
@@ -17,9 +20,6 @@ from langgap.catalog.generate import (
     generate_tasks,
     write_registry,
 )
-from langgap.catalog.task import DIMENSIONS, Task
-from langgap.cli.validate_cmd import add_gate_options, run_gate
-from langgap.errors import LangGapError
 from langgap.stack import SUITES
 
 
@@ -111,7 +111,7 @@ def run(args) -> int:
     if args.catalog in EXTERNAL:
         return _run_external(args)
     if args.catalog == BEYOND_CATALOG:
-        from langgap.catalog.beyond import generate_beyond
+        from langgap.generation.beyond import generate_beyond
 
         tasks = generate_beyond(args.suites)
     else:
@@ -120,8 +120,8 @@ def run(args) -> int:
     print("\n".join(summary_lines(tasks)))
     print(f"wrote {path}")
     if args.gate_inits:
-        from langgap.gate.recording import record
-        from langgap.gate.text import gate_summary
+        from langgap.validity.recording import record
+        from langgap.validity.text import gate_summary
 
         rows = run_gate(args, str(path), "all", args.gate_inits, recording=True).rows
         print(gate_summary(rows))
@@ -131,9 +131,9 @@ def run(args) -> int:
 
 def _run_external(args) -> int:
     """Read the catalog from its package, write it, run the file checks and record their findings beside it."""
-    from langgap.catalog.audit import audit_text, record_audit
     from langgap.catalog.catalog import load_catalog_file
-    from langgap.catalog.external import GENERATORS, files_about, files_findings, write_external
+    from langgap.generation.external import GENERATORS, files_about, files_findings, write_external
+    from langgap.validity.audit import audit_text, record_audit
 
     if args.gate_inits or args.suites != list(SUITES):
         raise LangGapError(

@@ -218,7 +218,7 @@ def _recorded_switch_verdicts(catalog: str, task_id: str) -> dict:
 
 
 def run_gate(args) -> int:
-    from langgap.catalog.coverage import coverage_table, gate_counts, stacks_text
+    from langgap.validity.coverage import coverage_table, gate_counts, stacks_text
 
     tasks = load_catalog(args.catalog).select(args.tasks)
     if args.condition:
@@ -243,7 +243,7 @@ def run_gate(args) -> int:
 
 
 def run_replay(args) -> int:
-    from langgap.demos.searched import replay_verdicts
+    from langgap.validity.demonstrations import replay_verdicts
 
     tasks = load_catalog(args.catalog).select(args.tasks)
     checks = []
@@ -265,10 +265,10 @@ def _switch_gate_counts(args, tasks: list[Task]) -> int:
     import dataclasses
 
     from langgap.catalog.catalog import registry_path
-    from langgap.catalog.coverage import coverage_table, gate_counts
     from langgap.catalog.switch_verdicts import read_switch_verdicts
     from langgap.engine.plan import without_switch_source
-    from langgap.gate.switch import switch_conditions
+    from langgap.validity.coverage import coverage_table, gate_counts
+    from langgap.validity.switch_gate import switch_conditions
 
     verdicts = read_switch_verdicts(registry_path(args.catalog))
     catalog = load_catalog(args.catalog)
@@ -292,10 +292,10 @@ def _switch_gate_counts(args, tasks: list[Task]) -> int:
 
 
 def run_audit(args) -> int:
-    from langgap.catalog.audit import CHECKS, audit_text, read_audit, record_audit
     from langgap.catalog.catalog import registry_path
-    from langgap.catalog.external import files_about, files_findings
     from langgap.errors import CatalogError
+    from langgap.generation.external import files_about, files_findings
+    from langgap.validity.audit import CHECKS, audit_text, read_audit, record_audit
 
     catalog = load_catalog(args.catalog)
     selected = catalog.select(args.tasks)
@@ -331,10 +331,10 @@ def run_audit(args) -> int:
 
 def _starts_check(args, catalog, tasks: list[Task], about: dict, recorded: list, ran: dict) -> list:
     """The simulator checks' findings on package tasks: run now (`--starts K`, added to `ran`), else as recorded."""
-    from langgap.catalog.audit import CHECKS
+    from langgap.validity.audit import CHECKS
 
     if args.starts:
-        from langgap.start_audit import SEED, starts_findings
+        from langgap.validity.starts import SEED, starts_findings
 
         found = starts_findings(catalog, tasks, args.starts, progress=lambda line: print(line, flush=True))
         ran["starts"] = {args.tasks: {"inits": args.starts, "seed": SEED}}
@@ -353,7 +353,7 @@ def _sentence_check(tasks: list[Task]) -> tuple[list, dict]:
     """The sentence check over `tasks` (LangGap's own sentences): its findings, and how many tasks each
     template phrased (printed with what each template's sentence allows and its goal checks)."""
     from langgap.catalog import files
-    from langgap.catalog.sentences import sentence_findings, template_counts, templates_text
+    from langgap.validity.sentences import sentence_findings, template_counts, templates_text
 
     counts = template_counts(tasks, files.scene_problem)
     print(f"sentence: {len(tasks)} task(s) by template")
@@ -385,7 +385,7 @@ def _gate_lines(gate) -> list[str]:
 
 def _recorded_findings(catalog: str, task_id: str) -> list[dict]:
     """What the recorded audit found in one task (empty without an audit)."""
-    from langgap.catalog.audit import read_audit
     from langgap.catalog.catalog import registry_path
+    from langgap.validity.audit import read_audit
 
     return [{"name": f.name, "detail": f.detail} for f in read_audit(registry_path(catalog))[1] if f.task == task_id]

@@ -11,8 +11,8 @@ from langgap.cli.eval_cmd import add_stepping_option, print_switch_note
 from langgap.cli.execution_flags import add_execution_options, add_share_rollouts_option, execution_options
 from langgap.cli.tasks_cmd import add_catalog_option
 from langgap.errors import LangGapError
-from langgap.gate.rows import FULL_INITS
-from langgap.search import BUDGET
+from langgap.validity.rows import FULL_INITS
+from langgap.validity.search import BUDGET
 from langgap.vocabulary import FEASIBLE_RATE, SWITCH_RATE, Verdict
 
 DEFAULT_POLICY = "oracle"
@@ -100,8 +100,8 @@ def run_gate(
         raise LangGapError(f"--search-budget varies the oracle's plan; --policy {policy} has none to vary")
     if budget is None:
         budget = BUDGET if policy == "oracle" else 0
-    from langgap.gate.recording import demonstrations_dir
-    from langgap.gate.validation import validate
+    from langgap.validity.recording import demonstrations_dir
+    from langgap.validity.validation import validate
 
     return validate(
         catalog,
@@ -119,8 +119,8 @@ def run_gate(
 
 
 def run(args) -> int:
-    from langgap.gate.recording import prove_rejected, record
-    from langgap.gate.text import table_text
+    from langgap.validity.recording import prove_rejected, record
+    from langgap.validity.text import table_text
 
     if args.claims_only:
         return _claims_only(args)
@@ -158,10 +158,10 @@ def run(args) -> int:
 
 
 def _switch_gate(args) -> int:
-    """The switch gate (`langgap.gate.switch`): the oracle under each `switch:K`; its flags that vary or add to
+    """The switch gate (`langgap.validity.switch_gate`): the oracle under each `switch:K`; its flags that vary or add to
     the plain gate's episodes are refused."""
     from langgap.catalog.catalog import load_catalog
-    from langgap.gate.switch import record_switch, switch_conditions, switch_table_text, validate_switch
+    from langgap.validity.switch_gate import record_switch, switch_conditions, switch_table_text, validate_switch
 
     plain_only = {
         "--blind": args.blind,
@@ -200,9 +200,9 @@ def _switch_gate(args) -> int:
 def _claims_only(args) -> int:
     """The claims about starts alone; the flags of a gate that runs a policy are refused."""
     from langgap.catalog.catalog import load_catalog
-    from langgap.gate.claims import start_claims
-    from langgap.gate.probes import scene_starts
-    from langgap.gate.validation import Validation
+    from langgap.validity.claims import start_claims
+    from langgap.validity.probes import scene_starts
+    from langgap.validity.validation import Validation
 
     policy_flags = {
         "--policy": args.policy is not None,
@@ -229,7 +229,7 @@ def _claims_only(args) -> int:
 
 def _print_claims(found, out: str | None) -> None:
     """Print the claims; with `out`, write the whole validation there as JSON."""
-    from langgap.gate.text import claims_text, report
+    from langgap.validity.text import claims_text, report
 
     print(claims_text(found.claims))
     if out:

@@ -1,4 +1,4 @@
-"""Which way the oracle opens a drawer: a choice a search over demonstrations varies (`langgap.search`)."""
+"""Which way the oracle opens a drawer: a choice a search over demonstrations varies (`langgap.validity.search`)."""
 
 from __future__ import annotations
 

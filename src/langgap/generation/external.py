@@ -24,7 +24,15 @@ import numpy as np
 from langgap import stack
 from langgap.bddl import parse_bddl
 from langgap.catalog import files, packages
-from langgap.catalog.audit import (
+from langgap.catalog.catalog import Catalog
+from langgap.catalog.naming import SUITE_SHORT
+from langgap.catalog.task import Origin, Task
+from langgap.errors import BddlError, CatalogError
+from langgap.generation.generate import source_tasks
+from langgap.generation.identity import original_in, same_trial
+from langgap.generation.registry_writer import registry_text
+from langgap.goals import conjunction
+from langgap.validity.audit import (
     Finding,
     duplicate_findings,
     goal_findings,
@@ -32,14 +40,6 @@ from langgap.catalog.audit import (
     instruction_findings,
     scene_findings,
 )
-from langgap.catalog.catalog import Catalog
-from langgap.catalog.generate import source_tasks
-from langgap.catalog.identity import original_in, same_trial
-from langgap.catalog.naming import SUITE_SHORT
-from langgap.catalog.registry_writer import registry_text
-from langgap.catalog.task import Origin, Task
-from langgap.errors import BddlError, CatalogError
-from langgap.goals import conjunction
 
 PRO_CATALOG = "libero-pro"
 PLUS_CATALOG = "libero-plus-language"

@@ -6,7 +6,7 @@ affords (`candidates`) becomes a task on the source's scene and init states, wit
 `naming`, both instruction styles from `phrasing`, and a dimension relative to the source. A
 candidate that is one of the paper's tasks keeps the paper's id, strings, dimension and split.
 
-Physical feasibility is not decided here: the feasibility gate (`langgap.gate`) runs the scripted
+Physical feasibility is not decided here: the feasibility gate (`langgap.validity`) runs the scripted
 oracle on the written catalog and records its verdicts beside the registry (`catalog/verdicts.py`).
 """
 
@@ -19,12 +19,12 @@ from pathlib import Path
 
 from langgap.bddl import BddlProblem, Predicate
 from langgap.catalog import files, phrasing
-from langgap.catalog.candidates import candidate_goals, dimension, obj_of_interest
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
 from langgap.catalog.naming import SUITE_SHORT, task_id
-from langgap.catalog.registry_writer import registry_text
 from langgap.catalog.task import DIMENSIONS, INSTRUCTION_STYLES, Task
 from langgap.errors import CatalogError
+from langgap.generation.candidates import candidate_goals, dimension, obj_of_interest
+from langgap.generation.registry_writer import registry_text
 from langgap.goals import conjunction
 from langgap.stack import SUITES
 

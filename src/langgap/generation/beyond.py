@@ -26,12 +26,13 @@ from collections.abc import Iterable
 from dataclasses import replace
 
 from langgap.bddl import BddlProblem, Predicate
-from langgap.catalog import affordances, files, rewording
-from langgap.catalog.candidates import obj_of_interest
-from langgap.catalog.generate import BEYOND_CATALOG, source_tasks
-from langgap.catalog.identity import original_in, same_trial
+from langgap.catalog import affordances, files
 from langgap.catalog.naming import SUITE_SHORT, goal_slug
 from langgap.catalog.task import BEYOND_DIMENSIONS, INSTRUCTION_STYLES, Task
+from langgap.generation import rewording
+from langgap.generation.candidates import obj_of_interest
+from langgap.generation.generate import BEYOND_CATALOG, source_tasks
+from langgap.generation.identity import original_in, same_trial
 from langgap.goals import And, Atom, Goal, Not, Or, Then, atoms, plain_atoms
 from langgap.stack import SUITES
 

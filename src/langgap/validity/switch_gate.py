@@ -22,11 +22,11 @@ from langgap.engine.evaluate import evaluate
 from langgap.engine.plan import switch_step
 from langgap.engine.spec import ExecutionOptions, RunSpec
 from langgap.errors import LangGapError
-from langgap.gate.recording import provenance
-from langgap.gate.rows import gate_result
 from langgap.records import EpisodeRecord
 from langgap.stack import DEFAULT_STEPPING
 from langgap.store import RunStore
+from langgap.validity.recording import provenance
+from langgap.validity.rows import gate_result
 from langgap.vocabulary import SWITCH_RATE, Verdict
 
 

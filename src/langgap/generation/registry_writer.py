@@ -25,6 +25,9 @@ _FULL_HEADER = """\
 # beside this file in full.gate.json; tasks the gate rejected stay listed here, and the default
 # selection leaves them out.
 """
+# The header names the generator where it stood when the registry was written (langgap/catalog/, now
+# langgap/generation/): the registry's bytes are its catalog hash, which every run stored on langgap-beyond
+# carries, so the text stays as written until the tasks themselves change.
 _BEYOND_HEADER = """\
 # LangGap beyond the paper's four dimensions: LIBERO's 40 originals, and on each one's scene and init
 # states tasks that ask for an order ("first A, then B"), negate its object or destination ("anywhere

@@ -15,9 +15,9 @@ from collections.abc import Callable
 
 from langgap.bddl import strip_sections
 from langgap.catalog import files
-from langgap.catalog.audit import Finding
 from langgap.catalog.catalog import Catalog
 from langgap.catalog.task import Task
+from langgap.validity.audit import Finding
 
 SEED = 0
 

@@ -14,9 +14,9 @@ from dataclasses import dataclass
 
 from langgap.bddl import BddlProblem, Predicate
 from langgap.catalog import affordances
-from langgap.catalog.audit import Finding
 from langgap.catalog.task import Task
 from langgap.goals import And, Atom, Not, Or, Then, plain_atoms
+from langgap.validity.audit import Finding
 
 
 @dataclass(frozen=True)

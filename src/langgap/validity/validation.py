@@ -4,14 +4,14 @@
 ordinary evaluation harness, then checks per task:
 
 * success rate — below `FEASIBLE_RATE` the task is rejected (unproven: the oracle does not do it; only
-  a proof from `langgap.proofs`, recorded with `--record`, makes it infeasible);
+  a proof from `langgap.validity.proofs`, recorded with `--record`, makes it infeasible);
 * the goal is false at t0 (after settling) in every episode;
 * for an extended task whose goal excludes its source's goal (the same object placed elsewhere), the
   source goal is false at the end of every successful episode;
 * the environment builds and its scene settles (no infrastructure gap; objects at rest after the
   settle steps, on the first init states of each scene).
 
-Then the benchmark's own claims, over every validated init state (`langgap.gate.claims`): the tasks of
+Then the benchmark's own claims, over every validated init state (`langgap.validity.claims`): the tasks of
 a scene start from the identical state (equal t0 hashes per init state), no scene task's goal holds
 at t0, and — with `blind=True`, which also runs the `blind` policy — the scene's original task done
 whatever the instruction says succeeds exactly where the oracle does on originals and never on an
@@ -25,18 +25,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from langgap.catalog.catalog import load_catalog
-from langgap.demos.searched import stored_demonstrations
 from langgap.engine.evaluate import evaluate
 from langgap.engine.pools import backend_session
 from langgap.engine.spec import ExecutionOptions, RunSpec
-from langgap.gate.claims import Claim, benchmark_claims
-from langgap.gate.probes import settle_drifts
-from langgap.gate.recording import beside_registry
-from langgap.gate.rows import FULL_INITS, TaskValidation, task_row
 from langgap.records import EpisodeRecord
-from langgap.search import demonstrate
 from langgap.stack import DEFAULT_STEPPING
 from langgap.store import RunStore
+from langgap.validity.claims import Claim, benchmark_claims
+from langgap.validity.demonstrations import stored_demonstrations
+from langgap.validity.probes import settle_drifts
+from langgap.validity.recording import beside_registry
+from langgap.validity.rows import FULL_INITS, TaskValidation, task_row
+from langgap.validity.search import demonstrate
 
 
 @dataclass
@@ -70,7 +70,7 @@ def validate(
     `blind`, the `blind` policy runs the same episodes too (kept in `run`-blind when `run` is given).
 
     With a `search_budget`, each init state the oracle fails gets a search for a demonstration
-    (`langgap.search`, that many candidate episodes); those found are stored under `demonstrations`
+    (`langgap.validity.search`, that many candidate episodes); those found are stored under `demonstrations`
     (a directory; the run's, or a temporary one, when None), replayed from there and counted.
 
     Every part (the episodes, the searches, the settle probes) is work for the engine's scheduler, run
