@@ -8,6 +8,7 @@ import shutil
 import subprocess
 import sys
 import textwrap
+import time
 from pathlib import Path
 
 import pytest
@@ -256,6 +257,19 @@ def test_policy_gpus_beyond_the_cluster_is_an_error_before_anything_is_stored(sh
     assert result.returncode == 2
     assert result.stderr.strip().splitlines()[-1] == "error: --policy-gpus 1: the Ray cluster has 0 GPU(s)"
     assert not run.exists()
+
+
+@pytest.mark.parametrize("address", ["127.0.0.1:1", "no-such-head.invalid:6379"])
+def test_a_ray_address_nothing_answers_on_is_one_error_line_in_seconds(address, short_catalog, tmp_path):
+    """Ray's own connect waits for minutes on a dead or misspelled head (seen: over ten); the command says so now."""
+    run = tmp_path / "run"
+    started = time.monotonic()
+    result = run_cli("eval", "--policy", "noop", "--catalog", short_catalog, "--episodes", "1", "--backend", "ray",
+                     "--ray-address", address, "--run", str(run), "--no-progress", "--quiet", timeout=120)  # fmt: skip
+    assert time.monotonic() - started < 60
+    assert result.returncode == 2
+    assert result.stderr.strip().splitlines()[-1].startswith(f"error: cannot reach the Ray cluster at {address}: ")
+    assert not (run / "episodes.sqlite").exists()
 
 
 def test_a_local_ray_instance_listens_on_loopback_only(short_catalog, tmp_path):

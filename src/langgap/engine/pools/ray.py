@@ -15,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
+import socket
 import tempfile
 from collections.abc import Iterator
 from dataclasses import dataclass, replace
@@ -123,6 +124,24 @@ def start_loopback_instance(ray, num_cpus: int, **init_options) -> None:
         ray_constants.ENABLE_RAY_CLUSTER = saved[1]
 
 
+HEAD_TIMEOUT_S = 10.0
+
+
+def check_reachable(address: str, timeout_s: float = HEAD_TIMEOUT_S) -> None:
+    """Raise `LangGapError` unless the head at `address` (`host:port`, or `ray://host:port`) accepts a connection:
+    Ray's own connect to a dead or misspelled address waits for many minutes before it gives up."""
+    if address == "auto":
+        return
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    try:
+        with socket.create_connection((host, int(port)), timeout=timeout_s):
+            return
+    except ValueError:
+        raise LangGapError(f"--ray-address takes HOST:PORT, got {address!r}") from None
+    except OSError as exc:
+        raise LangGapError(f"cannot reach the Ray cluster at {address}: {exc}") from None
+
+
 def connect(ray, options: ExecutionOptions) -> bool:
     """Connect to the cluster at `options.ray_address` (or start a local instance) unless this process is
     connected already; returns whether it connected now (and so is the one to shut Ray down)."""
@@ -131,6 +150,7 @@ def connect(ray, options: ExecutionOptions) -> bool:
     common = dict(include_dashboard=False, log_to_driver=False, configure_logging=False)
     try:
         if options.ray_address:
+            check_reachable(options.ray_address)
             ray.init(address=options.ray_address, **common)
         else:
             start_loopback_instance(ray, options.workers, **common)
