@@ -54,6 +54,11 @@ class RunnerSetup:
     seed_scheme: str = DEFAULT_SEED_SCHEME  # how a seed selects the placement (`RunSpec.seed_scheme`)
     policy_server: PolicyServerHandle | None = None  # a shared policy; None: each runner builds its own
 
+    @property
+    def output_dir(self) -> Path:
+        """Where work writes its files: `run_dir`, or the working directory when none is given."""
+        return Path(self.run_dir or ".")
+
 
 class WorkFailure(Exception):
     """A work item could not be done (infrastructure): its one-line message travels to the scheduler."""
@@ -72,8 +77,8 @@ class WorkRunner:
 
     @property
     def output_dir(self) -> Path:
-        """Where work writes its files (`RunnerSetup.run_dir`; a Ray actor's are sent to the driver's)."""
-        return Path(self.setup.run_dir or ".")
+        """Where work writes its files (`RunnerSetup.output_dir`; a Ray actor's are sent to the driver's)."""
+        return self.setup.output_dir
 
     def run(self, item: WorkItem, attempts: int = 1) -> Any:
         """Do one work item; raises WorkFailure on any infrastructure error (after discarding env and policy)."""
