@@ -10,7 +10,7 @@ task's policy performed the original task of the scene).
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from datetime import UTC, datetime
 
 import numpy as np
@@ -28,6 +28,17 @@ from langgap.policies.base import Policy, PolicyOutputError
 from langgap.records import EpisodeRecord, FailureKind, Outcome, Status, classify
 from langgap.sim.env import SETTLE_STEPS, TaskEnv
 from langgap.version import code_version
+
+
+@dataclass(frozen=True)
+class EpisodeSettings:
+    """What every episode executor takes besides the episode, its environment and its policy: the same for
+    every episode a worker runs with one built policy (the runner builds it with the policy)."""
+
+    policy_name: str  # the name the policy was asked for by (`langgap eval --policy`), stored in each record
+    policy_hash: str  # `config_hash` of the built policy's config ("": not recorded, as `check-policy` runs it)
+    style: str  # the instruction style the policy is told (`RunSpec.style`)
+    worker: int = 0  # the worker the episodes run on, stored in each record
 
 
 def scene_goals(task: Task, catalog: Catalog) -> dict[str, Goal]:
@@ -66,27 +77,25 @@ def _switched(planned: PlannedEpisode, instructions: list[tuple[int, str]]) -> t
     return planned.started_as, instructions[1][0]
 
 
-def _policy_fields(
-    env: TaskEnv, policy: Policy, *, policy_name: str, policy_hash: str, worker: int, attempts: int
-) -> dict:
+def _policy_fields(env: TaskEnv, policy: Policy, settings: EpisodeSettings, attempts: int) -> dict:
     """The record fields that say which policy ran, what it saw, and where."""
     return dict(
-        policy=policy_name,
-        policy_config_hash=policy_hash,
+        policy=settings.policy_name,
+        policy_config_hash=settings.policy_hash,
         sees_state=policy.spec.sees_state,
         sees_goal=policy.spec.sees_goal,
         cameras=list(policy.spec.cameras),
         image_size=policy.spec.image_size if policy.spec.cameras else 0,
-        worker=worker,
+        worker=settings.worker,
         attempts=attempts,
         physics=stack.physics_stack(env.options.stepping, env.options.seed_scheme),
     )
 
 
 def _policy_error_record(
-    planned: PlannedEpisode, task: Task, error: str, env: TaskEnv, wall_time_s: float, common: dict
+    planned: PlannedEpisode, task: Task, error: PolicyOutputError, env: TaskEnv, wall_time_s: float, common: dict
 ) -> EpisodeRecord:
-    """The record of an episode that ended on a malformed action (`error`: the policy's name and why)."""
+    """The record of an episode that ended on a malformed action (`error`, stored after the policy's name)."""
     return _record(
         planned,
         task,
@@ -94,7 +103,7 @@ def _policy_error_record(
         success=False,
         outcome=Outcome.POLICY_ERROR,
         failure_kind=FailureKind.POLICY,
-        error=error,
+        error=f"{common['policy']}: {error}",
         steps=env.steps,
         policy_calls=0,
         t0_hash=env.t0_hash or "",
@@ -141,27 +150,22 @@ def execute_episode(
     catalog: Catalog,
     env: TaskEnv,
     policy: Policy,
+    settings: EpisodeSettings,
     *,
-    policy_name: str,
-    policy_hash: str,
-    style: str,
-    worker: int = 0,
     attempts: int = 1,
     on_step: StepHook | None = None,
 ) -> EpisodeRecord:
-    """Run one planned episode. A malformed action is a policy failure (recorded); any other exception
-    propagates, for the caller to treat as an infrastructure error."""
-    context = planned_context(planned, task, catalog, style)
+    """Run one planned episode (its `attempts`-th try). A malformed action is a policy failure (recorded);
+    any other exception propagates, for the caller to treat as an infrastructure error."""
+    context = planned_context(planned, task, catalog, settings.style)
     started = time.perf_counter()
-    common = _policy_fields(
-        env, policy, policy_name=policy_name, policy_hash=policy_hash, worker=worker, attempts=attempts
-    )
+    common = _policy_fields(env, policy, settings, attempts)
     try:
         result = run_episode(
             env, policy, context, watch=scene_goals(task, catalog), on_step=on_step, changes=planned.changes
         )
     except PolicyOutputError as exc:
-        return _policy_error_record(planned, task, f"{policy_name}: {exc}", env, time.perf_counter() - started, common)
+        return _policy_error_record(planned, task, exc, env, time.perf_counter() - started, common)
     return _judged_record(planned, task, result, time.perf_counter() - started, common)
 
 
@@ -170,11 +174,8 @@ def execute_shared(
     catalog: Catalog,
     env: TaskEnv,
     policy: Policy,
+    settings: EpisodeSettings,
     *,
-    policy_name: str,
-    policy_hash: str,
-    style: str,
-    worker: int = 0,
     attempts: int = 1,
 ) -> list[EpisodeRecord]:
     """Run planned episodes that share one rollout (`langgap.engine.sharing`) as that one rollout; each gets
@@ -185,10 +186,8 @@ def execute_shared(
     when some ended before it, and propagates (the whole rollout retried) when none did."""
     tasks = {p.key.task_id: catalog.get(p.key.task_id) for p in members}
     lead = members[0]
-    context = planned_context(lead, tasks[lead.key.task_id], catalog, style)
-    common = _policy_fields(
-        env, policy, policy_name=policy_name, policy_hash=policy_hash, worker=worker, attempts=attempts
-    )
+    context = planned_context(lead, tasks[lead.key.task_id], catalog, settings.style)
+    common = _policy_fields(env, policy, settings, attempts)
     started = time.perf_counter()
     goals = {task_id: task.goal for task_id, task in tasks.items()}
     rollout = run_shared_episode(
@@ -211,13 +210,13 @@ def execute_shared(
             records.append(_judged_record(planned, task, result, rollout.ended_after_s[task.id], common))
         elif isinstance(error, PolicyOutputError):
             wall = time.perf_counter() - started
-            records.append(_policy_error_record(planned, task, f"{policy_name}: {error}", env, wall, common))
+            records.append(_policy_error_record(planned, task, error, env, wall, common))
         else:
             records.append(
                 gap_record(
                     planned,
                     task,
-                    policy_name=policy_name,
+                    policy_name=settings.policy_name,
                     error=one_line(error),
                     attempts=attempts,
                     physics=common["physics"],

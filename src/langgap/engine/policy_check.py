@@ -26,7 +26,7 @@ from langgap.catalog.catalog import DEFAULT_CATALOG, Catalog, load_catalog
 from langgap.catalog.task import DEFAULT_STYLE
 from langgap.checks import Check, check_lines
 from langgap.engine.context import planned_context
-from langgap.engine.episode import execute_episode
+from langgap.engine.episode import EpisodeSettings, execute_episode
 from langgap.engine.plan import PlannedEpisode, build_plan
 from langgap.engine.policy_timing import (
     RETRIED,
@@ -229,7 +229,9 @@ class _Checker:
     def __init__(
         self, policy: Policy, name: str, catalog: Catalog, plan: list[PlannedEpisode], style: str, timeout_s: float
     ):
-        self.policy, self.name, self.catalog, self.plan, self.style = policy, name, catalog, plan, style
+        self.policy, self.catalog, self.plan = policy, catalog, plan
+        # As eval's first worker runs it, but with no config hash: no record of the check is stored.
+        self.settings = EpisodeSettings(policy_name=name, policy_hash="", style=style)
         self.timeout_s = timeout_s
         self.planned = plan[0]
         self.task = catalog.get(self.planned.key.task_id)
@@ -349,10 +351,7 @@ class _Checker:
         self.watched.calls = []
         began = time.perf_counter()
         try:
-            record = execute_episode(
-                self.planned, self.task, self.catalog, env, self.watched,
-                policy_name=self.name, policy_hash="", style=self.style,
-            )  # fmt: skip
+            record = execute_episode(self.planned, self.task, self.catalog, env, self.watched, self.settings)
         except Exception as exc:
             raised = self.watched.raised
             if raised is None or raised[1] is not exc:
@@ -415,7 +414,7 @@ class _Checker:
     def _lifecycle(self, env: TaskEnv) -> tuple[Check, _Episode | None]:
         done = ["reset", "reset again", "a second episode"]
         try:
-            context = planned_context(self.planned, self.task, self.catalog, self.style)
+            context = planned_context(self.planned, self.task, self.catalog, self.settings.style)
             self.watched.reset(context.for_policy(self.policy.spec))  # twice in a row: the episode resets again
             second = self._episode(env, "the second episode")
         except _Failed as failed:

@@ -18,7 +18,7 @@ from typing import Any, Protocol
 
 from langgap.catalog.catalog import load_catalog
 from langgap.catalog.task import DEFAULT_STYLE, Task
-from langgap.engine.episode import execute_episode, execute_shared, video_hook
+from langgap.engine.episode import EpisodeSettings, execute_episode, execute_shared, video_hook
 from langgap.engine.filming import VIDEO_DIR, clip_name
 from langgap.engine.plan import PlannedEpisode
 from langgap.engine.rollout import env_options_for
@@ -54,6 +54,11 @@ class RunnerSetup:
     seed_scheme: str = DEFAULT_SEED_SCHEME  # how a seed selects the placement (`RunSpec.seed_scheme`)
     policy_server: PolicyServerHandle | None = None  # a shared policy; None: each runner builds its own
 
+    @property
+    def output_dir(self) -> Path:
+        """Where work writes its files: `run_dir`, or the working directory when none is given."""
+        return Path(self.run_dir or ".")
+
 
 class WorkFailure(Exception):
     """A work item could not be done (infrastructure): its one-line message travels to the scheduler."""
@@ -67,13 +72,13 @@ class WorkRunner:
         self.worker = worker
         self.catalog = load_catalog(setup.catalog)
         self._policy = None
-        self._policy_hash = ""
+        self._settings: EpisodeSettings | None = None  # built with the policy (its config hash is the policy's)
         self._env: TaskEnv | None = None
 
     @property
     def output_dir(self) -> Path:
-        """Where work writes its files (`RunnerSetup.run_dir`; a Ray actor's are sent to the driver's)."""
-        return Path(self.setup.run_dir or ".")
+        """Where work writes its files (`RunnerSetup.output_dir`; a Ray actor's are sent to the driver's)."""
+        return self.setup.output_dir
 
     def run(self, item: WorkItem, attempts: int = 1) -> Any:
         """Do one work item; raises WorkFailure on any infrastructure error (after discarding env and policy)."""
@@ -106,17 +111,7 @@ class WorkRunner:
         if planned.film:
             hook = video_hook(self._env, frames, CAMERAS, every=FRAME_EVERY)
         record = execute_episode(
-            planned,
-            task,
-            self.catalog,
-            self._env,
-            self._policy,
-            policy_name=self.setup.policy,
-            policy_hash=self._policy_hash,
-            style=self.setup.style,
-            worker=self.worker,
-            attempts=attempts,
-            on_step=hook,
+            planned, task, self.catalog, self._env, self._policy, self._settings, attempts=attempts, on_step=hook
         )
         if frames:
             from langgap.video import write_video
@@ -128,17 +123,7 @@ class WorkRunner:
 
     def _run_shared(self, item: SharedRollout, attempts: int) -> list[EpisodeRecord]:
         self._prepare(self.catalog.get(item.task_id), film=False)
-        return execute_shared(
-            item.members,
-            self.catalog,
-            self._env,
-            self._policy,
-            policy_name=self.setup.policy,
-            policy_hash=self._policy_hash,
-            style=self.setup.style,
-            worker=self.worker,
-            attempts=attempts,
-        )
+        return execute_shared(item.members, self.catalog, self._env, self._policy, self._settings, attempts=attempts)
 
     def _prepare(self, task: Task, *, film: bool) -> None:
         """Build the policy (once) and an environment of `task` (filming's cameras when `film`)."""
@@ -147,7 +132,8 @@ class WorkRunner:
                 self._policy = self.setup.policy_server.connect(self.worker)
             else:
                 self._policy = make_policy(self.setup.policy, self.setup.policy_args)
-            self._policy_hash = config_hash(policy_config(self._policy))
+            policy_hash = config_hash(policy_config(self._policy))
+            self._settings = EpisodeSettings(self.setup.policy, policy_hash, self.setup.style, self.worker)
         # An environment without the video cameras serves every episode but a filmed one (rendering
         # needs a GL context, which costs an environment build seconds and memory: only filming pays it).
         env = self._env

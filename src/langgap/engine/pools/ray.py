@@ -192,7 +192,7 @@ class RayPool:
             self.close()
             raise
         self.setup = setup
-        self._output = Path(setup.run_dir or ".")  # where the actors' files are written, on this machine
+        self._output = setup.output_dir  # where the actors' files are written, on this machine
         self._remote = ray.remote(num_cpus=1, max_restarts=0, max_task_retries=0)(RunnerActor)
         self._actors: dict[int, object] = {}
         self._running: dict[object, int] = {}  # object ref -> worker
