@@ -3,25 +3,15 @@ paraphrases paired against their original sentences (synthetic run stores, no si
 
 from __future__ import annotations
 
-import dataclasses
-
-from langgap.records import Outcome, classify
+from langgap.records import Outcome
 from langgap.report.load import load_runs
 from langgap.report.summary import summarize
 from langgap.report.tables import beyond_table, diagnosis, outcome_table, wording_table
-from tests.support.reports import SOURCE, episode, memoriser, write_run
+from tests.support.reports import SOURCE, beyond_episode, episode, memoriser, write_run
 
 ORDERED = "spatial/s0/first-open-drawer-then-bowl-on-plate"
 NEGATED = "spatial/s0/bowl-on-plate~not-where"
 PASSIVE = "spatial/s0/bowl-on-plate~passive"
-
-
-def beyond_episode(task_id: str, dimension: str, k: int, *, success=False, reached=None, wrong_order=False):
-    """An episode of a `langgap-beyond` task, classified as the engine does."""
-    reached = reached or {}
-    outcome = classify(task_id, "extended", SOURCE, success, reached, wrong_order=wrong_order)
-    base = episode("spatial/s0/ramekin-on-plate", k, success=success, reached=reached)
-    return dataclasses.replace(base, task_id=task_id, dimension=dimension, split="heldout", outcome=outcome)
 
 
 def run_records() -> list:
