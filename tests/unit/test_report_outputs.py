@@ -1,6 +1,7 @@
-"""The JSON report byte for byte (key names, order, rounding, nulls) and the CSV drawn from it, on synthetic
-stores whose report has every section: compared with files written by the report as it was before its sections
-and rows were given one serialisation path (`report_json/`), never with output of the code under test."""
+"""The JSON report byte for byte (key names, order, rounding, nulls), the CSV drawn from it, and the Markdown
+report and diagnosis (every section, in order, under its heading), on synthetic stores whose report has every
+section: compared with files written by the report as it was before its sections and rows were given one
+serialisation path (`report_outputs/`), never with output of the code under test."""
 
 from __future__ import annotations
 
@@ -11,10 +12,10 @@ import pytest
 
 from langgap.catalog.task import GateResult
 from langgap.records import Outcome
-from langgap.report import render
+from langgap.report import diagnosis_text, render
 from tests.support.reports import SOURCE, beyond_episode, memoriser, reader, write_run
 
-EXPECTED = Path(__file__).parent / "report_json"
+EXPECTED = Path(__file__).parent / "report_outputs"
 RAMEKIN, STOVE = "spatial/s0/ramekin-on-plate", "spatial/s0/bowl-on-stove"
 PASSIVE, ORDERED = "spatial/s0/bowl-on-plate~passive", "spatial/s0/first-open-drawer-then-bowl-on-plate"
 
@@ -60,9 +61,19 @@ def _side_by_side() -> list[Path]:
     ]
 
 
-@pytest.mark.parametrize(("name", "runs"), [("every_section", _every_section), ("side_by_side", _side_by_side)])
-def test_the_json_and_csv_reports_are_byte_for_byte_as_stored(name, runs, tmp_path, monkeypatch):
+OUTPUTS = {  # file suffix -> the report it holds
+    "json": lambda paths: render(paths, "json"),
+    "csv": lambda paths: render(paths, "csv"),
+    "md": lambda paths: render(paths, "md"),
+    "summary.md": lambda paths: diagnosis_text(paths, "md"),
+}
+
+
+@pytest.mark.parametrize(
+    ("runs", "output"),
+    [(_every_section, output) for output in OUTPUTS] + [(_side_by_side, "json"), (_side_by_side, "csv")],
+)
+def test_the_reports_are_byte_for_byte_as_stored(runs, output, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)  # runs named by relative paths: the report's paths read the same in any directory
-    paths = runs()
-    for fmt in ("json", "csv"):
-        assert render(paths, fmt) == (EXPECTED / f"{name}.{fmt}").read_bytes().decode(), fmt
+    expected = EXPECTED / f"{runs.__name__.removeprefix('_')}.{output}"
+    assert OUTPUTS[output](runs()) == expected.read_bytes().decode()
