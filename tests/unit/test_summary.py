@@ -72,7 +72,7 @@ def test_condition_and_run_comparisons_are_paired(summary):
     (comparison,) = summary.comparisons
     assert comparison.pairs == 11  # the gap has no partner
     assert (comparison.successes_a, comparison.successes_b) == (4, 10)
-    assert comparison.as_dict()["p_value"] == pytest.approx(0.03125)
+    assert comparison.p_value == pytest.approx(0.03125)
     # Agreement 5 of 11 pairs; chance gives (4 x 10 + 7 x 1) / 121: κ = (55 - 47) / (121 - 47).
     assert comparison.agreement == pytest.approx(5 / 11) and comparison.kappa == pytest.approx(8 / 74)
 

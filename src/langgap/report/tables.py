@@ -405,8 +405,7 @@ def video_table(run: RunResults) -> Table | None:
 
 
 def _paired_cells(t: PairedTest) -> list[str]:
-    d = t.as_dict()
-    return [t.name, str(t.pairs), pct(d["rate_a"]), pct(d["rate_b"]), str(t.only_a), str(t.only_b), f"{t.p_value:.3g}"]
+    return [t.name, str(t.pairs), pct(t.rate_a), pct(t.rate_b), str(t.only_a), str(t.only_b), f"{t.p_value:.3g}"]
 
 
 def _paired_table(
@@ -430,7 +429,7 @@ def wording_table(run: RunResults) -> Table | None:
 
 def condition_table(run: RunResults) -> Table | None:
     """Language conditions against `given`, episode by episode."""
-    changed = ("Behaviour changed %", lambda t: pct(t.changed / t.pairs))
+    changed = ("Behaviour changed %", lambda t: pct(t.changed_behaviour))
     return _paired_table("Language conditions", run, run.conditions, "Given", "Condition", changed)
 
 
@@ -446,9 +445,9 @@ def switch_table(run: RunResults) -> Table | None:
         [
             str(row.k),
             label(OUTCOME_GROUP_LABEL, row.group),
-            str(next(iter(row.classes.values())).episodes),
+            str(row.episodes),
             *(f"{pct(r.rate)} {ci(r)}" for r in row.classes.values()),
-            str(next(iter(row.classes.values())).gaps),
+            str(row.gaps),
             f"{len(row.unproven)} of {row.tasks}" if row.unproven else "",
         ]
         for row in run.switches
