@@ -28,7 +28,7 @@ from langgap.engine.spec import spec_differences
 from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Outcome, Privilege, achieved
 from langgap.report.answer import Answer, Switched
 from langgap.report.card import PROTOCOL_ITEMS, protocol_card
-from langgap.report.data import MERGED, Spec, to_data
+from langgap.report.data import MERGED, Spec
 from langgap.report.load import Run
 from langgap.report.stats import PairedTest, Rate
 from langgap.stack import stack_differences
@@ -550,21 +550,6 @@ class SideBySide:
             return run.source(group)
         return next((r for r in run.by_dimension if r.group == group), None)
 
-    def as_dict(self) -> list[dict]:
-        """One row per (row, catalog, group) the runs have: the JSON report's `side_by_side` section."""
-        out = []
-        for number, row in enumerate(self.rows):
-            for catalog, run in row.items():
-                for group in self.groups[catalog]:
-                    if (r := self.rate(run, group)) is not None:
-                        data = to_data(r)
-                        del data["group"]
-                        policy = run.card["policy"]
-                        out.append(
-                            {"row": number, "policy": policy, "catalog": catalog, "run": run.name, "id": group, **data}
-                        )
-        return out
-
 
 def side_by_side(runs: list[RunResults]) -> SideBySide | None:
     """The runs side by side by catalog, when some policy was run on two or more catalogs (None otherwise:
@@ -606,57 +591,6 @@ class Summary:
     def privileges(self) -> set[Privilege]:
         """The privileges the runs' policies had (`Privilege.NONE` included when one had none)."""
         return {run.privilege for run in self.runs}
-
-    def to_dict(self) -> dict:
-        """The summary as plain data (the JSON report)."""
-        out: dict = {
-            "runs": [],
-            "confusion": {},
-            "comparisons": to_data(self.comparisons),
-            "protocol_mismatches": self.mismatches,
-            "comparisons_refused": self.refused,
-            "side_by_side": self.side_by_side.as_dict() if self.side_by_side else [],
-        }
-        sections = {
-            "by_source": lambda run: run.by_source,
-            "per_dimension": lambda run: run.by_dimension,
-            "per_suite": lambda run: run.by_suite,
-            "per_split": lambda run: run.by_split,
-            "per_task": lambda run: [t.rate for t in run.tasks],
-        }
-        for section in ("answers", *sections, "outcomes", "conditions", "switches", "wording", "spread", "videos"):
-            out[section] = []
-        for run in self.runs:
-            out["runs"].append(
-                {
-                    "run": run.name,
-                    "path": str(run.path),
-                    "episodes": run.episodes,
-                    "gaps": run.gaps,
-                    "privilege": str(run.privilege),
-                    "spec": run.spec,
-                    "card": run.card,
-                    "capped_tasks": run.capped,
-                    "other_stack_tasks": run.other_stack,
-                    "gate": run.gate_source,
-                }
-            )
-            for section, rows in sections.items():
-                for row in rows(run):
-                    data = to_data(row)
-                    out[section].append({"run": run.name, "id": data.pop("group"), **data})
-            out["answers"].append({"run": run.name, **to_data(run.answer)})
-            for section, rows in (
-                ("outcomes", run.outcomes),
-                ("conditions", run.conditions),
-                ("switches", run.switches),
-                ("wording", run.wording),
-                ("spread", run.spread),
-                ("videos", run.clips),
-            ):
-                out[section] += [{"run": run.name, **to_data(row)} for row in rows]
-            out["confusion"][run.name] = run.confusion
-        return out
 
 
 def protocol_differences(a: RunResults, b: RunResults) -> list[str]:
