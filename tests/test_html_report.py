@@ -11,7 +11,7 @@ import pytest
 
 from langgap.report import load_runs, summarize
 from langgap.report.published import load_published
-from langgap.report.tables import full_report
+from langgap.report.sections import FULL_REPORT, report_tables
 from langgap.video import VIDEO_FPS, write_video
 from tests.support.browser import CHROMIUM, chromium
 from tests.support.harness import run_cli
@@ -70,7 +70,7 @@ def test_the_html_report_in_a_real_browser(tmp_path):
         page.open(page_path.as_uri())
         facts = page.evaluate(_FACTS)
         # Every table of the Markdown report is on the page, and its data is the JSON report's.
-        assert facts["titles"] == [t.title for t in full_report(summary, load_published())]
+        assert facts["titles"] == [t.title for t in report_tables(summary, load_published(), FULL_REPORT.sections)]
         assert facts["data"] == report
         vla_row = next(row for row in facts["table_vii"] if row[0] == "vla (my-vla)")
         extended = next(r for r in report["by_source"] if r["run"] == "vla (my-vla)" and r["id"] == "extended")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import asdict
 from pathlib import Path
 
@@ -49,6 +50,15 @@ def episode(task_id: str, init_index: int, *, success=False, reached=None, condi
         scene=SCENE,
         **kw,
     )
+
+
+def beyond_episode(task_id: str, dimension: str, k: int, *, success=False, reached=None, wrong_order=False):
+    """An episode of a `langgap-beyond` task of `SCENE` (ordering, negation, paraphrase, ...), classified as the
+    engine does."""
+    reached = reached or {}
+    outcome = classify(task_id, "extended", SOURCE, success, reached, wrong_order=wrong_order)
+    base = episode("spatial/s0/ramekin-on-plate", k, success=success, reached=reached)
+    return dataclasses.replace(base, task_id=task_id, dimension=dimension, split="heldout", outcome=outcome)
 
 
 def write_run(

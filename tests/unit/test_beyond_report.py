@@ -3,25 +3,15 @@ paraphrases paired against their original sentences (synthetic run stores, no si
 
 from __future__ import annotations
 
-import dataclasses
-
-from langgap.records import Outcome, classify
+from langgap.records import Outcome
 from langgap.report.load import load_runs
+from langgap.report.sections import DIAGNOSIS, report_data, report_tables
 from langgap.report.summary import summarize
-from langgap.report.tables import beyond_table, diagnosis, outcome_table, wording_table
-from tests.support.reports import SOURCE, episode, memoriser, write_run
+from tests.support.reports import SOURCE, beyond_episode, episode, memoriser, write_run
 
 ORDERED = "spatial/s0/first-open-drawer-then-bowl-on-plate"
 NEGATED = "spatial/s0/bowl-on-plate~not-where"
 PASSIVE = "spatial/s0/bowl-on-plate~passive"
-
-
-def beyond_episode(task_id: str, dimension: str, k: int, *, success=False, reached=None, wrong_order=False):
-    """An episode of a `langgap-beyond` task, classified as the engine does."""
-    reached = reached or {}
-    outcome = classify(task_id, "extended", SOURCE, success, reached, wrong_order=wrong_order)
-    base = episode("spatial/s0/ramekin-on-plate", k, success=success, reached=reached)
-    return dataclasses.replace(base, task_id=task_id, dimension=dimension, split="heldout", outcome=outcome)
 
 
 def run_records() -> list:
@@ -39,16 +29,16 @@ def run_records() -> list:
 def test_new_dimensions_get_table_vii_form_and_what_the_policy_did_instead(tmp_path):
     summary = summarize(load_runs([write_run(tmp_path / "vla", "vla", run_records())]))
     (run,) = summary.runs
-    table = beyond_table(summary)
+    (table,) = report_tables(summary, None, ["beyond"])
     assert table.headers == ["Method", "Ordering", "Negation", "Paraphrase"]
     assert table.rows[0][1].startswith("50.0") and table.rows[0][2].startswith("0.0")
-    instead = outcome_table(run)
+    (instead,) = report_tables(summary, None, ["outcomes"])
     assert "Wrong order %" in instead.headers
     rows = {row[0]: dict(zip(instead.headers, row, strict=True)) for row in instead.rows}
     assert rows["Ordering"]["Wrong order %"] == "50.0" and rows["Ordering"]["Success %"] == "50.0"
     assert rows["Negation"]["Did source task %"] == "100.0"
     assert {o.group: o.shares[Outcome.WRONG_ORDER] for o in run.outcomes}["ordering"] == 0.5
-    assert any(t is table or t.title == table.title for t in diagnosis(summary))
+    assert table in report_tables(summary, None, DIAGNOSIS.sections)
 
 
 def test_a_paraphrase_is_paired_with_its_original_sentence_on_the_same_episodes(tmp_path):
@@ -56,12 +46,13 @@ def test_a_paraphrase_is_paired_with_its_original_sentence_on_the_same_episodes(
     (test,) = summary.runs[0].wording
     assert test.name == "original vs paraphrase ~passive" and test.pairs == 4
     assert (test.successes_a, test.successes_b, test.only_a, test.only_b) == (3, 3, 1, 1)
-    table = wording_table(summary.runs[0])
+    (table,) = report_tables(summary, None, ["wording"])
     assert table.rows[0][-1] == "+0.0" and table.headers[-1] == "Difference (points)"
-    assert summary.to_dict()["wording"][0]["pairs"] == 4
+    assert report_data(summary)["wording"][0]["pairs"] == 4
 
 
 def test_runs_of_the_paper_catalog_show_no_new_columns(tmp_path):
     summary = summarize(load_runs([write_run(tmp_path / "blind", "blind", memoriser())]))
-    assert beyond_table(summary) is None and wording_table(summary.runs[0]) is None
-    assert "Wrong order %" not in outcome_table(summary.runs[0]).headers
+    assert report_tables(summary, None, ["beyond", "wording"]) == []
+    (instead,) = report_tables(summary, None, ["outcomes"])
+    assert "Wrong order %" not in instead.headers

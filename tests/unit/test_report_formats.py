@@ -9,6 +9,7 @@ import json
 import pytest
 
 from langgap.report import FORMATS, load_runs, render, summarize
+from langgap.report.sections import report_data
 from tests.support.harness import run_cli
 from tests.support.reports import memoriser, reader, write_run
 
@@ -24,7 +25,7 @@ def runs(tmp_path):
 def test_json_is_the_summary(runs):
     summary = summarize(load_runs(runs))
     report = json.loads(render(runs, "json"))
-    assert report == json.loads(json.dumps(summary.to_dict()))
+    assert report == json.loads(json.dumps(report_data(summary)))
     blind_dims = {row["id"]: row for row in report["per_dimension"] if row["run"] == "blind"}
     assert blind_dims["change_target"]["gaps"] == 1 and blind_dims["change_target"]["episodes"] == 3
     assert report["comparisons"][0]["pairs"] == 11

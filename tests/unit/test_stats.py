@@ -7,6 +7,7 @@ import math
 
 import pytest
 
+from langgap.report.data import to_data
 from langgap.report.stats import PairedTest, Rate, cohen_kappa, mcnemar_exact, minimum_detectable_effect, wilson
 
 
@@ -28,14 +29,14 @@ def test_exact_mcnemar(only_a, only_b, p):
 
 def test_a_rate_is_over_judged_episodes_and_carries_its_interval():
     r = Rate("g", episodes=10, successes=5, gaps=3, tasks=2)
-    row = r.as_dict()
+    row = to_data(r)
     assert row["rate"] == 0.5 and (row["ci_low"], row["ci_high"]) == pytest.approx((0.2366, 0.7634), abs=1e-4)
     assert row["gaps"] == 3 and Rate("empty", 0, 0, 4, 1).rate == 0.0
 
 
 def test_a_paired_test_reports_rates_and_p_value():
     t = PairedTest("a vs b", pairs=20, successes_a=12, successes_b=3, only_a=9, only_b=0, changed=10)
-    row = t.as_dict()
+    row = to_data(t)
     assert (row["rate_a"], row["rate_b"], row["changed_behaviour"]) == (0.6, 0.15, 0.5)
     assert row["p_value"] == pytest.approx(0.00390625)
 
@@ -55,7 +56,7 @@ def test_the_minimum_detectable_effect_has_80_percent_power(rate, n):
     mde = minimum_detectable_effect(rate, n)
     other = rate + mde if rate <= 0.5 else rate - mde
     assert _power(rate, other, n) == pytest.approx(0.8, abs=0.002)
-    assert Rate("g", n, round(rate * n), 0, 1).as_dict()["mde"] == pytest.approx(mde)
+    assert to_data(Rate("g", n, round(rate * n), 0, 1))["mde"] == pytest.approx(mde)
 
 
 def test_more_episodes_detect_smaller_effects():
@@ -81,6 +82,6 @@ def test_cohen_kappa(both, only_a, only_b, neither, kappa):
 def test_paired_agreement_and_kappa_come_from_the_pairs_and_are_reported_for_a_retest_only():
     test = PairedTest("a vs b", pairs=50, successes_a=25, successes_b=30, only_a=5, only_b=10, changed=0, retest=True)
     assert test.agreement == pytest.approx(0.7) and test.kappa == pytest.approx(0.4)
-    assert test.as_dict()["agreement"] == pytest.approx(0.7) and test.as_dict()["kappa"] == pytest.approx(0.4)
+    assert to_data(test)["agreement"] == pytest.approx(0.7) and to_data(test)["kappa"] == pytest.approx(0.4)
     other = dataclasses.replace(test, retest=False)  # two different runs: agreement is no test-retest figure
-    assert other.as_dict()["agreement"] is None and other.as_dict()["kappa"] is None
+    assert to_data(other)["agreement"] is None and to_data(other)["kappa"] is None

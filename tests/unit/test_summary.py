@@ -9,6 +9,7 @@ import pytest
 
 from langgap.records import Outcome, Privilege
 from langgap.report import load_runs, render, summarize
+from langgap.report.sections import report_data, report_tables
 from tests.support.reports import SOURCE, TASKS, memoriser, reader, write_run
 
 
@@ -72,18 +73,17 @@ def test_condition_and_run_comparisons_are_paired(summary):
     (comparison,) = summary.comparisons
     assert comparison.pairs == 11  # the gap has no partner
     assert (comparison.successes_a, comparison.successes_b) == (4, 10)
-    assert comparison.as_dict()["p_value"] == pytest.approx(0.03125)
+    assert comparison.p_value == pytest.approx(0.03125)
     # Agreement 5 of 11 pairs; chance gives (4 x 10 + 7 x 1) / 121: κ = (55 - 47) / (121 - 47).
     assert comparison.agreement == pytest.approx(5 / 11) and comparison.kappa == pytest.approx(8 / 74)
 
 
 def test_agreement_and_kappa_are_shown_only_for_one_spec_run_twice(tmp_path, summary):
     """Cohen's κ of two runs is a test-retest figure: one spec run twice, never two policies (blind vs my-vla)."""
-    from langgap.report.tables import comparison_table
-
-    assert not summary.comparisons[0].retest and comparison_table(summary).headers[-1] == "p"
+    (table,) = report_tables(summary, None, ["comparisons"])
+    assert not summary.comparisons[0].retest and table.headers[-1] == "p"
     markdown = render([run.path for run in summary.runs], "md")
-    assert summary.to_dict()["comparisons"][0]["kappa"] is None and "κ" not in markdown
+    assert report_data(summary)["comparisons"][0]["kappa"] is None and "κ" not in markdown
     # The same spec twice (a policy that samples: one episode came out otherwise), and the same policy with other
     # arguments (another spec, though its protocol card, and so its pairing, is the same).
     again = [
@@ -97,11 +97,11 @@ def test_agreement_and_kappa_are_shown_only_for_one_spec_run_twice(tmp_path, sum
     ]
     retest = summarize(load_runs(runs))
     assert [t.retest for t in retest.comparisons] == [True, False]
-    table = comparison_table(retest)
+    (table,) = report_tables(retest, None, ["comparisons"])
     assert table.headers[-2:] == ["Agree %", "κ"] and "one run spec run twice (test-retest)" in table.title
     # 8 of 12 pairs agree; chance gives (11 x 7 + 1 x 5) / 144: κ = (96 - 82) / (144 - 82)
     assert table.rows[0][-2:] == ["66.7", "0.23"] and table.rows[1][-2:] == ["", ""]
-    compared = retest.to_dict()["comparisons"]
+    compared = report_data(retest)["comparisons"]
     assert compared[0]["kappa"] == pytest.approx(14 / 62) and compared[1]["agreement"] is None
     assert "| Agree % | κ |" in render(runs, "md")
 
@@ -110,7 +110,7 @@ def test_runs_are_named_by_label_and_policy_once_and_privileged_runs_are_marked(
     assert [run.privilege for run in summary.runs] == [Privilege.GOAL, Privilege.NONE]
     # run directory `blind` of policy blind: the name once, not "blind (blind)"; directory `vla` of policy my-vla
     assert summary.runs[0].label == "blind †" and summary.runs[1].label == "vla (my-vla)"
-    assert [run["privilege"] for run in summary.to_dict()["runs"]] == ["goal", "none"]
+    assert [run["privilege"] for run in report_data(summary)["runs"]] == ["goal", "none"]
 
 
 def test_a_learned_policy_that_reads_simulator_state_is_not_called_a_scripted_reference(tmp_path):
@@ -209,7 +209,7 @@ def test_the_switch_table_per_k_and_dimension(tmp_path):
     assert "| 20 | All extended | 7 | 0.0 [0.0, 35.4] | 100.0 [64.6, 100.0] |" in markdown
     assert "given vs switch:20" in markdown  # paired against `given` (McNemar) with the other conditions
     (exported,) = [
-        s for s in summarize(load_runs([run])).to_dict()["switches"] if (s["k"], s["group"]) == (20, "extended")
+        s for s in report_data(summarize(load_runs([run])))["switches"] if (s["k"], s["group"]) == (20, "extended")
     ]
     assert exported["persisted"] == 1.0 and exported["episodes"] == 7 and exported["gaps"] == 1
 

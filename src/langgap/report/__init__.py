@@ -1,4 +1,5 @@
-"""Reports from stored runs: load → summarize (every number, once) → tables → a format by name."""
+"""Reports from stored runs: load → summarize (every number, once) → sections by name (tables, data) → a format by
+name."""
 
 from langgap.report.formats import FORMATS, diagnosis_text, render
 from langgap.report.load import Run, load_runs

@@ -12,7 +12,9 @@ the task switched to and how often it went on with the first instruction's.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
+from langgap.report.data import Spec
 from langgap.report.stats import PairedTest, Rate
 
 READS = 0.8  # extended success at this share of original success or more: the policy reads its instruction
@@ -85,7 +87,7 @@ class Answer:
         if (test := self.against_originals) is not None:
             parts.append(f"paired with their originals: {p_text(test)}")
         if (test := self.against_blind) is not None:
-            blind = percent(test.successes_a / test.pairs)
+            blind = percent(test.rate_a)
             parts.append(f"against blind, {blind} on the same {test.pairs} episodes: {p_text(test)}")
         return f" ({'; '.join(parts)})" if parts else ""
 
@@ -154,11 +156,11 @@ class Answer:
             "instruction does them as well)"
         )
 
-    def as_dict(self) -> dict:
-        tests = {"against_originals": self.against_originals, "against_blind": self.against_blind}
-        return {
-            "text": self.text,
-            "verdict": self.verdict,
-            "default_task_rate": self.default_task.rate if self.default_task.episodes else None,
-            **{name: None if t is None else t.as_dict() for name, t in tests.items()},
-        }
+    # The JSON report's answer (`langgap.report.data.to_data`): the sentence, its verdict and what they rest on.
+    DATA: ClassVar[Spec] = (
+        "text",
+        "verdict",
+        ("default_task_rate", lambda a: a.default_task.rate if a.default_task.episodes else None),
+        "against_originals",
+        "against_blind",
+    )

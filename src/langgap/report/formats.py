@@ -10,8 +10,9 @@ from pathlib import Path
 
 from langgap.report.load import load_runs
 from langgap.report.published import Published, load_published
+from langgap.report.sections import CSV_REPORT, DIAGNOSIS, FULL_REPORT, Layout, report_data, report_tables
 from langgap.report.summary import Summary, summarize
-from langgap.report.tables import Table, diagnosis, full_report, notes, selection_text
+from langgap.report.tables import Table, notes, selection_text
 
 
 def markdown_table(table: Table) -> str:
@@ -90,35 +91,34 @@ def _header(summary: Summary, published: Published | None) -> str:
     return runs + "".join(f"{note}\n\n" for note in notes(summary, published))
 
 
-def to_markdown(summary: Summary, published: Published | None = None, tables: list[Table] | None = None) -> str:
-    """The report in Markdown, opening with the answer; `tables` (the diagnosis) instead of the full report."""
+def to_markdown(summary: Summary, published: Published | None = None, layout: Layout = FULL_REPORT) -> str:
+    """The report in Markdown, opening with the answer: the sections of `layout` (the full report, or the
+    diagnosis), with the runs' header first or the notes last as it says."""
     opening = "".join(f"{sentence}\n\n" for sentence in answers(summary))
-    body = "\n".join(markdown_table(t) for t in (full_report(summary, published) if tables is None else tables))
-    if tables is None:
+    body = "\n".join(markdown_table(t) for t in report_tables(summary, published, layout.sections))
+    if layout.header:
         return opening + _header(summary, published) + body
     return opening + body + "".join(f"\n{note}\n" for note in notes(summary, published, ceiling=False))
 
 
-def to_latex(summary: Summary, published: Published | None = None, tables: list[Table] | None = None) -> str:
-    """The report in LaTeX, opening with the answer; `tables` (the diagnosis) instead of the full report."""
+def to_latex(summary: Summary, published: Published | None = None, layout: Layout = FULL_REPORT) -> str:
+    """The report in LaTeX, opening with the answer: the sections of `layout` (the full report, or the
+    diagnosis), then the notes."""
     opening = "".join(f"\\noindent {_latex_escape(sentence)}\n\n" for sentence in answers(summary))
-    body = "\n".join(latex_table(t) for t in (full_report(summary, published) if tables is None else tables))
-    shown = notes(summary, published, ceiling=tables is None)
+    body = "\n".join(latex_table(t) for t in report_tables(summary, published, layout.sections))
+    shown = notes(summary, published, ceiling=layout.header)
     return opening + body + "".join(f"\n\\noindent {_latex_escape(note)}\n" for note in shown)
 
 
 def to_json(summary: Summary, published: Published | None = None) -> str:
-    """The summary's data; published figures are left out (they are not this report's numbers)."""
-    return json.dumps(summary.to_dict(), indent=1)
-
-
-CSV_SECTIONS = ("by_source", "per_dimension", "per_suite", "per_split", "per_task")
+    """The summary's data (`JSON_REPORT`'s sections); published figures are left out (they are not this report's
+    numbers)."""
+    return json.dumps(report_data(summary), indent=1)
 
 
 def to_csv(summary: Summary, published: Published | None = None) -> str:
-    """Tidy CSV: one row per (run, table, group), the JSON report's rate rows."""
-    data = summary.to_dict()
-    privilege = {run["run"]: run["privilege"] for run in data["runs"]}
+    """Tidy CSV: one row per (run, table, group), the JSON report's rate rows (`CSV_REPORT`'s sections)."""
+    privilege = {run.name: str(run.privilege) for run in summary.runs}
     buffer = io.StringIO()
     writer = csv.writer(buffer)
     columns = [
@@ -133,8 +133,8 @@ def to_csv(summary: Summary, published: Published | None = None) -> str:
         "relative_to_oracle",
     ]
     writer.writerow(["run", "privilege", "table", "group", *columns])
-    for section in CSV_SECTIONS:
-        for row in data[section]:
+    for section, rows in report_data(summary, CSV_REPORT).items():
+        for row in rows:
             values = [f"{v:.4f}" if isinstance(v := row[c], float) else ("" if v is None else v) for c in columns]
             writer.writerow([row["run"], privilege[row["run"]], section, row["id"], *values])
     return buffer.getvalue()
@@ -157,7 +157,7 @@ def render(paths: list[str | Path], fmt: str = "md", *, published: bool = True, 
 
 
 # The formats that show the short diagnosis (`report --summary`): json and csv hold every number already.
-DIAGNOSIS_FORMATS: dict[str, Callable[[Summary, Published | None, list[Table]], str]] = {
+DIAGNOSIS_FORMATS: dict[str, Callable[[Summary, Published | None, Layout], str]] = {
     "md": to_markdown,
     "latex": to_latex,
 }
@@ -170,4 +170,4 @@ def diagnosis_text(
     (`fmt`: a name in `DIAGNOSIS_FORMATS`; `allow_mismatch` pairs runs whose protocols differ)."""
     summary = summarize(load_runs(paths), allow_mismatch=allow_mismatch)
     reference = load_published() if published else None
-    return DIAGNOSIS_FORMATS[fmt](summary, reference, diagnosis(summary, reference))
+    return DIAGNOSIS_FORMATS[fmt](summary, reference, DIAGNOSIS)

@@ -17,8 +17,9 @@ from pathlib import Path
 from langgap.catalog.labels import DIMENSION_LABEL, label
 from langgap.records import Outcome
 from langgap.report.published import Published
+from langgap.report.sections import FULL_REPORT, report_data, report_tables
 from langgap.report.summary import Summary, shown_dimensions
-from langgap.report.tables import OUTCOME_NAME, Table, full_report, notes, selection_text
+from langgap.report.tables import OUTCOME_NAME, Table, notes, selection_text
 
 MEDIA_DIR = "media"
 
@@ -235,11 +236,11 @@ def html_page(summary: Summary, published: Published | None = None, media: dict[
     """The whole report as one HTML document; `media` maps each clip's file to its address from the page."""
     tables = "".join(
         _gallery(t, f"t{i}", media or {}) if t.kind == "gallery" else _table(t, f"t{i}")
-        for i, t in enumerate(full_report(summary, published))
+        for i, t in enumerate(report_tables(summary, published, FULL_REPORT.sections))
     )
     runs = ", ".join(html.escape(run.label) for run in summary.runs)
     selections = "".join(f"<li>{html.escape(f'{run.label} — {selection_text(run)}')}</li>" for run in summary.runs)
-    data = json.dumps(summary.to_dict()).replace("</", "<\\/")
+    data = json.dumps(report_data(summary)).replace("</", "<\\/")
     return (
         '<!doctype html><html lang="en"><head><meta charset="utf-8">'
         f"<title>LangGap report — {runs}</title><style>{_STYLE}</style></head><body>"

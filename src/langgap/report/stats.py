@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
+from typing import ClassVar
+
+from langgap.report.data import FIELDS, Spec
 
 Z_95 = 1.959964
 Z_POWER_80 = 0.841621
@@ -102,10 +105,16 @@ class Rate:
         """The minimum detectable effect at this group's size (see `minimum_detectable_effect`)."""
         return minimum_detectable_effect(self.rate, self.episodes)
 
-    def as_dict(self) -> dict:
-        low, high = self.ci
-        extra = {"oracle_rate": self.oracle_rate, "relative_to_oracle": self.relative}
-        return {**asdict(self), "rate": self.rate, "ci_low": low, "ci_high": high, "mde": self.mde, **extra}
+    # The JSON report's row (`langgap.report.data.to_data`): the fields, then the figures derived from them.
+    DATA: ClassVar[Spec] = (
+        FIELDS,
+        "rate",
+        ("ci_low", lambda r: r.ci[0]),
+        ("ci_high", lambda r: r.ci[1]),
+        "mde",
+        "oracle_rate",
+        ("relative_to_oracle", "relative"),
+    )
 
 
 @dataclass(frozen=True)
@@ -137,13 +146,28 @@ class PairedTest:
         both = self.successes_a - self.only_a
         return cohen_kappa(both, self.only_a, self.only_b, self.pairs - both - self.only_a - self.only_b)
 
-    def as_dict(self) -> dict:
-        return {
-            **asdict(self),
-            "rate_a": self.successes_a / self.pairs,
-            "rate_b": self.successes_b / self.pairs,
-            "p_value": self.p_value,
-            "agreement": self.agreement if self.retest else None,
-            "kappa": self.kappa if self.retest else None,
-            "changed_behaviour": self.changed / self.pairs,
-        }
+    @property
+    def rate_a(self) -> float:
+        """The first side's success rate over the pairs."""
+        return self.successes_a / self.pairs
+
+    @property
+    def rate_b(self) -> float:
+        """The second side's success rate over the pairs."""
+        return self.successes_b / self.pairs
+
+    @property
+    def changed_behaviour(self) -> float:
+        """The share of pairs whose achieved task differs."""
+        return self.changed / self.pairs
+
+    # The JSON report's row: the fields, then the figures derived from them (a test-retest's only for a retest).
+    DATA: ClassVar[Spec] = (
+        FIELDS,
+        "rate_a",
+        "rate_b",
+        "p_value",
+        ("agreement", lambda t: t.agreement if t.retest else None),
+        ("kappa", lambda t: t.kappa if t.retest else None),
+        "changed_behaviour",
+    )

@@ -11,8 +11,9 @@ import functools
 import statistics
 from collections import Counter, defaultdict
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import ClassVar
 
 from langgap.catalog.labels import (
     EXTENDED_DIMENSIONS,
@@ -27,6 +28,7 @@ from langgap.engine.spec import spec_differences
 from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Outcome, Privilege, achieved
 from langgap.report.answer import Answer, Switched
 from langgap.report.card import PROTOCOL_ITEMS, protocol_card
+from langgap.report.data import MERGED, Spec
 from langgap.report.load import Run
 from langgap.report.stats import PairedTest, Rate
 from langgap.stack import stack_differences
@@ -126,10 +128,6 @@ class Clip:
     instruction: str  # every instruction it was sent, in order (`timeline_text`)
     path: Path
 
-    def as_dict(self) -> dict:
-        data = {f.name: getattr(self, f.name) for f in fields(self)}
-        return {**data, "path": str(self.path)}
-
 
 def timeline_text(timeline: list[tuple[int, str]]) -> str:
     """An episode's instructions as one line: the first, then each change with its step (`→ at step K: ...`)."""
@@ -164,8 +162,8 @@ class SpreadRow:
         """The sample standard deviation across repeats (0 with one repeat)."""
         return statistics.stdev(r.rate for r in self.rates) if len(self.rates) > 1 else 0.0
 
-    def as_dict(self) -> dict:
-        return {"group": self.group, "rates": [r.rate for r in self.rates], "mean": self.mean, "std": self.std}
+    # The JSON report's row (`langgap.report.data.to_data`): each repeat's rate, their mean and spread.
+    DATA: ClassVar[Spec] = ("group", ("rates", lambda row: [r.rate for r in row.rates]), "mean", "std")
 
 
 def spread(records: list[EpisodeRecord], run_seed: int) -> list[SpreadRow]:
@@ -193,8 +191,7 @@ class OutcomeRow:
     gaps: int
     shares: dict[str, float]  # outcome -> share of the judged episodes
 
-    def as_dict(self) -> dict:
-        return {"group": self.group, "episodes": self.episodes, "gaps": self.gaps, **self.shares}
+    DATA: ClassVar[Spec] = ("group", "episodes", "gaps", (MERGED, "shares"))  # one entry per outcome
 
 
 def outcome_row(group: str, records: list[EpisodeRecord]) -> OutcomeRow:
@@ -224,12 +221,27 @@ class SwitchRow:
     tasks: int = 0  # the group's tasks
     unproven: tuple[str, ...] = ()  # its tasks the switch gate has not accepted at K (marked ⚠)
 
-    def as_dict(self) -> dict:
-        first = next(iter(self.classes.values()))
-        shares = {name: r.rate for name, r in self.classes.items()}
-        cis = {f"{name}_ci": list(r.ci) for name, r in self.classes.items()}
-        counts = {"episodes": first.episodes, "gaps": first.gaps, "tasks": self.tasks, "unproven": list(self.unproven)}
-        return {"k": self.k, "group": self.group, **counts, **shares, **cis}
+    @property
+    def episodes(self) -> int:
+        """The group's judged episodes (every class's denominator)."""
+        return next(iter(self.classes.values())).episodes
+
+    @property
+    def gaps(self) -> int:
+        """The group's gaps (left out of every class's share)."""
+        return next(iter(self.classes.values())).gaps
+
+    # The JSON report's row (`langgap.report.data.to_data`): the counts, each class's share, then their intervals.
+    DATA: ClassVar[Spec] = (
+        "k",
+        "group",
+        "episodes",
+        "gaps",
+        "tasks",
+        "unproven",
+        (MERGED, lambda row: {name: r.rate for name, r in row.classes.items()}),
+        (MERGED, lambda row: {f"{name}_ci": r.ci for name, r in row.classes.items()}),
+    )
 
 
 def switch_rows(records: list[EpisodeRecord], verdicts: SwitchVerdicts | None = None) -> list[SwitchRow]:
@@ -538,21 +550,6 @@ class SideBySide:
             return run.source(group)
         return next((r for r in run.by_dimension if r.group == group), None)
 
-    def as_dict(self) -> list[dict]:
-        """One row per (row, catalog, group) the runs have: the JSON report's `side_by_side` section."""
-        out = []
-        for number, row in enumerate(self.rows):
-            for catalog, run in row.items():
-                for group in self.groups[catalog]:
-                    if (r := self.rate(run, group)) is not None:
-                        data = r.as_dict()
-                        del data["group"]
-                        policy = run.card["policy"]
-                        out.append(
-                            {"row": number, "policy": policy, "catalog": catalog, "run": run.name, "id": group, **data}
-                        )
-        return out
-
 
 def side_by_side(runs: list[RunResults]) -> SideBySide | None:
     """The runs side by side by catalog, when some policy was run on two or more catalogs (None otherwise:
@@ -594,54 +591,6 @@ class Summary:
     def privileges(self) -> set[Privilege]:
         """The privileges the runs' policies had (`Privilege.NONE` included when one had none)."""
         return {run.privilege for run in self.runs}
-
-    def to_dict(self) -> dict:
-        """The summary as plain data (the JSON report)."""
-        out: dict = {
-            "runs": [],
-            "confusion": {},
-            "comparisons": [t.as_dict() for t in self.comparisons],
-            "protocol_mismatches": self.mismatches,
-            "comparisons_refused": self.refused,
-            "side_by_side": self.side_by_side.as_dict() if self.side_by_side else [],
-        }
-        sections = {
-            "by_source": lambda run: run.by_source,
-            "per_dimension": lambda run: run.by_dimension,
-            "per_suite": lambda run: run.by_suite,
-            "per_split": lambda run: run.by_split,
-            "per_task": lambda run: [t.rate for t in run.tasks],
-        }
-        for section in ("answers", *sections, "outcomes", "conditions", "switches", "wording", "spread", "videos"):
-            out[section] = []
-        for run in self.runs:
-            out["runs"].append(
-                {
-                    "run": run.name,
-                    "path": str(run.path),
-                    "episodes": run.episodes,
-                    "gaps": run.gaps,
-                    "privilege": str(run.privilege),
-                    "spec": run.spec,
-                    "card": run.card,
-                    "capped_tasks": run.capped,
-                    "other_stack_tasks": run.other_stack,
-                    "gate": run.gate_source,
-                }
-            )
-            for section, rows in sections.items():
-                for row in rows(run):
-                    data = row.as_dict()
-                    out[section].append({"run": run.name, "id": data.pop("group"), **data})
-            out["answers"].append({"run": run.name, **run.answer.as_dict()})
-            out["outcomes"] += [{"run": run.name, **o.as_dict()} for o in run.outcomes]
-            out["conditions"] += [{"run": run.name, **t.as_dict()} for t in run.conditions]
-            out["switches"] += [{"run": run.name, **row.as_dict()} for row in run.switches]
-            out["wording"] += [{"run": run.name, **t.as_dict()} for t in run.wording]
-            out["spread"] += [{"run": run.name, **row.as_dict()} for row in run.spread]
-            out["videos"] += [{"run": run.name, **clip.as_dict()} for clip in run.clips]
-            out["confusion"][run.name] = run.confusion
-        return out
 
 
 def protocol_differences(a: RunResults, b: RunResults) -> list[str]:

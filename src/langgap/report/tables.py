@@ -1,4 +1,5 @@
-"""The paper's table layouts (and LangGap's diagnoses), built from a `Summary` as neutral tables."""
+"""The paper's table layouts (and LangGap's diagnoses), built from a `Summary` as neutral tables: each the
+tables of one section of the report (`langgap.report.sections`), titled by that section's heading."""
 
 from __future__ import annotations
 
@@ -21,6 +22,9 @@ from langgap.report.summary import (
     shown_dimensions,
 )
 from langgap.vocabulary import CEILING_TARGET, FEASIBLE_RATE, SWITCH_RATE, Verdict
+
+# A section's heading with its fields filled (`Section.title`): `run=` the run's label, and whatever else it names.
+Title = Callable[..., str]
 
 SOURCE_LABEL = {"original": "Original (LIBERO)", "extended": "Extended (LangGap)", "total": "Total"}
 OUTCOME_LABEL = {
@@ -149,11 +153,6 @@ def _rate_rows(rates: list[Rate], names: dict[str, str]) -> list[list[str]]:
     ]
 
 
-def paper_table(title: str, table: str) -> str:
-    """A heading that says what its table holds, then which of the paper's tables it reproduces."""
-    return f"{title} (the paper's {table})"
-
-
 def _heading(text: str) -> list[str]:
     return [f"*{text}*", *[""] * (len(_RATE_HEADERS) - 1)]
 
@@ -165,22 +164,20 @@ SUITE_KIND_LABEL = {
 }
 
 
-def source_table(run: RunResults) -> Table:
+def source_table(run: RunResults, title: Title) -> Table:
     """Success by data source, by suite and by perturbation dimension, each beside the oracle's ceiling (the
     paper's Table II)."""
     rows = [_heading("By data source"), *_rate_rows(run.by_source, SOURCE_LABEL)]
     rows += [_heading("By suite"), *_rate_rows(run.by_suite, SUITE_KIND_LABEL)]
     rows += [_heading("By perturbation dimension"), *_rate_rows(run.by_dimension, DIMENSION_LABEL)]
-    return Table(
-        paper_table(f"Success by data source, suite and dimension — {run.label}", "Table II"), _RATE_HEADERS, rows
-    )
+    return Table(title(run=run.label), _RATE_HEADERS, rows)
 
 
 def _published_cells(values: dict[str, float], keys: list[str]) -> list[str]:
     return [f"{values[k]:.1f}" if k in values else "–" for k in keys]
 
 
-def suite_table(summary: Summary, published: Published | None = None) -> Table:
+def suite_table(summary: Summary, published: Published | None, title: Title) -> Table:
     """Success per suite, original vs extended, one row per run (libero_10 has no extended tasks; the paper's
     Table VI); the paper's rows below them when `published` is given."""
     keys = [f"{s}/{k}" for s in SUITE_ORDER for k in ("original", "extended") if (s, k) != ("libero_10", "extended")]
@@ -194,11 +191,10 @@ def suite_table(summary: Summary, published: Published | None = None) -> Table:
     for row in published.suites if published else []:
         cells = _published_cells(row.values, [*keys, "original", "extended"])
         rows.append([published.label(row.method, "Table VI"), *cells])
-    title = paper_table("Success per suite, original vs extended tasks — success %, 95% CI", "Table VI")
-    return Table(title, [*headers, "Total Orig", "Total Ext"], rows)
+    return Table(title(), [*headers, "Total Orig", "Total Ext"], rows)
 
 
-def dimension_table(summary: Summary, published: Published | None = None) -> Table:
+def dimension_table(summary: Summary, published: Published | None, title: Title) -> Table:
     """Success on extended tasks by dimension, one row per run (the paper's Table VII); the paper's rows below
     when `published` is given."""
     headers = ["Method", *(DIMENSION_LABEL[d] for d in EXTENDED_DIMENSIONS), "Total"]
@@ -211,11 +207,10 @@ def dimension_table(summary: Summary, published: Published | None = None) -> Tab
     for row in published.dimensions if published else []:
         cells = _published_cells(row.values, [*EXTENDED_DIMENSIONS, "extended"])
         rows.append([published.label(row.method, "Table VII"), *cells])
-    title = paper_table("Success on extended tasks by dimension — success %, 95% CI, (tasks)", "Table VII")
-    return Table(title, headers, rows)
+    return Table(title(), headers, rows)
 
 
-def beyond_table(summary: Summary) -> Table | None:
+def beyond_table(summary: Summary, published: Published | None, title: Title) -> Table | None:
     """`dimension_table`'s form for the dimensions beyond the paper's that the runs have (`langgap-beyond`'s ordering,
     negation, paraphrase, attribute reference; other catalogs' such as libero-pro's task and language); None
     when they have none."""
@@ -227,9 +222,7 @@ def beyond_table(summary: Summary) -> Table | None:
         by_dim = {r.group: r for r in run.by_dimension}
         rows.append([run.label, *(rate_cell(r) + f" ({r.tasks})" if (r := by_dim.get(d)) else "–" for d in beyond)])
     headers = ["Method", *(label(DIMENSION_LABEL, d) for d in beyond)]
-    return Table(
-        "Success on extended tasks by the dimensions beyond the paper's — success %, 95% CI, (tasks)", headers, rows
-    )
+    return Table(title(), headers, rows)
 
 
 def _side_by_side_label(row: dict[str, RunResults]) -> str:
@@ -240,7 +233,7 @@ def _side_by_side_label(row: dict[str, RunResults]) -> str:
     return f"{first.card['policy']}{f' {mark}' if mark else ''} ({directories})"
 
 
-def side_by_side_table(summary: Summary) -> Table | None:
+def side_by_side_table(summary: Summary, published: Published | None, title: Title) -> Table | None:
     """One policy's runs on several catalogs: a column group per catalog (its originals, each of its
     dimensions, all its extended tasks), success % with its 95% interval; None unless a policy was run
     on two or more catalogs (`summary.side_by_side`)."""
@@ -254,16 +247,18 @@ def side_by_side_table(summary: Summary) -> Table | None:
     for row in side.rows:
         cells = [rate_cell(side.rate(row[c], g)) if c in row else "–" for c in side.catalogs for g in side.groups[c]]
         rows.append([_side_by_side_label(row), *cells])
-    title = "Side by side — one policy on several catalogs (success %, 95% CI; columns: catalog: tasks)"
-    return Table(title, headers, rows, column_groups=groups)
+    return Table(title(), headers, rows, column_groups=groups)
 
 
 def _count_cell(successes: int, episodes: int) -> str:
     return f"{successes}/{episodes} ({pct(successes / episodes)}%)" if episodes else "–"
 
 
-def published_appendix_table(summary: Summary, published: Published) -> Table:
-    """The paper's per-task appendix for π0.5, beside each run's result on the same tasks."""
+def published_appendix_table(summary: Summary, published: Published | None, title: Title) -> Table | None:
+    """The paper's per-task appendix for π0.5, beside each run's result on the same tasks (None: the published
+    figures are left out)."""
+    if published is None:
+        return None
     rows = []
     for group in published.appendix:
         row = [label(DIMENSION_LABEL, group.dimension), group.label]
@@ -274,34 +269,32 @@ def published_appendix_table(summary: Summary, published: Published) -> Table:
         rows.append(row)
     method = published.label(published.appendix_method, "appendix")
     headers = ["Dimension", "Tasks", method, *(run.label for run in summary.runs)]
-    title = f"Success per group of tasks — {published.appendix_method} as published, beside your runs on the same tasks"
-    return Table(paper_table(title, "appendix"), headers, rows)
+    return Table(title(method=published.appendix_method), headers, rows)
 
 
-def published_diagnostic_table(published: Published) -> Table:
-    """The paper's Table II as published (its episode counts, with the Wilson intervals they imply)."""
+def published_diagnostic_table(summary: Summary, published: Published | None, title: Title) -> Table | None:
+    """The paper's Table II as published (its episode counts, with the Wilson intervals they imply; None: the
+    published figures are left out)."""
+    if published is None:
+        return None
     names = {**DIMENSION_LABEL, **SOURCE_LABEL}
-    title = paper_table(
-        f"Success by data source and dimension — {published.diagnostic_method} as published", "Table II"
-    )
-    return Table(title, _RATE_HEADERS, _rate_rows(published.diagnostic, names))
+    return Table(title(method=published.diagnostic_method), _RATE_HEADERS, _rate_rows(published.diagnostic, names))
 
 
-def split_table(run: RunResults) -> Table:
-    title = f"Success on training vs held-out tasks — {run.label}"
-    return Table(title, _RATE_HEADERS, _rate_rows(run.by_split, SPLIT_LABEL))
+def split_table(run: RunResults, title: Title) -> Table:
+    """Success on the tasks a policy may have trained on against the held-out ones."""
+    return Table(title(run=run.label), _RATE_HEADERS, _rate_rows(run.by_split, SPLIT_LABEL))
 
 
-def mde_table(run: RunResults) -> Table:
+def mde_table(run: RunResults, title: Title) -> Table:
     """Per dimension: the smallest change in success rate another run of this size would detect."""
     rates = [run.source("original"), *run.by_dimension, run.source("extended")]
     names = {**DIMENSION_LABEL, **SOURCE_LABEL}
     rows = [[label(names, r.group), str(r.episodes), pct(r.rate), pct(r.mde)] for r in rates if r.episodes]
-    title = f"Minimum detectable effect — {run.label} (80 % power, α = 0.05, against a run of the same size)"
-    return Table(title, ["Category", "Episodes", "Rate %", "MDE (points)"], rows)
+    return Table(title(run=run.label), ["Category", "Episodes", "Rate %", "MDE (points)"], rows)
 
 
-def spread_table(run: RunResults) -> Table | None:
+def spread_table(run: RunResults, title: Title) -> Table | None:
     """Between-seed spread: each repeat's rate beside the pooled rate and its episode interval."""
     if not run.spread:
         return None
@@ -318,10 +311,10 @@ def spread_table(run: RunResults) -> Table | None:
         for row in run.spread
     ]
     headers = ["Category", "Rate % per seed", "Mean %", "Std across seeds (points)", "Pooled %, 95% CI"]
-    return Table(f"Between-seed spread — {run.label} (same init states, other seeds)", headers, rows)
+    return Table(title(run=run.label), headers, rows)
 
 
-def outcome_table(run: RunResults) -> Table:
+def outcome_table(run: RunResults, title: Title) -> Table:
     """What the policy did instead, per dimension (`did source task` is the default-task rate). `wrong order`
     is shown for runs with ordered tasks (or any episode in that outcome); `persisted` never (the table holds
     `given` episodes: only a switch's persist, in `switch_table`)."""
@@ -338,7 +331,7 @@ def outcome_table(run: RunResults) -> Table:
         ]
         for o in run.outcomes
     ]
-    return Table(f"What the policy did instead — {run.label} (did source task = default-task rate)", headers, rows)
+    return Table(title(run=run.label), headers, rows)
 
 
 CAPPED_MARK = "⚠"
@@ -360,7 +353,7 @@ def _instead_cells(t: TaskRow) -> list[str]:
     return [OUTCOME_NAME[outcome], str(count)]
 
 
-def task_table(run: RunResults) -> Table:
+def task_table(run: RunResults, title: Title) -> Table:
     """The appendix: every task, grouped by dimension, with what it most often ended in instead."""
     rows = [
         [
@@ -381,10 +374,10 @@ def task_table(run: RunResults) -> Table:
     headers = ["Suite", "Dimension", "Split", "Task", "Instruction", "Success", "Rate %", "95% CI", "Gaps"]
     headers += ["Oracle %", "Relative %", "Mostly did instead", "Episodes"]
     filters = ("Suite", "Dimension", "Split", "Mostly did instead")
-    return Table(f"Success per task — {run.label}", headers, rows, filters)
+    return Table(title(run=run.label), headers, rows, filters)
 
 
-def video_table(run: RunResults) -> Table | None:
+def video_table(run: RunResults, title: Title) -> Table | None:
     """The filmed episodes, `did source task` first, with the instruction each was given."""
     if not run.clips:
         return None
@@ -401,17 +394,14 @@ def video_table(run: RunResults) -> Table | None:
         for c in run.clips
     ]
     headers = ["Outcome", "Task", "Condition", "Init", "Seed", "Instruction", "Video"]
-    return Table(f"Filmed episodes — {run.label}", headers, rows, kind="gallery")  # grouped by outcome on a page
+    return Table(title(run=run.label), headers, rows, kind="gallery")  # grouped by outcome on a page
 
 
 def _paired_cells(t: PairedTest) -> list[str]:
-    d = t.as_dict()
-    return [t.name, str(t.pairs), pct(d["rate_a"]), pct(d["rate_b"]), str(t.only_a), str(t.only_b), f"{t.p_value:.3g}"]
+    return [t.name, str(t.pairs), pct(t.rate_a), pct(t.rate_b), str(t.only_a), str(t.only_b), f"{t.p_value:.3g}"]
 
 
-def _paired_table(
-    title: str, run: RunResults, tests: list[PairedTest], a: str, b: str, last: tuple[str, Callable]
-) -> Table | None:
+def _paired_table(title: str, tests: list[PairedTest], a: str, b: str, last: tuple[str, Callable]) -> Table | None:
     """`run`'s paired tests (McNemar) as a table: `a` against `b` episode by episode, then one column
     `last` (its header, and its cell from a test); None without tests."""
     if not tests:
@@ -419,22 +409,22 @@ def _paired_table(
     header, cell = last
     headers = ["Comparison", "Pairs", f"{a} %", f"{b} %", f"Only {a.lower()}", f"Only {b.lower()}", "p", header]
     rows = [[*_paired_cells(t), cell(t)] for t in tests]
-    return Table(f"{title}, paired episode by episode (McNemar) — {run.label}", headers, rows)
+    return Table(title, headers, rows)
 
 
-def wording_table(run: RunResults) -> Table | None:
+def wording_table(run: RunResults, title: Title) -> Table | None:
     """Paraphrases and attribute references against their sources' original sentences, episode by episode."""
     difference = ("Difference (points)", lambda t: f"{100 * (t.successes_b - t.successes_a) / t.pairs:+.1f}")
-    return _paired_table("Same goal, other words", run, run.wording, "Original", "Reworded", difference)
+    return _paired_table(title(run=run.label), run.wording, "Original", "Reworded", difference)
 
 
-def condition_table(run: RunResults) -> Table | None:
+def condition_table(run: RunResults, title: Title) -> Table | None:
     """Language conditions against `given`, episode by episode."""
-    changed = ("Behaviour changed %", lambda t: pct(t.changed / t.pairs))
-    return _paired_table("Language conditions", run, run.conditions, "Given", "Condition", changed)
+    changed = ("Behaviour changed %", lambda t: pct(t.changed_behaviour))
+    return _paired_table(title(run=run.label), run.conditions, "Given", "Condition", changed)
 
 
-def switch_table(run: RunResults) -> Table | None:
+def switch_table(run: RunResults, title: Title) -> Table | None:
     """What the policy did after its instruction changed at step K (`switch:K`), per K and dimension, each
     share with its 95% interval; None for a run without a switch. Paired against `given` in the conditions.
     ⚠ counts the group's tasks the switch gate has not accepted at K (unproven there), named in the title."""
@@ -446,60 +436,61 @@ def switch_table(run: RunResults) -> Table | None:
         [
             str(row.k),
             label(OUTCOME_GROUP_LABEL, row.group),
-            str(next(iter(row.classes.values())).episodes),
+            str(row.episodes),
             *(f"{pct(r.rate)} {ci(r)}" for r in row.classes.values()),
-            str(next(iter(row.classes.values())).gaps),
+            str(row.gaps),
             f"{len(row.unproven)} of {row.tasks}" if row.unproven else "",
         ]
         for row in run.switches
     ]
-    title = (
-        f"Instruction switched at step K — {run.label} (persisted: after the switch it did what the first "
-        "instruction asked; other: another scene task)"
-    )
+    heading = title(run=run.label)
     unproven = sorted({(row.k, task) for row in run.switches for task in row.unproven})
     if unproven:
         named = ", ".join(f"{task} at K={k}" for k, task in unproven[:SHOWN_UNPROVEN])
         more = len(unproven) - SHOWN_UNPROVEN
-        title += (
+        heading += (
             f"; {CAPPED_MARK} the switch gate (oracle ≥ {percent(SWITCH_RATE)} under switch:K) has not accepted {named}"
         )
-        title += f" and {more} more (the JSON report's switches section lists them)" if more > 0 else ""
-    return Table(title, headers, rows)
+        heading += f" and {more} more (the JSON report's switches section lists them)" if more > 0 else ""
+    return Table(heading, headers, rows)
 
 
 SHOWN_UNPROVEN = 6  # task and K pairs a switch table's title names
 
 
-def comparison_table(summary: Summary) -> Table | None:
-    """The first run against each other run on matched episodes; refused when their protocols differ."""
-    if summary.refused:
-        rows = [[name, ", ".join(items)] for name, items in summary.mismatches.items()]
-        title = "Runs not compared: their protocols differ from the first run's (--allow-mismatch pairs them anyway)"
-        return Table(title, ["Run", "Differs in"], rows)
+def mismatch_table(summary: Summary, published: Published | None, title: Title) -> Table | None:
+    """The runs not compared with the first because their protocols differ (None: none was refused)."""
+    if not summary.refused:
+        return None
+    rows = [[name, ", ".join(items)] for name, items in summary.mismatches.items()]
+    return Table(title(), ["Run", "Differs in"], rows)
+
+
+def comparison_table(summary: Summary, published: Published | None, title: Title) -> Table | None:
+    """The first run against each other run on matched episodes (None: none was paired)."""
     if not summary.comparisons:
         return None
     headers = ["Comparison", "Pairs", "First %", "Second %", "Only first", "Only second", "p"]
-    title = "Runs compared on matched episodes (McNemar)"
+    heading = title()
     if summary.mismatches:
-        title += " — protocols differ: " + "; ".join(f"{n}: {', '.join(i)}" for n, i in summary.mismatches.items())
+        heading += " — protocols differ: " + "; ".join(f"{n}: {', '.join(i)}" for n, i in summary.mismatches.items())
     rows = [_paired_cells(t) for t in summary.comparisons]
     if any(t.retest for t in summary.comparisons):
         # Agreement and κ are a test-retest: shown for runs of one spec only, blank beside any other run.
-        title += "; Agree % and κ: one run spec run twice (test-retest)"
+        heading += "; Agree % and κ: one run spec run twice (test-retest)"
         headers += ["Agree %", "κ"]
         for row, t in zip(rows, summary.comparisons, strict=True):
             row += [pct(t.agreement), "–" if t.kappa is None else f"{t.kappa:.2f}"] if t.retest else ["", ""]
-    return Table(title, headers, rows)
+    return Table(heading, headers, rows)
 
 
-def protocol_table(summary: Summary) -> Table:
+def protocol_table(summary: Summary, published: Published | None, title: Title) -> Table:
     """The protocol card: what determines each run's numbers."""
     rows = [[item, *(run.card[item] for run in summary.runs)] for item in CARD_ITEMS]
-    return Table("Protocol card", ["", *(run.label for run in summary.runs)], rows)
+    return Table(title(), ["", *(run.label for run in summary.runs)], rows)
 
 
-def confusion_tables(run: RunResults) -> list[Table]:
+def confusion_tables(run: RunResults, title: Title) -> list[Table]:
     """Per scene with two or more tasks: intended × achieved episode counts."""
     tables = []
     for rows in sorted(run.confusion.values(), key=lambda rows: sorted(rows)[0]):
@@ -511,64 +502,10 @@ def confusion_tables(run: RunResults) -> list[Table]:
         suite, scene = intended[0].split("/")[:2]
         tables.append(
             Table(
-                f"Confusion (intended × achieved) — {run.label}, scene {suite}/{scene}",
+                title(run=run.label, scene=f"{suite}/{scene}"),
                 ["intended \\ achieved", *(task_label(run, c) for c in columns)],
                 body,
                 kind="heatmap",
             )
         )
-    return tables
-
-
-def full_report(summary: Summary, published: Published | None = None) -> list[Table]:
-    """Every table of `langgap report` (with the paper's published rows when `published` is given); runs of
-    one policy on several catalogs side by side first, after the protocol card."""
-    tables = [protocol_table(summary)]
-    if (catalogs := side_by_side_table(summary)) is not None:
-        tables.append(catalogs)
-    for run in summary.runs:
-        tables += [source_table(run), outcome_table(run)]
-        if (videos := video_table(run)) is not None:
-            tables.append(videos)
-        tables += [split_table(run), mde_table(run)]
-        if (seeds := spread_table(run)) is not None:
-            tables.append(seeds)
-        if (conditions := condition_table(run)) is not None:
-            tables.append(conditions)
-        if (switches := switch_table(run)) is not None:
-            tables.append(switches)
-        if (wording := wording_table(run)) is not None:
-            tables.append(wording)
-    if published:
-        tables.append(published_diagnostic_table(published))
-    tables += [suite_table(summary, published), dimension_table(summary, published)]
-    if (beyond := beyond_table(summary)) is not None:
-        tables.append(beyond)
-    if (comparison := comparison_table(summary)) is not None:
-        tables.append(comparison)
-    if published:
-        tables.append(published_appendix_table(summary, published))
-    for run in summary.runs:
-        tables += [task_table(run), *confusion_tables(run)]
-    return tables
-
-
-def diagnosis(summary: Summary, published: Published | None = None) -> list[Table]:
-    """The short diagnosis: success by dimension (runs side by side) and what each policy did instead."""
-    tables = [protocol_table(summary)]
-    if (catalogs := side_by_side_table(summary)) is not None:
-        tables.append(catalogs)
-    tables.append(dimension_table(summary, published))
-    if (beyond := beyond_table(summary)) is not None:
-        tables.append(beyond)
-    if (comparison := comparison_table(summary)) is not None and summary.refused:
-        tables.append(comparison)
-    for run in summary.runs:
-        tables.append(outcome_table(run))
-        if (conditions := condition_table(run)) is not None:
-            tables.append(conditions)
-        if (switches := switch_table(run)) is not None:
-            tables.append(switches)
-        if (wording := wording_table(run)) is not None:
-            tables.append(wording)
     return tables
