@@ -18,7 +18,7 @@ from langgap.catalog.catalog import DEFAULT_CATALOG, catalog_hash, load_catalog
 from langgap.catalog.task import DEFAULT_STYLE, INSTRUCTION_STYLES
 from langgap.engine.filming import VideoSelection
 from langgap.engine.plan import CONDITION_HELP, REPEAT_STRIDE, unknown_conditions
-from langgap.errors import LangGapError
+from langgap.errors import LangGapError, ParameterError
 from langgap.policies import policy_kwargs
 
 PAPER_EPISODES = 20
@@ -35,6 +35,10 @@ RESULT_STEPPINGS = tuple(s for s in stack.STEPPINGS if s != "robosuite")
 
 class SpecError(LangGapError):
     """A run spec or execution option is invalid, or a stored run was made with another spec."""
+
+
+class SpecParameterError(SpecError, ParameterError):
+    """An argument of `RunSpec.create` or `ExecutionOptions` is invalid, named as the caller passed it."""
 
 
 @dataclass(frozen=True)
@@ -77,9 +81,11 @@ class RunSpec:
         policy_args = {str(k): str(v) for k, v in (policy_args or {}).items()}
         policy_kwargs(policy, policy_args)
         if episodes < 1:
-            raise SpecError(f"--episodes must be at least 1, got {episodes}")
+            raise SpecParameterError("{episodes} must be at least 1, got {got}", got=episodes)
         if not 1 <= repeats <= REPEAT_STRIDE:
-            raise SpecError(f"--repeats must be between 1 and {REPEAT_STRIDE}, got {repeats}")
+            raise SpecParameterError(
+                "{repeats} must be between 1 and {most}, got {got}", most=REPEAT_STRIDE, got=repeats
+            )
         if style not in INSTRUCTION_STYLES:
             raise SpecError(f"unknown instruction style {style!r} (known: {', '.join(INSTRUCTION_STYLES)})")
         if stepping not in RESULT_STEPPINGS:
@@ -164,33 +170,36 @@ class ExecutionOptions:
     def __post_init__(self) -> None:
         # The backend's name is checked by `langgap.engine.pools.make_pool`, which owns the registry.
         if self.workers < 0 or (self.backend != "local" and self.workers < 1):
-            raise SpecError(f"--workers must be at least {0 if self.backend == 'local' else 1}, got {self.workers}")
+            least = 0 if self.backend == "local" else 1
+            raise SpecParameterError("{workers} must be at least {least}, got {got}", least=least, got=self.workers)
         if self.timeout_s is not None and self.timeout_s <= 0:
-            raise SpecError(f"--timeout must be positive, got {self.timeout_s}")
+            raise SpecParameterError("{timeout_s} must be positive, got {got}", got=self.timeout_s)
         if self.timeout_s is not None and self.backend == "local" and self.workers == 0:
-            raise SpecError("--timeout needs worker processes: an episode in this process cannot be stopped")
+            raise SpecParameterError("{timeout_s} needs worker processes: an episode in this process cannot be stopped")
         if self.max_attempts < 1:
-            raise SpecError(f"--max-attempts must be at least 1, got {self.max_attempts}")
+            raise SpecParameterError("{max_attempts} must be at least 1, got {got}", got=self.max_attempts)
         if self.max_failure_streak < 1:
-            raise SpecError(f"--max-failure-streak must be at least 1, got {self.max_failure_streak}")
+            raise SpecParameterError("{max_failure_streak} must be at least 1, got {got}", got=self.max_failure_streak)
         try:
             VideoSelection.parse(self.video)
-        except LangGapError as exc:
-            raise SpecError(str(exc)) from None
+        except ParameterError as exc:
+            raise SpecParameterError(exc.template, **exc.values) from None
         if self.ray_address is not None and self.backend != "ray":
-            raise SpecError("--ray-address needs --backend ray")
-        batching = {"--max-batch": self.max_batch, "--max-wait-ms": self.max_wait_ms, "--policy-gpus": self.policy_gpus}
-        given = [flag for flag, value in batching.items() if value is not None]
+            raise SpecParameterError("{ray_address} needs {backend} ray")
+        batching = {"max_batch": self.max_batch, "max_wait_ms": self.max_wait_ms, "policy_gpus": self.policy_gpus}
+        given = ", ".join(f"{{{name}}}" for name, value in batching.items() if value is not None)
         if given and not self.shared_policy:
-            raise SpecError(f"{', '.join(given)} only apply to a shared policy (--shared-policy)")
+            raise SpecParameterError(given + " only apply to a shared policy ({shared_policy})")
         if self.shared_policy and self.workers == 0:
-            raise SpecError("--shared-policy needs worker processes to serve (--workers 1 or more)")
+            raise SpecParameterError("{shared_policy} needs worker processes to serve ({workers} 1 or more)")
         if self.policy_gpus is not None and self.backend != "ray":
-            raise SpecError("--policy-gpus needs --backend ray (a local policy process uses the GPUs it can see)")
+            raise SpecParameterError(
+                "{policy_gpus} needs {backend} ray (a local policy process uses the GPUs it can see)"
+            )
         if self.max_batch is not None and self.max_batch < 1:
-            raise SpecError(f"--max-batch must be at least 1, got {self.max_batch}")
+            raise SpecParameterError("{max_batch} must be at least 1, got {got}", got=self.max_batch)
         if (self.max_wait_ms or 0) < 0 or (self.policy_gpus or 0) < 0:
-            raise SpecError("--max-wait-ms and --policy-gpus must not be negative")
+            raise SpecParameterError("{max_wait_ms} and {policy_gpus} must not be negative")
 
     @property
     def video_selection(self) -> VideoSelection:
