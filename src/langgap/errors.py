@@ -8,7 +8,11 @@ from collections.abc import Mapping
 
 
 class LangGapError(Exception):
-    """Base class: the CLI prints `error: <message>` and exits with `exit_code`."""
+    """Base class: the CLI prints `error: <message>` and exits with `exit_code`.
+
+    Attributes:
+        exit_code: The CLI's exit code for the error (2: bad input; 4: the work failed).
+    """
 
     exit_code = 2
 
@@ -37,7 +41,14 @@ class ParameterError(LangGapError):
         super().__init__(self.naming({}))
 
     def naming(self, names: Mapping[str, str]) -> str:
-        """The message with each parameter spelled as `names` spells it (as passed where `names` has none)."""
+        """The message with each parameter spelled as `names` spells it.
+
+        Args:
+            names: Parameter -> its spelling (`{"episodes": "--episodes"}`); one it lacks reads as passed.
+
+        Returns:
+            The message.
+        """
         return self.template.format_map({**{p: names.get(p, p) for p in self.parameters}, **self.values})
 
     def __reduce__(self):
