@@ -51,7 +51,7 @@ class ParameterError(LangGapError):
         """
         return self.template.format_map({**{p: names.get(p, p) for p in self.parameters}, **self.values})
 
-    def __reduce__(self):
+    def __reduce__(self) -> tuple:
         # Copied and pickled as its template and values: its message (`args`) is no template.
         return functools.partial(type(self), **self.values), (self.template,)
 

@@ -9,7 +9,8 @@ from collections.abc import Iterator
 
 from langgap.errors import LangGapError, ParameterError
 
-# The parameters set by a flag of another `dest`; every other parameter is its flag's dest.
+# The parameters set by a flag of another `dest`; every other parameter is its flag's dest. The retries' flag
+# stores `work_attempts`: `collect` spells it `--max-task-attempts`, its own `--max-attempts` being another option.
 DESTS = {"timeout_s": "timeout", "max_attempts": "work_attempts"}
 
 
