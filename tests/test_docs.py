@@ -1,10 +1,13 @@
 """The documentation: the MkDocs site builds with `--strict` (no broken link, missing anchor or missing API
-object), its CLI reference lists every flag of every command, and the README stays a front page."""
+object), its CLI reference lists every flag of every command, every public name documents its parameters
+(Google-style `Args:`, as mkdocstrings parses them), and the README stays a front page."""
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import importlib.util
+import inspect
 import os
 import re
 import subprocess
@@ -77,6 +80,69 @@ def test_the_api_page_renders_the_public_names_from_their_docstrings(site):
     page = (out / "api" / "index.html").read_text()
     for name in langgap.__all__:
         assert re.search(rf'id="langgap\.[\w.]*\b{name}"', page), name
+
+
+def _sections(doc: str | None) -> dict[str, set[str]]:
+    """The names each section of a Google-style docstring documents (`parameters`, `attributes`, `returns`,
+    ...), read by griffe's parser, the one mkdocstrings renders the API page with."""
+    from griffe import Docstring, Parser
+
+    found: dict[str, set[str]] = {}
+    for section in Docstring(inspect.cleandoc(doc or ""), lineno=1).parse(Parser.google, warn_missing_types=False):
+        items = section.value if isinstance(section.value, list) else [section.value]
+        found.setdefault(section.kind.value, set()).update(getattr(item, "name", "").lstrip("*") for item in items)
+    return found
+
+
+def _parameters(call) -> list[str]:
+    return [name for name in inspect.signature(call).parameters if name not in ("self", "cls")]
+
+
+def _calls(name: str, value) -> list[tuple[str, object, dict[str, set[str]], tuple[str, ...]]]:
+    """(what, the call, its docstring's sections, the sections that may document its parameters) for each way
+    a caller calls public `name`: a function; a class's own classmethods and static methods and its constructor
+    (a dataclass's fields are its parameters: its Attributes may document them)."""
+    if not isinstance(value, type):
+        return [(name, value, _sections(value.__doc__), ("parameters",))]
+    calls = []
+    for attribute, member in vars(value).items():
+        if isinstance(member, classmethod | staticmethod) and not attribute.startswith("_"):
+            call = getattr(value, attribute)
+            calls.append((f"{name}.{attribute}", call, _sections(call.__doc__), ("parameters",)))
+    init = vars(value).get("__init__")
+    if init is not None and init.__module__ == value.__module__:  # its own (not Protocol's or Exception's)
+        kinds = ("parameters", "attributes") if dataclasses.is_dataclass(value) else ("parameters",)
+        calls.append((name, value, _sections(value.__doc__), kinds))
+    return calls
+
+
+@pytest.mark.requires(HAS_MKDOCS, "mkdocs, mkdocs-material and mkdocstrings[python] (pip install '.[docs]')")
+def test_every_public_call_documents_each_parameter_and_what_it_returns():
+    import langgap
+
+    checked = set()
+    for name in langgap.__all__:
+        for what, call, sections, kinds in _calls(name, getattr(langgap, name)):
+            documented = set().union(*(sections.get(kind, set()) for kind in kinds))
+            missing = [p for p in _parameters(call) if p not in documented]
+            assert not missing, f"{what}: no Args line (or Attributes, for a dataclass field) for {missing}"
+            returns = inspect.signature(call).return_annotation
+            if not isinstance(call, type) and returns not in ("None", None):
+                assert "returns" in sections, f"{what}: no Returns section"
+            checked.add(what)
+    assert {"RunSpec.create", "ExecutionOptions", "evaluate", "load_catalog", "make_policy", "Catalog"} <= checked
+
+
+@pytest.mark.requires(HAS_MKDOCS, "mkdocs, mkdocs-material and mkdocstrings[python] (pip install '.[docs]')")
+def test_the_api_page_tables_the_parameters_of_run_spec_create(site):
+    from langgap.engine.spec import RunSpec
+
+    out, _ = site
+    page = (out / "api" / "index.html").read_text()
+    section = page.split('id="langgap.engine.spec.RunSpec.create"', 1)[1].split('id="langgap.', 1)[0]
+    table = section.split('<span class="doc-section-title">Parameters:</span>', 1)[1].split("</table>", 1)[0]
+    rows = re.findall(r'<tr class="doc-section-item">\s*<td>\s*<code>(\w+)</code>', table)
+    assert rows == _parameters(RunSpec.create) and len(rows) == 11
 
 
 def test_the_readme_is_a_front_page_whose_links_resolve():

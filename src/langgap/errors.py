@@ -1,10 +1,59 @@
 """Exception types. Every user-facing failure is a `LangGapError` whose message is one line."""
 
+from __future__ import annotations
+
+import functools
+import string
+from collections.abc import Mapping
+
 
 class LangGapError(Exception):
-    """Base class: the CLI prints `error: <message>` and exits with `exit_code`."""
+    """Base class: the CLI prints `error: <message>` and exits with `exit_code`.
+
+    Attributes:
+        exit_code: The CLI's exit code for the error (2: bad input; 4: the work failed).
+    """
 
     exit_code = 2
+
+
+class ParameterError(LangGapError):
+    """An argument is out of range, or needs another one. The message names each parameter as a Python
+    caller passed it (`episodes must be at least 1, got 0`); a front end that spells them otherwise reads
+    `naming` (the CLI: `--episodes must be at least 1, got 0`).
+
+    Args:
+        template: The message, each parameter written as a `{name}` field.
+        **values: The template's other fields: what the caller gave, formatted by the template and never
+            read as fields themselves.
+
+    Attributes:
+        parameters: The parameters the message names, in its order.
+        template: The message as given, with its fields.
+        values: The values given for the fields that are not parameters.
+    """
+
+    def __init__(self, template: str, **values: object) -> None:
+        fields = (field for _, field, _, _ in string.Formatter().parse(template) if field)
+        self.template = template
+        self.values = values
+        self.parameters = tuple(dict.fromkeys(f for f in fields if f not in values))
+        super().__init__(self.naming({}))
+
+    def naming(self, names: Mapping[str, str]) -> str:
+        """The message with each parameter spelled as `names` spells it.
+
+        Args:
+            names: Parameter -> its spelling (`{"episodes": "--episodes"}`); one it lacks reads as passed.
+
+        Returns:
+            The message.
+        """
+        return self.template.format_map({**{p: names.get(p, p) for p in self.parameters}, **self.values})
+
+    def __reduce__(self) -> tuple:
+        # Copied and pickled as its template and values: its message (`args`) is no template.
+        return functools.partial(type(self), **self.values), (self.template,)
 
 
 class CatalogError(LangGapError):

@@ -21,15 +21,26 @@ class Status(StrEnum):
 
 
 class Outcome(StrEnum):
-    """What an episode achieved (see `classify`)."""
+    """What an episode achieved (see `classify`).
+
+    Attributes:
+        SUCCESS: The task's goal held.
+        PERSISTED: After its instruction changed, the policy achieved the first instruction's goal.
+        WRONG_ORDER: An ordered task's sub-goals all held, but not in the order asked.
+        DID_SOURCE_TASK: An extended task's policy did the scene's original task instead.
+        DID_OTHER_TASK: The policy achieved the goal of another task of the scene.
+        NO_GOAL_REACHED: No goal of the scene's tasks held.
+        POLICY_ERROR: The policy returned a malformed action.
+        GAP: Infrastructure failed to run the episode: no verdict on the policy.
+    """
 
     SUCCESS = "success"
-    PERSISTED = "persisted"  # after its instruction changed, the policy achieved the first instruction's goal
-    WRONG_ORDER = "wrong_order"  # an ordered task's sub-goals all held, but not in the order asked
-    DID_SOURCE_TASK = "did_source_task"  # an extended task's policy did the scene's original task instead
+    PERSISTED = "persisted"
+    WRONG_ORDER = "wrong_order"
+    DID_SOURCE_TASK = "did_source_task"
     DID_OTHER_TASK = "did_other_task"
     NO_GOAL_REACHED = "no_goal_reached"
-    POLICY_ERROR = "policy_error"  # the policy returned a malformed action
+    POLICY_ERROR = "policy_error"
     GAP = "gap"
 
 
@@ -67,23 +78,68 @@ class EpisodeKey:
 
 @dataclass
 class EpisodeRecord:
-    """Everything needed to trust one episode's result (one row of a run store)."""
+    """Everything needed to trust one episode's result (one row of a run store).
+
+    Attributes:
+        task_id: The task's id.
+        init_index: The init state the episode started from.
+        seed: Its environment seed.
+        condition: Its language condition (`given`, `empty`, `shuffled`, `source`, `nonsense`, `switch:K`).
+        status: A `Status`: `done` (the policy was judged) or `gap` (infrastructure failed).
+        success: The task's goal held.
+        outcome: What the episode achieved: an `Outcome`.
+        failure_kind: Who failed an unsuccessful episode: a `FailureKind`; None on success.
+        error: Why a policy error or a gap ended it (None otherwise).
+        steps: The policy steps taken (settling not counted).
+        policy_calls: The calls to the policy's `act`.
+        instruction: The first instruction sent.
+        instruction_sha256: Its SHA-256.
+        t0_hash: A hash of the simulator state at reset: the same in every sibling task of a scene for one init
+            state and seed (empty for a gap).
+        reached: Scene task id -> the first step its goal held.
+        goals_at_start: The scene tasks whose goals already held after settling.
+        goals_at_end: Those whose goals held when the episode ended.
+        catalog: The task's catalog.
+        suite: Its LIBERO suite.
+        kind: Its kind (`original`, `extended`).
+        dimension: Its dimension.
+        split: Its split.
+        source: Its source task's id.
+        scene: A hash of the scene it is set in (`langgap.catalog.files.scene_key`).
+        max_steps: Its step limit.
+        settle_steps: Idle steps after reset, before the policy acts.
+        policy: The policy's name.
+        policy_config_hash: A short hash of the policy's configuration (`policy_config`; empty for a gap).
+        sees_state: The policy's observations carried the simulator state.
+        sees_goal: The policy was told the task id and goal (a scripted reference).
+        cameras: The cameras the policy saw.
+        image_size: Their size in pixels (0: no images).
+        physics: The physics stack and conventions the episode ran on (`langgap.stack.physics_stack`).
+        code_version: The LangGap code that ran it (`langgap.version.code_version`).
+        attempts: The attempts it took.
+        wall_time_s: Seconds it took.
+        worker: The worker that ran it (-1: none, for a gap).
+        finished_at: When it ended (UTC, ISO 8601).
+        video: Its clip's path, relative to the run directory (None: not filmed).
+        instructions: [policy step, instruction] for every instruction sent, from step 0 (schema 4; see
+            `timeline`).
+    """
 
     task_id: str
     init_index: int
     seed: int
     condition: str
-    status: str  # Status
+    status: str
     success: bool
-    outcome: str  # Outcome
-    failure_kind: str | None  # FailureKind, None on success
+    outcome: str
+    failure_kind: str | None
     error: str | None
     steps: int
     policy_calls: int
-    instruction: str  # the first instruction sent
+    instruction: str
     instruction_sha256: str
     t0_hash: str
-    reached: dict[str, int] = field(default_factory=dict)  # scene task id -> first step its goal held
+    reached: dict[str, int] = field(default_factory=dict)
     goals_at_start: list[str] = field(default_factory=list)
     goals_at_end: list[str] = field(default_factory=list)
     catalog: str = ""
@@ -94,13 +150,13 @@ class EpisodeRecord:
     source: str = ""
     scene: str = ""
     max_steps: int = 0
-    settle_steps: int = 0  # idle steps after reset, before the policy acts
+    settle_steps: int = 0
     policy: str = ""
     policy_config_hash: str = ""
-    sees_state: bool = False  # the policy's observations carried the simulator state
-    sees_goal: bool = False  # the policy was told the task id and goal (a scripted reference)
-    cameras: list[str] = field(default_factory=list)  # the cameras the policy saw
-    image_size: int = 0  # their size in pixels (0: no images)
+    sees_state: bool = False
+    sees_goal: bool = False
+    cameras: list[str] = field(default_factory=list)
+    image_size: int = 0
     physics: dict = field(default_factory=dict)
     code_version: str = ""
     attempts: int = 1
@@ -108,7 +164,6 @@ class EpisodeRecord:
     worker: int = 0
     finished_at: str = ""
     video: str | None = None
-    # [policy step, instruction] for every instruction sent, from step 0 (schema 4; see `timeline`)
     instructions: list = field(default_factory=list)
 
     @property

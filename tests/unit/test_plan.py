@@ -56,7 +56,7 @@ def test_init_indices_past_the_fifty_states_are_an_error(catalog):
         build_plan(catalog.select("spatial/s0/black-bowl-1-on-plate"), catalog, episodes=1, conditions=("loud",))
     with pytest.raises(LangGapError, match="init indices -1..0 are out of range"):
         build_plan(catalog.select(BOWL_1), catalog, episodes=2, first_init=-1)
-    with pytest.raises(LangGapError, match="--episodes must be at least 1, got 0"):
+    with pytest.raises(LangGapError, match="^episodes must be at least 1, got 0$"):
         build_plan(catalog.select(BOWL_1), catalog, episodes=0)
     assert len(build_plan(catalog.select(BOWL_1), catalog, episodes=5, first_init=45)) == 5  # 45..49: the last five
 
@@ -95,24 +95,33 @@ def test_the_instruction_style_reaches_the_plan(catalog):
 @pytest.mark.parametrize(
     ("options", "message"),
     [
-        ({"workers": -1}, "--workers must be at least 0"),
-        ({"backend": "ray", "workers": 0}, "--workers must be at least 1"),
-        ({"workers": 0, "timeout_s": 10}, "--timeout needs worker processes"),
-        ({"timeout_s": 0}, "--timeout must be positive"),
-        ({"max_batch": 4}, "--shared-policy"),
-        ({"backend": "ray", "shared_policy": True, "max_batch": 0}, "--max-batch"),
-        ({"max_attempts": 0}, "--max-attempts"),
-        ({"max_failure_streak": 0}, "--max-failure-streak"),
-        ({"video": "-1"}, "--video must film at least 0 episodes"),
-        ({"ray_address": "10.0.0.1:6379"}, "--ray-address needs --backend ray"),
-        ({"shared_policy": True, "workers": 0}, "--shared-policy needs worker processes"),
-        ({"shared_policy": True, "policy_gpus": 1.0}, "--policy-gpus needs --backend ray"),
+        ({"workers": -1}, "^workers must be at least 0, got -1$"),
+        ({"backend": "ray", "workers": 0}, "^workers must be at least 1, got 0$"),
+        ({"workers": 0, "timeout_s": 10}, "^timeout_s needs worker processes"),
+        ({"timeout_s": 0}, "^timeout_s must be positive, got 0$"),
+        ({"max_batch": 4}, "^max_batch only apply to a shared policy \\(shared_policy\\)$"),
+        ({"backend": "ray", "shared_policy": True, "max_batch": 0}, "^max_batch must be at least 1, got 0$"),
+        ({"max_attempts": 0}, "^max_attempts must be at least 1, got 0$"),
+        ({"max_failure_streak": 0}, "^max_failure_streak must be at least 1, got 0$"),
+        ({"video": "-1"}, "^video must film at least 0 episodes, got '-1'$"),
+        ({"ray_address": "10.0.0.1:6379"}, "^ray_address needs backend ray$"),
+        (
+            {"shared_policy": True, "workers": 0},
+            "^shared_policy needs worker processes to serve \\(workers 1 or more\\)$",
+        ),
+        ({"shared_policy": True, "policy_gpus": 1.0}, "^policy_gpus needs backend ray"),
         (
             {"backend": "ray", "max_wait_ms": 2.0, "policy_gpus": 1.0},
-            "--max-wait-ms, --policy-gpus only apply to a shared",
+            "^max_wait_ms, policy_gpus only apply to a shared policy \\(shared_policy\\)$",
         ),
-        ({"backend": "ray", "shared_policy": True, "max_wait_ms": -1.0}, "must not be negative"),
-        ({"backend": "ray", "shared_policy": True, "policy_gpus": -0.5}, "must not be negative"),
+        (
+            {"backend": "ray", "shared_policy": True, "max_wait_ms": -1.0},
+            "^max_wait_ms and policy_gpus must not be negative$",
+        ),
+        (
+            {"backend": "ray", "shared_policy": True, "policy_gpus": -0.5},
+            "^max_wait_ms and policy_gpus must not be negative$",
+        ),
     ],
 )
 def test_execution_options_are_validated(options, message):
@@ -161,9 +170,9 @@ def test_a_spec_resolves_its_selection_and_records_what_determines_results():
 @pytest.mark.parametrize(
     ("arguments", "error", "message"),
     [
-        ({"episodes": 0}, SpecError, "--episodes must be at least 1, got 0"),
-        ({"repeats": 0}, SpecError, "--repeats must be between 1 and 1000, got 0"),
-        ({"repeats": 1001}, SpecError, "--repeats must be between 1 and 1000, got 1001"),
+        ({"episodes": 0}, SpecError, "^episodes must be at least 1, got 0$"),
+        ({"repeats": 0}, SpecError, "^repeats must be between 1 and 1000, got 0$"),
+        ({"repeats": 1001}, SpecError, "^repeats must be between 1 and 1000, got 1001$"),
         ({"style": "shouting"}, SpecError, "unknown instruction style 'shouting' \\(known: libero, paper\\)"),
         ({"conditions": ("given", "loud")}, SpecError, "unknown condition\\(s\\) \\['loud'\\]"),
         ({"conditions": ()}, SpecError, "unknown condition\\(s\\) \\[\\]"),

@@ -33,7 +33,20 @@ _KEYWORDS_HELP = (
 
 
 class Catalog:
-    """An ordered, immutable set of tasks with lookup and selection."""
+    """An ordered, immutable set of tasks with lookup and selection.
+
+    Args:
+        name: The catalog's name (`langgap99`).
+        tasks: Its tasks, in catalog order: every task's `source` is an original task of the catalog set in the
+            same scene.
+        description: One line on what the catalog holds.
+
+    Attributes:
+        tasks: The tasks, in catalog order (iterating over the catalog gives the same).
+
+    Raises:
+        CatalogError: Two tasks share an id, or a task's source is not an original task of its scene.
+    """
 
     def __init__(self, name: str, tasks: Iterable[Task], description: str = ""):
         self.name = name
@@ -58,7 +71,17 @@ class Catalog:
         return iter(self.tasks)
 
     def get(self, task_id: str) -> Task:
-        """The task with id `task_id`; UnknownTaskError (with suggestions) otherwise."""
+        """The task with id `task_id`.
+
+        Args:
+            task_id: A task id (`spatial/s0/black-bowl-1-on-plate`).
+
+        Returns:
+            The task.
+
+        Raises:
+            UnknownTaskError: No task has that id (the message suggests close ones).
+        """
         try:
             return self._by_id[task_id]
         except KeyError:
@@ -87,6 +110,15 @@ class Catalog:
         split. Terms joined with `&` intersect (`spatial&heldout`); `!` before a term excludes its
         tasks (`original&!spatial/s0/*`; alone, from all tasks). A term matching nothing is an
         error. No expression selects every task a feasibility gate did not reject.
+
+        Args:
+            expression: The selection (`spatial/s0/*`, `feasible&heldout`); None or blank: `feasible`.
+
+        Returns:
+            The selected tasks, in catalog order.
+
+        Raises:
+            UnknownTaskError: A term matches no task, or `paper:N` has no number.
         """
         if expression is None or not expression.strip():
             expression = "feasible"
@@ -260,5 +292,18 @@ def gate_snapshot(name: str, task_ids: Iterable[str], previous: dict | None = No
 
 @functools.cache
 def load_catalog(name: str = DEFAULT_CATALOG) -> Catalog:
-    """A shipped catalog by name (`langgap99`), or a registry file by path."""
+    """A shipped catalog by name (`langgap99`), or a registry file by path.
+
+    Args:
+        name: A shipped catalog's name (`available_catalogs` lists them), or the path of a registry YAML file
+            (a name that ends in `.yaml` or holds a `/`).
+
+    Returns:
+        The catalog, its tasks carrying the feasibility verdicts recorded beside the registry. It is loaded
+        once per name: later calls return the same object.
+
+    Raises:
+        CatalogError: The name is no shipped catalog, or the registry or its verdicts cannot be read or are
+            not valid.
+    """
     return load_catalog_file(registry_path(name))

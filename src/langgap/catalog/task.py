@@ -235,6 +235,37 @@ class Task:
     states the task uses; for an original task that is the task itself, for an extended task its
     `source`. `goal` is an expression of `langgap.goals` (for LIBERO's and the paper's tasks, a
     conjunction of atoms); `bddl_goal` is the conjunction its BDDL file states.
+
+    `load_catalog` makes a task of each registry entry; a task checks its fields when it is made.
+
+    Attributes:
+        id: The task's id: its suite's short name, its scene and its name (`spatial/s0/black-bowl-1-on-plate`).
+        catalog: The name of the catalog it belongs to.
+        suite: Its LIBERO suite (`libero_spatial`, `libero_object`, `libero_goal`, `libero_10`).
+        kind: `original` (a LIBERO task) or `extended` (a task set on an original's scene and init states).
+        dimension: What an extended task changes (one of `DIMENSIONS`: the paper's `change_object`,
+            `change_target`, `spatial_description`, `drawer_action`, and the other catalogs'); `original`
+            for an original.
+        split: `train` or `heldout` for an extended task; `original` for an original.
+        source: The id of the original task whose scene and init states it uses (its own for an original).
+        scene_task: The LIBERO task whose BDDL scene and init states it uses (see above).
+        scene_index: The scene's number in its suite (the `s0` of the id).
+        goal: What the episode must achieve (see above).
+        obj_of_interest: The objects the goal is about, as the BDDL file lists them.
+        instructions: The instruction in each style (`libero`, `paper`); `instruction(style)` reads one.
+        max_steps: The episode's step limit.
+        paper_id: The task's number in the paper (None: not one of the paper's tasks).
+        notes: Remarks the registry keeps on the task.
+        in_langgap99: True for a task of the paper's LangGap-99.
+        gate: The feasibility gate's verdict (None: not validated by a feasibility gate).
+        origin: Where a task read from another benchmark's package comes from (None: LangGap's own).
+        gate_from: `catalog:task id` of a task whose gate trial this task's would repeat exactly (`SAME_TRIAL`),
+            shown by the generator; the task takes that task's verdict and the gate never re-runs it. None: its
+            own verdict.
+
+    Raises:
+        CatalogError: A kind, dimension or split that does not exist, or that disagree about being original; an
+            instruction style without a sentence; a step limit that is not positive.
     """
 
     id: str
@@ -253,10 +284,8 @@ class Task:
     paper_id: int | None = None
     notes: tuple[str, ...] = ()
     in_langgap99: bool = False
-    gate: GateResult | None = None  # None: not validated by a feasibility gate
-    origin: Origin | None = None  # a task read from another benchmark's package (None: LangGap's own)
-    # `catalog:task id` of a task whose gate trial this task's would repeat exactly (`SAME_TRIAL`), shown by
-    # the generator; the task takes that task's verdict and the gate never re-runs it. None: its own verdict.
+    gate: GateResult | None = None
+    origin: Origin | None = None
     gate_from: str | None = None
 
     def __post_init__(self) -> None:
@@ -275,7 +304,17 @@ class Task:
             raise CatalogError(f"task {self.id}: max_steps must be positive")
 
     def instruction(self, style: str = DEFAULT_STYLE) -> str:
-        """The exact string a policy receives under instruction `style`."""
+        """The exact string a policy receives under instruction `style`.
+
+        Args:
+            style: An instruction style (`INSTRUCTION_STYLES`: `libero`, `paper`).
+
+        Returns:
+            The instruction.
+
+        Raises:
+            CatalogError: An unknown style.
+        """
         if style not in self.instructions:
             raise CatalogError(f"unknown instruction style {style!r} (known: {', '.join(INSTRUCTION_STYLES)})")
         return self.instructions[style]

@@ -11,7 +11,6 @@ from langgap.engine.spec import (
     DEFAULT_MAX_ATTEMPTS,
     DEFAULT_TIMEOUT_S,
     ExecutionOptions,
-    SpecError,
 )
 
 
@@ -55,7 +54,6 @@ def add_execution_options(parser: argparse.ArgumentParser, *, attempts_flag: str
     )
     parser.add_argument("--ray-address", metavar="ADDR", help="Ray cluster to join (default: start a local one)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
-    parser.set_defaults(attempts_flag=attempts_flag)
 
 
 def add_share_rollouts_option(parser: argparse.ArgumentParser) -> None:
@@ -71,8 +69,6 @@ def add_share_rollouts_option(parser: argparse.ArgumentParser) -> None:
 
 def execution_options(args: argparse.Namespace, **more) -> ExecutionOptions:
     """The `ExecutionOptions` of the flags `add_execution_options` added, with `more` (a command's own)."""
-    if args.work_attempts < 1:  # checked here, where the flag's name is known (`collect` calls it otherwise)
-        raise SpecError(f"{args.attempts_flag} must be at least 1, got {args.work_attempts}")
     return ExecutionOptions(
         backend=args.backend,
         workers=args.workers,

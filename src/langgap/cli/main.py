@@ -16,6 +16,7 @@ from langgap.cli import (
     export_hdf5_cmd,
     export_lerobot_cmd,
     generate_cmd,
+    parameter_flags,
     report_cmd,
     serve_cmd,
     smoke,
@@ -66,7 +67,7 @@ def main(argv: list[str] | None = None) -> int:
         smoke.apply(args)
         return int(args.handler(args) or 0)
     except LangGapError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {parameter_flags.error_message(exc, parser, args)}", file=sys.stderr)
         return exc.exit_code
     except KeyboardInterrupt:
         print("error: interrupted", file=sys.stderr)

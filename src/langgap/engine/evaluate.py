@@ -24,7 +24,22 @@ from langgap.version import code_version
 
 @dataclass
 class RunSummary:
-    """What one `evaluate` call did."""
+    """What one `evaluate` call did.
+
+    Attributes:
+        run: The run directory.
+        planned: The episodes the spec plans.
+        skipped: Those the store already held (a resume).
+        ran: Those this call ran.
+        successes: Of those, the successful ones.
+        gaps: Of those, the ones infrastructure failed to run (stored as gaps, run again by a resume).
+        policy_errors: Episodes that ended on a malformed action (outcome `policy_error`).
+        policy_server: A shared policy's counters (Ray): calls, queries.
+        filmed: Episodes with a clip among those `video` chose.
+        shared: Episodes run inside shared rollouts (`share_rollouts`).
+        rollouts: The shared rollouts they ran in.
+        film_mismatches: Replays (per-outcome filming) that ended otherwise: no clip attached.
+    """
 
     run: Path
     planned: int
@@ -32,12 +47,12 @@ class RunSummary:
     ran: int = 0
     successes: int = 0
     gaps: int = 0
-    policy_errors: int = 0  # episodes that ended on a malformed action (outcome `policy_error`)
-    policy_server: dict = field(default_factory=dict)  # a shared policy's counters (Ray): calls, queries
-    filmed: int = 0  # episodes with a clip among those `--video` chose
-    shared: int = 0  # episodes run inside shared rollouts (`--share-rollouts`)
-    rollouts: int = 0  # the shared rollouts they ran in
-    film_mismatches: int = 0  # replays (per-outcome filming) that ended otherwise: no clip attached
+    policy_errors: int = 0
+    policy_server: dict = field(default_factory=dict)
+    filmed: int = 0
+    shared: int = 0
+    rollouts: int = 0
+    film_mismatches: int = 0
 
     def rates(self, _latest: EpisodeRecord | None = None) -> str:
         """The running success rate (of judged episodes) and the gaps, for the progress bar."""
@@ -123,6 +138,23 @@ def evaluate(
     that the stored run has the same spec (`extend` lets it grow its tasks, inits or conditions).
     A run that hits `options.max_failure_streak` consecutive infrastructure failures with one cause
     raises `RunStopped`; every episode stored before stays, and a resume continues.
+
+    Args:
+        spec: What to run (`RunSpec.create`).
+        run: The run directory: its episodes are stored in `episodes.sqlite` there, with their clips.
+        options: How to run it (None: `ExecutionOptions()`, one worker process).
+        resume: Continue the run stored in `run`: episodes it holds are skipped, the others (gaps included)
+            run. Without it an existing run is refused.
+        extend: With `resume`: the spec may grow the stored run's tasks, init states or conditions.
+
+    Returns:
+        What this call did: episodes planned, skipped, run, successes and gaps.
+
+    Raises:
+        SpecError: `resume` of a run stored with another spec.
+        RunStopped: `options.max_failure_streak` infrastructure failures in a row with one cause.
+        LangGapError: Options the backend cannot satisfy, a run that exists already (without `resume`) or
+            that another process is writing, init indices out of range.
     """
     options = options or ExecutionOptions()
     run = Path(run)

@@ -14,7 +14,7 @@ from collections import defaultdict
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from langgap.errors import LangGapError
+from langgap.errors import ParameterError
 from langgap.records import EpisodeKey, EpisodeRecord
 
 # Clips live in this folder of the run directory; records hold paths relative to the run directory.
@@ -47,10 +47,10 @@ class VideoSelection:
             return cls()
         match = re.fullmatch(r"(?:(?P<mode>[a-z-]+):)?(?P<count>-?\d+)", text.strip())
         if match is None or (match["mode"] or "first") not in MODES:
-            raise LangGapError(f"--video takes first:N, per-outcome:N or N, got {text!r}")
+            raise ParameterError("{video} takes first:N, per-outcome:N or N, got {got!r}", got=text)
         selection = cls(match["mode"] or "first", int(match["count"]))
         if selection.count < 0:
-            raise LangGapError(f"--video must film at least 0 episodes, got {text!r}")
+            raise ParameterError("{video} must film at least 0 episodes, got {got!r}", got=text)
         return selection
 
     def __bool__(self) -> bool:

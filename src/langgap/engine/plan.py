@@ -14,7 +14,7 @@ import numpy as np
 
 from langgap.catalog.catalog import Catalog
 from langgap.catalog.task import Task
-from langgap.errors import CatalogError, InitStateError
+from langgap.errors import CatalogError, InitStateError, ParameterError
 from langgap.records import EpisodeKey
 
 CONDITIONS = ("given", "empty", "shuffled", "source", "nonsense")
@@ -25,6 +25,10 @@ CONDITION_HELP = (
     "from the catalog's vocabulary; switch:K: another task's instruction from the same scene (an extended "
     "task's source, an original's sibling) until policy step K, then the task's own"
 )
+
+
+class PlanParameterError(CatalogError, ParameterError):
+    """An argument of `build_plan` is invalid, named as the caller passed it."""
 
 
 @dataclass(frozen=True)
@@ -175,7 +179,7 @@ def build_plan(
     each `repeats` times with its own seed (same init state); no `switch:K` episode of a task that has nothing
     to start under (`without_switch_source`)."""
     if episodes < 1:
-        raise CatalogError(f"--episodes must be at least 1, got {episodes}")
+        raise PlanParameterError("{episodes} must be at least 1, got {got}", got=episodes)
     unknown = unknown_conditions(conditions)
     if unknown:
         raise CatalogError(f"unknown condition(s) {unknown} ({CONDITION_HELP})")

@@ -38,7 +38,7 @@ from langgap.engine.policy_timing import (
     wall_time_check,
 )
 from langgap.engine.rollout import env_options_for
-from langgap.engine.spec import DEFAULT_TIMEOUT_S, PAPER_EPISODES, SpecError
+from langgap.engine.spec import DEFAULT_TIMEOUT_S, PAPER_EPISODES, SpecParameterError
 from langgap.errors import LangGapError, SimulationError
 from langgap.policies import policy_class, policy_kwargs
 from langgap.policies.base import Policy, PolicyOutputError, PolicySpec, PolicySpecError, as_action_chunk
@@ -109,7 +109,7 @@ def check_policy(
     """
     began = time.perf_counter()
     if timeout_s <= 0:
-        raise SpecError(f"--timeout must be positive, got {timeout_s:g}")
+        raise SpecParameterError("{timeout_s} must be positive, got {got:g}", got=timeout_s)
     loaded = load_catalog(catalog)
     plan = build_plan(loaded.select(tasks), loaded, episodes=episodes, style=style)
     heading = [f"langgap check-policy {name}"]

@@ -18,7 +18,7 @@ from langgap.catalog.catalog import DEFAULT_CATALOG, catalog_hash, load_catalog
 from langgap.catalog.task import DEFAULT_STYLE, INSTRUCTION_STYLES
 from langgap.engine.filming import VideoSelection
 from langgap.engine.plan import CONDITION_HELP, REPEAT_STRIDE, unknown_conditions
-from langgap.errors import LangGapError
+from langgap.errors import LangGapError, ParameterError
 from langgap.policies import policy_kwargs
 
 PAPER_EPISODES = 20
@@ -37,22 +37,42 @@ class SpecError(LangGapError):
     """A run spec or execution option is invalid, or a stored run was made with another spec."""
 
 
+class SpecParameterError(SpecError, ParameterError):
+    """An argument of `RunSpec.create` or `ExecutionOptions` is invalid, named as the caller passed it."""
+
+
 @dataclass(frozen=True)
 class RunSpec:
-    """Everything that determines a run's results. Build one with `RunSpec.create` (which validates it)."""
+    """Everything that determines a run's results. Build one with `RunSpec.create` (which validates it).
+
+    Attributes:
+        policy: The policy's name (or `module:Class` path).
+        policy_args: Its constructor arguments, as strings.
+        catalog: The catalog's name (or registry path).
+        catalog_hash: The SHA-256 of the catalog's registry file.
+        selection: The task selection as given (None: the catalog's default selection).
+        tasks: The task ids it resolved to.
+        inits: The init-state indices every task runs (episode k uses init state k).
+        seed: Episode k's env seed is seed + k (repeat r: seed + r * REPEAT_STRIDE + k).
+        repeats: Seeds per init state.
+        conditions: The language conditions every task runs under.
+        style: The instruction style.
+        physics: The installed physics stack and conventions (`langgap.stack.physics_stack`), with the `fast`
+            stepping and the `openpi` seed scheme where chosen.
+    """
 
     policy: str
     policy_args: dict[str, str]
     catalog: str
     catalog_hash: str
-    selection: str | None  # the task selection as given (None: the catalog's default selection)
-    tasks: tuple[str, ...]  # the task ids it resolved to
-    inits: tuple[int, ...]  # the init-state indices every task runs (episode k uses init state k)
-    seed: int  # episode k's env seed is seed + k (repeat r: seed + r * REPEAT_STRIDE + k)
-    repeats: int  # seeds per init state
+    selection: str | None
+    tasks: tuple[str, ...]
+    inits: tuple[int, ...]
+    seed: int
+    repeats: int
     conditions: tuple[str, ...]
     style: str
-    physics: dict[str, str]  # the installed physics stack
+    physics: dict[str, str]
 
     @classmethod
     def create(
@@ -73,13 +93,43 @@ class RunSpec:
         """A validated spec: the policy accepts its arguments, the selection resolves, the options exist.
 
         `tasks` is a task selection (see `Catalog.select`); `episodes` runs init states 0..episodes-1.
+
+        Args:
+            policy: A registered policy's name (`noop`, `random`, `blind`, `oracle`, `small-bc`, `openpi`,
+                `lerobot`, ...) or the `module:Class` path of a policy class.
+            policy_args: The policy's constructor arguments as strings (`{"checkpoint": "bc.safetensors"}`),
+                checked against its constructor here and converted to its types when it is built.
+            catalog: A shipped catalog's name or a registry file's path (see `load_catalog`).
+            tasks: A task selection (see `Catalog.select`); None: the catalog's doable tasks (`feasible`).
+            episodes: Episodes per task and condition: init states 0..episodes-1 (at least 1).
+            seed: The first episode's environment seed: episode k's is seed + k.
+            repeats: Seeds per init state, 1..REPEAT_STRIDE: repeat r of episode k has seed
+                seed + r * REPEAT_STRIDE + k.
+            conditions: The language conditions (`given`, `empty`, `shuffled`, `source`, `nonsense`,
+                `switch:K`; `langgap.engine.plan.CONDITION_HELP`); one named twice runs once.
+            style: The instruction style (`libero` or `paper`).
+            stepping: How the physics substeps are computed: `exact` or `fast` (`RESULT_STEPPINGS`).
+            seed_scheme: How an episode's seed selects its placement: `per-episode` or `openpi`
+                (`langgap.stack.SEED_SCHEMES`).
+
+        Returns:
+            The spec, with the selection resolved to task ids and the catalog's hash and the installed physics
+            stack recorded.
+
+        Raises:
+            SpecError: `episodes` or `repeats` out of range (a `ParameterError` that names it), an unknown
+                style, stepping, seed scheme or condition.
+            LangGapError: An unknown policy or policy argument, an unknown catalog, a selection that matches no
+                task.
         """
         policy_args = {str(k): str(v) for k, v in (policy_args or {}).items()}
         policy_kwargs(policy, policy_args)
         if episodes < 1:
-            raise SpecError(f"--episodes must be at least 1, got {episodes}")
+            raise SpecParameterError("{episodes} must be at least 1, got {got}", got=episodes)
         if not 1 <= repeats <= REPEAT_STRIDE:
-            raise SpecError(f"--repeats must be between 1 and {REPEAT_STRIDE}, got {repeats}")
+            raise SpecParameterError(
+                "{repeats} must be between 1 and {most}, got {got}", most=REPEAT_STRIDE, got=repeats
+            )
         if style not in INSTRUCTION_STYLES:
             raise SpecError(f"unknown instruction style {style!r} (known: {', '.join(INSTRUCTION_STYLES)})")
         if stepping not in RESULT_STEPPINGS:
@@ -144,53 +194,77 @@ def spec_differences(a: dict, b: dict) -> list[str]:
 
 @dataclass(frozen=True)
 class ExecutionOptions:
-    """How a run is executed; results do not depend on any of it."""
+    """How a run is executed; results do not depend on any of it.
 
-    backend: str = "local"  # a name in `langgap.engine.pools.BACKENDS`
-    workers: int = 1  # local: worker processes (0: in this process); ray: environment actors
-    timeout_s: float | None = None  # per episode; None: DEFAULT_TIMEOUT_S where it can be enforced
+    Args:
+        backend: Where the episodes run: a name in `langgap.engine.pools.BACKENDS` (`local`, `ray`).
+        workers: Local: worker processes (0: in this process); ray: environment actors.
+        timeout_s: Seconds per episode before it is an infrastructure failure; None: DEFAULT_TIMEOUT_S where it
+            can be enforced (worker processes, not this process).
+        max_attempts: Attempts at a work item before it is given up (an episode becomes a gap).
+        max_failure_streak: Consecutive infrastructure failures with the same cause that stop the run.
+        video: Which episodes to film (`langgap.engine.filming.VideoSelection`): `first:N`, `per-outcome:N`
+            or `N`; empty: none.
+        progress: Show a progress bar.
+        ray_address: The Ray cluster to join (None: start a local one); needs `backend="ray"`.
+        shared_policy: One policy process (local) or actor (ray) batching every worker's queries.
+        max_batch: Shared policy: the largest batch (None: DEFAULT_MAX_BATCH).
+        max_wait_ms: Shared policy: how long a query waits for others (None: DEFAULT_MAX_WAIT_MS).
+        policy_gpus: Ray's shared policy: GPUs for the policy actor (None: 0).
+        share_rollouts: Run an instruction-blind policy's episodes that start alike as one rollout
+            (`langgap.engine.sharing`); every record is the one its own episode gives.
+
+    Raises:
+        SpecError: An option out of range, or one that needs another (a `ParameterError` that names them).
+    """
+
+    backend: str = "local"
+    workers: int = 1
+    timeout_s: float | None = None
     max_attempts: int = DEFAULT_MAX_ATTEMPTS
-    max_failure_streak: int = DEFAULT_FAILURE_STREAK  # consecutive infrastructure failures (same cause) that stop
-    video: str = ""  # which episodes to film (`langgap.engine.filming.VideoSelection`): first:N, per-outcome:N
+    max_failure_streak: int = DEFAULT_FAILURE_STREAK
+    video: str = ""
     progress: bool = True
     ray_address: str | None = None
-    shared_policy: bool = False  # one policy process (local) or actor (ray) batching every worker's queries
-    max_batch: int | None = None  # shared policy: largest batch (None: DEFAULT_MAX_BATCH)
-    max_wait_ms: float | None = None  # shared policy: how long a query waits for others (None: DEFAULT_MAX_WAIT_MS)
-    policy_gpus: float | None = None  # ray's shared policy: GPUs for the policy actor (default 0)
-    # An instruction-blind policy's episodes that start alike as one rollout (`langgap.engine.sharing`): exact
+    shared_policy: bool = False
+    max_batch: int | None = None
+    max_wait_ms: float | None = None
+    policy_gpus: float | None = None
     share_rollouts: bool = False
 
     def __post_init__(self) -> None:
         # The backend's name is checked by `langgap.engine.pools.make_pool`, which owns the registry.
         if self.workers < 0 or (self.backend != "local" and self.workers < 1):
-            raise SpecError(f"--workers must be at least {0 if self.backend == 'local' else 1}, got {self.workers}")
+            least = 0 if self.backend == "local" else 1
+            raise SpecParameterError("{workers} must be at least {least}, got {got}", least=least, got=self.workers)
         if self.timeout_s is not None and self.timeout_s <= 0:
-            raise SpecError(f"--timeout must be positive, got {self.timeout_s}")
+            raise SpecParameterError("{timeout_s} must be positive, got {got}", got=self.timeout_s)
         if self.timeout_s is not None and self.backend == "local" and self.workers == 0:
-            raise SpecError("--timeout needs worker processes: an episode in this process cannot be stopped")
+            raise SpecParameterError("{timeout_s} needs worker processes: an episode in this process cannot be stopped")
         if self.max_attempts < 1:
-            raise SpecError(f"--max-attempts must be at least 1, got {self.max_attempts}")
+            raise SpecParameterError("{max_attempts} must be at least 1, got {got}", got=self.max_attempts)
         if self.max_failure_streak < 1:
-            raise SpecError(f"--max-failure-streak must be at least 1, got {self.max_failure_streak}")
+            raise SpecParameterError("{max_failure_streak} must be at least 1, got {got}", got=self.max_failure_streak)
         try:
             VideoSelection.parse(self.video)
-        except LangGapError as exc:
-            raise SpecError(str(exc)) from None
+        except ParameterError as exc:
+            raise SpecParameterError(exc.template, **exc.values) from None
         if self.ray_address is not None and self.backend != "ray":
-            raise SpecError("--ray-address needs --backend ray")
-        batching = {"--max-batch": self.max_batch, "--max-wait-ms": self.max_wait_ms, "--policy-gpus": self.policy_gpus}
-        given = [flag for flag, value in batching.items() if value is not None]
+            raise SpecParameterError("{ray_address} needs {backend} ray")
+        batching = {"max_batch": self.max_batch, "max_wait_ms": self.max_wait_ms, "policy_gpus": self.policy_gpus}
+        given = ", ".join(f"{{{name}}}" for name, value in batching.items() if value is not None)
         if given and not self.shared_policy:
-            raise SpecError(f"{', '.join(given)} only apply to a shared policy (--shared-policy)")
+            raise SpecParameterError(given + " only apply to a shared policy ({shared_policy})")
         if self.shared_policy and self.workers == 0:
-            raise SpecError("--shared-policy needs worker processes to serve (--workers 1 or more)")
+            raise SpecParameterError("{shared_policy} needs worker processes to serve ({workers} 1 or more)")
         if self.policy_gpus is not None and self.backend != "ray":
-            raise SpecError("--policy-gpus needs --backend ray (a local policy process uses the GPUs it can see)")
+            raise SpecParameterError(
+                "{policy_gpus} needs {backend} ray (a local policy process uses the GPUs it can see)"
+            )
         if self.max_batch is not None and self.max_batch < 1:
-            raise SpecError(f"--max-batch must be at least 1, got {self.max_batch}")
+            raise SpecParameterError("{max_batch} must be at least 1, got {got}", got=self.max_batch)
         if (self.max_wait_ms or 0) < 0 or (self.policy_gpus or 0) < 0:
-            raise SpecError("--max-wait-ms and --policy-gpus must not be negative")
+            raise SpecParameterError("{max_wait_ms} and {policy_gpus} must not be negative")
 
     @property
     def video_selection(self) -> VideoSelection:

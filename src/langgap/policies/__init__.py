@@ -83,5 +83,19 @@ def policy_kwargs(name: str, args: dict[str, str] | None = None) -> dict:
 
 
 def make_policy(name: str, args: dict[str, str] | None = None) -> Policy:
-    """Build policy `name` with keyword arguments given as strings (`--policy-arg k=v`)."""
+    """Build policy `name` with keyword arguments given as strings (`--policy-arg k=v`).
+
+    Args:
+        name: A registered policy's name (`noop`, `random`, `oracle`, `small-bc`, `openpi`, ...) or the
+            `module:Class` path of a policy class (its module may be a file in the current directory).
+        args: Constructor arguments as strings, converted to the types of the constructor's annotations or
+            defaults (None: none).
+
+    Returns:
+        The policy.
+
+    Raises:
+        LangGapError: An unknown policy or one that cannot be imported, an argument its constructor does not
+            take or that does not convert, or a refusal of its constructor (no checkpoint, no server).
+    """
     return policy_class(name)(**policy_kwargs(name, args))

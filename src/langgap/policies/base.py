@@ -49,6 +49,20 @@ class PolicySpec:
     init state and seed), e.g. one that samples without reseeding per episode; by default a policy is taken
     to act the same given the episode's seed (`langgap check-policy` checks it), as re-runs and the replays
     that film `--video` clips assume.
+
+    Args:
+        cameras: The cameras rendered for the policy (`langgap.sim.env.CAMERAS`); none: no images.
+        image_size: Their height and width in pixels.
+        sees_state: Observations carry the simulator state.
+        sees_goal: The reset context carries the task id and the goal: a scripted reference, never a policy
+            under test.
+        chunk: The most actions one `act` returns.
+        replan: How many of them are executed before the next `act` (1..chunk).
+        reads_instruction: False for an instruction-blind policy.
+        stochastic: True for a policy whose actions may differ between two runs of the same episode.
+
+    Raises:
+        PolicySpecError: An unknown camera, or `replan` outside 1..`chunk`.
     """
 
     cameras: tuple[str, ...] = ()
@@ -100,6 +114,14 @@ class TaskContext:
     declare `sees_goal`: the engine removes it before `reset` (`for_policy`), so a policy under test
     cannot read the goal, however it is written. There is deliberately no free-form field: every
     field a policy is told is one of these, so none can carry the answer past `for_policy`.
+
+    Attributes:
+        instruction: The instruction the episode starts with.
+        suite: The task's LIBERO suite (`libero_spatial`, ...).
+        init_index: The init state the episode starts from.
+        seed: The episode's environment seed.
+        max_steps: The episode's step limit.
+        privileged: The answer, for a policy whose spec `sees_goal` (None for every other).
     """
 
     instruction: str
@@ -125,7 +147,15 @@ class TaskContext:
 
 def current_instruction(observation: Observation, context: TaskContext) -> str:
     """The instruction in force at `observation`: the observation's (it may change mid-episode), else the
-    one the episode started with."""
+    one the episode started with.
+
+    Args:
+        observation: The observation the policy acts on.
+        context: The context the policy was reset with.
+
+    Returns:
+        The instruction in force.
+    """
     return context.instruction if observation.instruction is None else observation.instruction
 
 
@@ -153,13 +183,30 @@ def simulator_state(observation: Observation, policy: str) -> PrivilegedState:
 @runtime_checkable
 class Policy(Protocol):
     """Implement `spec`, `reset` and `act`; `close` and `config` are optional (see `policy_config`). A `close`
-    must be safe to call twice (the second call does nothing), as a file's is."""
+    must be safe to call twice (the second call does nothing), as a file's is.
+
+    Attributes:
+        spec: What the policy observes and how it chunks actions.
+    """
 
     spec: PolicySpec
 
-    def reset(self, context: TaskContext) -> None: ...
+    def reset(self, context: TaskContext) -> None:
+        """Start an episode.
 
-    def act(self, observation: Observation) -> np.ndarray: ...
+        Args:
+            context: What the policy is told about the episode.
+        """
+
+    def act(self, observation: Observation) -> np.ndarray:
+        """Choose the next action(s).
+
+        Args:
+            observation: What the environment shows at this step.
+
+        Returns:
+            One action (7,) or a chunk (k, 7), k <= `spec.chunk`, of OSC_POSE deltas and the gripper in [-1, 1].
+        """
 
 
 class PolicyOutputError(ValueError):

@@ -79,7 +79,19 @@ def run_name(policy: str, label: str) -> str:
 
 
 def load_runs(paths: list[str | Path]) -> list[Run]:
-    """Read runs from their stores (while they are being written, too)."""
+    """Read runs from their stores (while they are being written, too).
+
+    Args:
+        paths: Run directories (each the `run` of an `evaluate`).
+
+    Returns:
+        One `Run` per path, in order: its name, spec and episode records, and the gate verdicts its report
+        reads (those stored with the run when it was created; the catalog's current ones for a run stored
+        before snapshots were kept).
+
+    Raises:
+        StoreError: A path holds no run store, or one this LangGap cannot read.
+    """
     runs = []
     for path in paths:
         with RunStore.open(path) as store:

@@ -102,12 +102,20 @@ class EnvOptions:
 
 @dataclass
 class Observation:
-    """What the environment shows a policy at one step."""
+    """What the environment shows a policy at one step.
+
+    Attributes:
+        state: The 8-D float32 robot state: end-effector position (3), end-effector orientation as axis-angle
+            (3), the two gripper finger joints (2).
+        images: An upright uint8 image (H, W, 3) per camera the policy's spec names.
+        privileged: The simulator state (`EnvOptions.privileged`), for a policy whose spec `sees_state`.
+        instruction: The instruction in force at this step (it may change mid-episode); None: the reset
+            context's stands.
+    """
 
     state: np.ndarray
     images: dict[str, np.ndarray] = field(default_factory=dict)
-    privileged: PrivilegedState | None = None  # the simulator state (`EnvOptions.privileged`)
-    # The instruction in force at this step (it may change mid-episode); None: the reset context's stands.
+    privileged: PrivilegedState | None = None
     instruction: str | None = None
 
 

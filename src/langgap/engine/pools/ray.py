@@ -27,7 +27,7 @@ from langgap.engine.pools import Event, ItemDone, ItemFailed, WorkerLost
 from langgap.engine.runner import RunnerSetup, WorkFailure, WorkRunner
 from langgap.engine.shared_policy import PolicyServer
 from langgap.engine.work import WorkItem
-from langgap.errors import DependencyNotInstalled, LangGapError
+from langgap.errors import DependencyNotInstalled, LangGapError, ParameterError
 from langgap.policies.base import TaskContext
 from langgap.sim.env import Observation
 
@@ -201,7 +201,9 @@ class RayPool:
     def _check_gpus(self, gpus: float) -> None:
         available = self._ray.cluster_resources().get("GPU", 0)
         if gpus > available:
-            raise LangGapError(f"--policy-gpus {gpus:g}: the Ray cluster has {available:g} GPU(s)")
+            raise ParameterError(
+                "{policy_gpus} {gpus:g}: the Ray cluster has {available:g} GPU(s)", gpus=gpus, available=available
+            )
 
     def spawn(self) -> int:
         worker, self._next_id = self._next_id, self._next_id + 1

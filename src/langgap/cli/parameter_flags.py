@@ -1,0 +1,37 @@
+"""A parameter as the command line spells it. A `ParameterError` names each parameter as a Python caller
+passes it (`episodes`, `max_attempts`); the CLI user reads the flag that sets it (`--episodes`,
+`--max-attempts`, or `collect`'s `--max-task-attempts`), found in the parser's own actions."""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Iterator
+
+from langgap.errors import LangGapError, ParameterError
+
+# The parameters set by a flag of another `dest`; every other parameter is its flag's dest. The retries' flag
+# stores `work_attempts`: `collect` spells it `--max-task-attempts`, its own `--max-attempts` being another option.
+DESTS = {"timeout_s": "timeout", "max_attempts": "work_attempts"}
+
+
+def _parsers(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Iterator[argparse.ArgumentParser]:
+    """`parser` and the sub-command parsers that read `args`, outermost first."""
+    yield parser
+    for action in parser._actions:  # argparse lists actions only in this private field
+        if isinstance(action, argparse._SubParsersAction) and getattr(args, action.dest, None) in action.choices:
+            yield from _parsers(action.choices[getattr(args, action.dest)], args)
+
+
+def _flag(action: argparse.Action) -> str:
+    return next((o for o in action.option_strings if o.startswith("--")), action.option_strings[0])
+
+
+def error_message(error: LangGapError, parser: argparse.ArgumentParser, args: argparse.Namespace) -> str:
+    """The line the CLI prints for `error`, a `ParameterError`'s parameters spelled as the flags of the command
+    that parsed `args`. A parameter no flag of the command sets (`validate --inits` becomes `RunSpec.create`'s
+    `episodes`) reads as the flag of its name, `--episodes`, as the other commands spell it."""
+    if not isinstance(error, ParameterError):
+        return str(error)
+    flags = {a.dest: _flag(a) for p in _parsers(parser, args) for a in p._actions if a.option_strings}
+    dests = {parameter: DESTS.get(parameter, parameter) for parameter in error.parameters}
+    return error.naming({p: flags.get(dest, "--" + dest.replace("_", "-")) for p, dest in dests.items()})
