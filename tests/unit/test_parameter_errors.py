@@ -67,8 +67,8 @@ def test_an_error_copied_or_pickled_keeps_its_parameters(clone):
             ["eval", "--policy", "noop", "--tasks", BOWL_1, "--max-attempts", "0"],
             "--max-attempts must be at least 1, got 0",
         ),
-        # `validate --inits` reaches `RunSpec.create` as `episodes`: no flag of validate sets it.
-        (["validate", BOWL_1, "--inits", "0", "--policy", "noop"], "--episodes must be at least 1, got 0"),
+        # `validate --inits` reaches `RunSpec.create` as `episodes`: the command's own flag is named.
+        (["validate", BOWL_1, "--inits", "0", "--policy", "noop"], "--inits must be at least 1, got 0"),
     ],
     ids=["episodes", "workers", "timeout", "max-attempts", "validate-inits"],
 )

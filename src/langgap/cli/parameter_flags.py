@@ -12,6 +12,9 @@ from langgap.errors import LangGapError, ParameterError
 # The parameters set by a flag of another `dest`; every other parameter is its flag's dest. The retries' flag
 # stores `work_attempts`: `collect` spells it `--max-task-attempts`, its own `--max-attempts` being another option.
 DESTS = {"timeout_s": "timeout", "max_attempts": "work_attempts"}
+# A parameter that commands set under another name: the init states each task runs are `eval --episodes` and
+# `validate --inits` (which reaches `RunSpec.create` as `episodes`).
+SYNONYMS = {"episodes": ("inits",)}
 
 
 def _parsers(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Iterator[argparse.ArgumentParser]:
@@ -28,10 +31,15 @@ def _flag(action: argparse.Action) -> str:
 
 def error_message(error: LangGapError, parser: argparse.ArgumentParser, args: argparse.Namespace) -> str:
     """The line the CLI prints for `error`, a `ParameterError`'s parameters spelled as the flags of the command
-    that parsed `args`. A parameter no flag of the command sets (`validate --inits` becomes `RunSpec.create`'s
-    `episodes`) reads as the flag of its name, `--episodes`, as the other commands spell it."""
+    that parsed `args`: the flag that sets the parameter (`SYNONYMS`: `validate --inits` sets `episodes`), else
+    the flag of its name, as the other commands spell it."""
     if not isinstance(error, ParameterError):
         return str(error)
     flags = {a.dest: _flag(a) for p in _parsers(parser, args) for a in p._actions if a.option_strings}
-    dests = {parameter: DESTS.get(parameter, parameter) for parameter in error.parameters}
-    return error.naming({p: flags.get(dest, "--" + dest.replace("_", "-")) for p, dest in dests.items()})
+
+    def spelled(parameter: str) -> str:
+        dest = DESTS.get(parameter, parameter)
+        setting = next((flags[d] for d in (dest, *SYNONYMS.get(parameter, ())) if d in flags), None)
+        return setting or "--" + dest.replace("_", "-")
+
+    return error.naming({p: spelled(p) for p in error.parameters})
