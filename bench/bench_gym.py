@@ -23,7 +23,8 @@ from bench_harness import timed_run
 
 import langgap.gym  # noqa: F401  (registers LangGap/Task-v0)
 from langgap.sim.env import SETTLE_ACTION
-from langgap.stack import DEFAULT_STEPPING, STEPPINGS
+from langgap.stack import DEFAULT_STEPPING
+from langgap.vocabulary import Stepping, words
 
 TASK = "spatial/s0/black-bowl-1-on-plate"
 
@@ -64,7 +65,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--task", default=TASK)
     parser.add_argument("--episodes", type=int, default=8, help="episodes per configuration (a multiple of 2)")
-    parser.add_argument("--stepping", choices=STEPPINGS, default=DEFAULT_STEPPING)
+    parser.add_argument("--stepping", choices=words(Stepping), default=DEFAULT_STEPPING)
     args = parser.parse_args()
     print(f"{args.episodes} noop episodes of {args.task}, {args.stepping} stepping, timed end to end")
     print("| N | harness pool steps/s | gym async steps/s | gym / harness |\n|---|---|---|---|")

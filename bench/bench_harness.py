@@ -32,6 +32,7 @@ from langgap.records import EpisodeRecord
 from langgap.sim.env import CAMERAS, SETTLE_ACTION, SETTLE_STEPS, EnvOptions, TaskEnv
 from langgap.stack import DEFAULT_STEPPING
 from langgap.store import RunStore
+from langgap.vocabulary import words
 
 SAMPLE_TASKS = (
     "spatial/s0/black-bowl-1-on-plate,spatial/s0/ramekin-on-plate,goal/s7/turn-on-stove,"
@@ -295,7 +296,7 @@ def main() -> None:
     parser.add_argument("--policy", default="oracle")
     parser.add_argument("--rounds", type=int, default=3, help="overhead: alternating rounds (best of each)")
     parser.add_argument("--run", help="protocol, validate: keep (and resume) the run here")
-    parser.add_argument("--stepping", choices=RESULT_STEPPINGS, default=DEFAULT_STEPPING)
+    parser.add_argument("--stepping", choices=words(RESULT_STEPPINGS), default=DEFAULT_STEPPING)
     args = parser.parse_args()
     if args.what == "overhead":
         overhead(args.episodes, args.rounds)

@@ -18,6 +18,7 @@ import time
 
 from langgap.catalog.catalog import load_catalog
 from langgap.engine.plan import episode_seed
+from langgap.stack import DEFAULT_STEPPING
 from langgap.validity.search import search
 
 TASKS = ("goal/s0/open-cabinet-bottom-drawer", "spatial/s2/open-cabinet-bottom-drawer")
@@ -33,7 +34,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--inits", type=int, default=5)
     parser.add_argument("--budget", type=int, default=16)
-    parser.add_argument("--stepping", default="exact")
+    parser.add_argument("--stepping", default=DEFAULT_STEPPING)
     args = parser.parse_args()
     catalog = load_catalog("langgap99")
     print("| task | init states | candidates | hits | hit rate | first hit at (median, max) | s / candidate |")

@@ -30,13 +30,14 @@ from langgap.engine.context import task_context
 from langgap.engine.episode import scene_goals
 from langgap.engine.rollout import env_options_for, run_episode
 from langgap.policies import make_policy
-from langgap.sim.env import STEPPINGS, EnvOptions, TaskEnv
+from langgap.sim.env import EnvOptions, TaskEnv
+from langgap.vocabulary import Stepping
 
 TARGET = 2.0  # a control step at most twice the raw physics of its substeps
 STEPPING_LABELS = {
-    "exact": "LangGap `exact` (bit-identical)",
-    "fast": "LangGap `fast` (last bits differ)",
-    "robosuite": "robosuite's own",
+    Stepping.EXACT: f"LangGap `{Stepping.EXACT}` (bit-identical)",
+    Stepping.FAST: f"LangGap `{Stepping.FAST}` (last bits differ)",
+    Stepping.ROBOSUITE: "robosuite's own",
 }
 
 
@@ -64,13 +65,13 @@ def _time_raw_steps(model, data, substeps: int, steps: int) -> float:
 def compare_steps(task, steps: int, rounds: int) -> dict[str, float]:
     """Median seconds per control step of raw physics and of each stepping."""
     actions = _actions(steps)
-    envs = {stepping: TaskEnv(task, EnvOptions(stepping=stepping)) for stepping in STEPPINGS}
+    envs = {stepping: TaskEnv(task, EnvOptions(stepping=stepping)) for stepping in Stepping}
     try:
-        inner = envs["exact"].robosuite_env
+        inner = envs[Stepping.EXACT].robosuite_env
         substeps = int(round(inner.control_timestep / inner.model_timestep))
-        envs["exact"].reset(0)
+        envs[Stepping.EXACT].reset(0)
         for action in actions[: steps // 2]:  # mid-episode: the arm moving, controls set
-            envs["exact"].step(action)
+            envs[Stepping.EXACT].step(action)
         model, mid = inner.sim.model._model, copy.copy(inner.sim.data._data)
         for env in envs.values():  # warm up (the fast stepping's compiled controller loads here)
             _time_env_steps(env, actions[:2], 0)
@@ -135,20 +136,20 @@ def main() -> None:
     print("| stepping | ms per control step | vs raw physics | target |")
     print("|---|---|---|---|")
     print(f"| raw physics (25 mj_step) | {t['raw'] * 1e3:.2f} | 1.00x | |")
-    for stepping in STEPPINGS:
-        target = f"≤ {TARGET:.1f}x" if stepping == "fast" else ""
+    for stepping in Stepping:
+        target = f"≤ {TARGET:.1f}x" if stepping == Stepping.FAST else ""
         print(f"| {STEPPING_LABELS[stepping]} | {t[stepping] * 1e3:.2f} | {t[stepping] / t['raw']:.2f}x | {target} |")
-    for stepping in ("exact", "fast"):
-        print(f"{stepping} vs robosuite's own: {t['robosuite'] / t[stepping]:.2f}x faster")
+    for stepping in (Stepping.EXACT, Stepping.FAST):
+        print(f"{stepping} vs robosuite's own: {t[Stepping.ROBOSUITE] / t[stepping]:.2f}x faster")
     if args.no_profile:
         return
-    profiles = {stepping: profile_episode(task, catalog, stepping) for stepping in ("exact", "fast")}
+    profiles = {stepping: profile_episode(task, catalog, stepping) for stepping in (Stepping.EXACT, Stepping.FAST)}
     print("\noracle episode (init 0) under cProfile, all in: where a step's time goes")
     print("| where | " + " | ".join(f"`{s}` stepping" for s in profiles) + " |")
     print("|---|" + "---|" * len(profiles))
     steps = " | ".join(f"{p[0]} steps, {p[1] * 1e3:.1f} ms/step" for p in profiles.values())
     print(f"| episode | {steps} |")
-    for name in profiles["exact"][2]:
+    for name in profiles[Stepping.EXACT][2]:
         print(f"| {name} | " + " | ".join(f"{p[2][name]:.0%}" for p in profiles.values()) + " |")
 
 

@@ -27,6 +27,7 @@ from langgap.engine.rollout import env_options_for, run_episode
 from langgap.policies import make_policy
 from langgap.records import classify
 from langgap.sim.env import TaskEnv
+from langgap.vocabulary import Stepping
 
 CHECKPOINTS = (1, 10, 50)
 
@@ -53,15 +54,15 @@ def _episode(catalog_name: str, task_id: str, init: int, stepping: str) -> dict:
 def compare(job: tuple[str, str, int]) -> dict:
     """One task and init state under both steppings."""
     catalog_name, task_id, init = job
-    exact, exact_states = _episode(catalog_name, task_id, init, "exact")
-    fast, fast_states = _episode(catalog_name, task_id, init, "fast")
+    exact, exact_states = _episode(catalog_name, task_id, init, Stepping.EXACT)
+    fast, fast_states = _episode(catalog_name, task_id, init, Stepping.FAST)
     n = min(len(exact_states), len(fast_states))
     drift = np.abs(np.array(exact_states[:n]) - np.array(fast_states[:n])).max(axis=1) if n else np.zeros(1)
     return {
         "task": task_id,
         "init": init,
-        "exact": exact,
-        "fast": fast,
+        Stepping.EXACT: exact,
+        Stepping.FAST: fast,
         "drift": {str(k): float(drift[k - 1]) for k in CHECKPOINTS if k <= n} | {"end": float(drift[-1])},
     }
 
@@ -86,23 +87,25 @@ def main() -> None:
     changed = [
         r
         for r in rows
-        if (r["exact"]["success"], r["exact"]["outcome"]) != (r["fast"]["success"], r["fast"]["outcome"])
+        if (r[Stepping.EXACT]["success"], r[Stepping.EXACT]["outcome"])
+        != (r[Stepping.FAST]["success"], r[Stepping.FAST]["outcome"])
     ]
     print(f"{len(tasks)} tasks x {args.inits} init states = {len(rows)} pairs, oracle, {wall / 60:.1f} min")
-    for stepping in ("exact", "fast"):
+    for stepping in (Stepping.EXACT, Stepping.FAST):
         wins = sum(r[stepping]["success"] for r in rows)
         seconds = sum(r[stepping]["seconds"] for r in rows)
         steps = sum(r[stepping]["steps"] for r in rows)
         print(f"{stepping}: {wins}/{len(rows)} successes, {seconds / steps * 1e3:.1f} ms per step all in")
-    exact_s = sum(r["exact"]["seconds"] for r in rows)
-    fast_s = sum(r["fast"]["seconds"] for r in rows)
-    print(f"fast vs exact, whole episodes: {exact_s / fast_s:.2f}x")
-    same_steps = sum(r["exact"]["steps"] == r["fast"]["steps"] for r in rows)
+    exact_s = sum(r[Stepping.EXACT]["seconds"] for r in rows)
+    fast_s = sum(r[Stepping.FAST]["seconds"] for r in rows)
+    print(f"{Stepping.FAST} vs {Stepping.EXACT}, whole episodes: {exact_s / fast_s:.2f}x")
+    same_steps = sum(r[Stepping.EXACT]["steps"] == r[Stepping.FAST]["steps"] for r in rows)
     print(f"verdicts changed (success or outcome): {len(changed)}; same step count: {same_steps}/{len(rows)}")
     for r in changed:
-        e, f = r["exact"], r["fast"]
+        e, f = r[Stepping.EXACT], r[Stepping.FAST]
         print(
-            f"  {r['task']} init {r['init']}: exact {e['outcome']} in {e['steps']}, fast {f['outcome']} in {f['steps']}"
+            f"  {r['task']} init {r['init']}: {Stepping.EXACT} {e['outcome']} in {e['steps']}, "
+            f"{Stepping.FAST} {f['outcome']} in {f['steps']}"
         )
     print("| state drift (max abs over time, qpos, qvel) | median | 90th pct | max |")
     print("|---|---|---|---|")

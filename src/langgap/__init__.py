@@ -34,7 +34,7 @@ _EXPORTS = {
     "current_instruction": "langgap.policies.base",
     "make_policy": "langgap.policies",
     "EpisodeRecord": "langgap.records",
-    "Outcome": "langgap.records",
+    "Outcome": "langgap.vocabulary",
     "load_runs": "langgap.report",
     "LangGapError": "langgap.errors",
 }

@@ -1,8 +1,8 @@
 """Episode records and their enumerations: the bottom of LangGap's data flow.
 
 Everything above (the engine that produces records, the store that keeps them, the reports that
-read them) takes the record's shape, its key and the names of its outcomes from here. This module
-imports nothing else from LangGap.
+read them) takes the record's shape and its key from here, and the names of its outcomes from
+`langgap.vocabulary`, the only part of LangGap this module imports.
 """
 
 from __future__ import annotations
@@ -12,35 +12,13 @@ from collections.abc import Iterable, Mapping
 from dataclasses import asdict, dataclass, field, fields
 from enum import StrEnum
 
+from langgap.vocabulary import Condition, Outcome, TaskKind
+
 
 class Status(StrEnum):
     """Whether the policy was judged: `done` (success or a policy failure) or `gap` (infrastructure failed)."""
 
     DONE = "done"
-    GAP = "gap"
-
-
-class Outcome(StrEnum):
-    """What an episode achieved (see `classify`).
-
-    Attributes:
-        SUCCESS: The task's goal held.
-        PERSISTED: After its instruction changed, the policy achieved the first instruction's goal.
-        WRONG_ORDER: An ordered task's sub-goals all held, but not in the order asked.
-        DID_SOURCE_TASK: An extended task's policy did the scene's original task instead.
-        DID_OTHER_TASK: The policy achieved the goal of another task of the scene.
-        NO_GOAL_REACHED: No goal of the scene's tasks held.
-        POLICY_ERROR: The policy returned a malformed action.
-        GAP: Infrastructure failed to run the episode: no verdict on the policy.
-    """
-
-    SUCCESS = "success"
-    PERSISTED = "persisted"
-    WRONG_ORDER = "wrong_order"
-    DID_SOURCE_TASK = "did_source_task"
-    DID_OTHER_TASK = "did_other_task"
-    NO_GOAL_REACHED = "no_goal_reached"
-    POLICY_ERROR = "policy_error"
     GAP = "gap"
 
 
@@ -70,7 +48,7 @@ class EpisodeKey:
     task_id: str
     init_index: int
     seed: int
-    condition: str = "given"
+    condition: str = Condition.GIVEN.value
 
     def label(self) -> str:
         return f"{self.task_id}#{self.init_index}/seed{self.seed}/{self.condition}"
@@ -213,7 +191,7 @@ def classify(
         return Outcome.PERSISTED
     if wrong_order:
         return Outcome.WRONG_ORDER
-    if kind == "extended" and source in reached:
+    if kind == TaskKind.EXTENDED and source in reached:
         return Outcome.DID_SOURCE_TASK
     if any(name != task_id for name in reached):
         return Outcome.DID_OTHER_TASK

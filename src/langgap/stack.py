@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from langgap.errors import DependencyNotInstalled, InitStateError
+from langgap.vocabulary import SeedScheme, Stepping
 
 # The versions LangGap's results are made with. Each one changes episode outcomes (docs/protocol.md: Simulation stack).
 PINNED = {
@@ -78,10 +79,9 @@ def version_of(package: str) -> str | None:
         return None
 
 
-# How physics substeps are computed (langgap/sim/stepping.py): `exact` and `robosuite` give the same
-# bits, `fast` differs from them in the last bits (and then drifts), so a result's physics names it.
-STEPPINGS = ("exact", "fast", "robosuite")
-DEFAULT_STEPPING = "exact"
+# How physics substeps are computed unless a run chooses (`langgap.vocabulary.Stepping`); a plain string, as the
+# specs, options and demonstrations it becomes a field of hold.
+DEFAULT_STEPPING = Stepping.EXACT.value
 
 
 # How an episode starts and when its images are taken (langgap/sim/env.py), recorded with every result so
@@ -92,20 +92,18 @@ DEFAULT_STEPPING = "exact"
 CONVENTIONS = {"start": "fresh-env", "images": "robosuite-sample"}
 
 
-# How an episode's seed selects its fixture placement (langgap/sim/env.py, `TaskEnv.reset`): `per-episode` seeds
-# NumPy with the episode's own seed (seed + k for init state k); `openpi` reproduces openpi's LIBERO example, one
-# stream per task seeded once (with seed), episode k drawing after k resets' draws.
-SEED_SCHEMES = ("per-episode", "openpi")
-DEFAULT_SEED_SCHEME = "per-episode"
+# How an episode's seed selects its fixture placement unless a run chooses (`langgap.vocabulary.SeedScheme`); a
+# plain string, as `DEFAULT_STEPPING`.
+DEFAULT_SEED_SCHEME = SeedScheme.PER_EPISODE.value
 
 
 def physics_stack(stepping: str = DEFAULT_STEPPING, seed_scheme: str = DEFAULT_SEED_SCHEME) -> dict[str, str | None]:
     """Installed versions of everything that changes simulation results, the start and image conventions,
-    and the `fast` stepping and the `openpi` seed scheme where used."""
+    and the `fast` stepping and the `openpi` seed scheme where used (as plain strings: results store them)."""
     versions = {name: version_of(name) for name in RECORDED}
-    chosen = {"stepping": stepping} if stepping == "fast" else {}
+    chosen = {"stepping": Stepping.FAST.value} if stepping == Stepping.FAST else {}
     if seed_scheme != DEFAULT_SEED_SCHEME:
-        chosen["seed_scheme"] = seed_scheme
+        chosen["seed_scheme"] = str(seed_scheme)
     return versions | CONVENTIONS | chosen
 
 

@@ -1,14 +1,98 @@
-"""LangGap's words, defined once: what each decision LangGap shows is called, and the rates behind them.
+"""LangGap's words, defined once: the kinds of task, the language conditions, the outcomes of an episode, the
+steppings and seed schemes of its physics, the gate's verdicts, and the rates behind them.
 
 The ground floor: it imports nothing from LangGap, so every layer takes its words from here, and a word
 read in a table, a report or a JSON file is the same word everywhere. Each enumeration is a `str` enum
 whose values are the words shown. Files keep storing what they stored before (a verdict file keeps
 `feasible` and `proof`); the words are derived from that where they are shown.
+
+A member equals its word, hashes as it, and f-strings, `csv` and `json` write its word, so code compares, keys
+and formats with the members. Its `repr` is not its word's (`<TaskKind.ORIGINAL: 'original'>`) and YAML refuses
+it, so the fields that held plain strings keep holding them: where a word becomes a task's kind, dimension or
+split, an episode's condition, a default that runs into specs and options, or a run spec's conditions, it is its
+`.value` (or `words`), and so are argparse's choices (its `invalid choice` error quotes their reprs).
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from enum import StrEnum
+
+
+class TaskKind(StrEnum):
+    """What a task is. An original's dimension and split are its kind's word too (`langgap.catalog.task`)."""
+
+    ORIGINAL = "original"  # a LIBERO task, run from LIBERO's own BDDL file
+    EXTENDED = "extended"  # a LangGap task set on an original's scene and init states (its `source`)
+
+
+class Condition(StrEnum):
+    """A language condition: which instruction an episode's policy receives (`langgap.engine.plan`). Beside
+    these fixed ones, `switch:K` (`SWITCH`) changes the instruction at policy step K."""
+
+    GIVEN = "given"  # the task's own
+    EMPTY = "empty"  # an empty string
+    SHUFFLED = "shuffled"  # another task's on the same scene
+    SOURCE = "source"  # the task's source (original) task's
+    NONSENSE = "nonsense"  # as many words drawn from the catalog's instructions
+
+
+# `switch:K`: another task's instruction until policy step K, then the task's own (`switch_step`).
+SWITCH = "switch:"
+
+
+def switch_step(condition: str) -> int | None:
+    """K of a valid `switch:K` condition (a positive number of policy steps); None for any other condition."""
+    k = condition.removeprefix(SWITCH)
+    return int(k) if condition.startswith(SWITCH) and k.isdigit() and int(k) >= 1 else None
+
+
+class Outcome(StrEnum):
+    """What an episode achieved (see `langgap.records.classify`).
+
+    Attributes:
+        SUCCESS: The task's goal held.
+        PERSISTED: After its instruction changed, the policy achieved the first instruction's goal.
+        WRONG_ORDER: An ordered task's sub-goals all held, but not in the order asked.
+        DID_SOURCE_TASK: An extended task's policy did the scene's original task instead.
+        DID_OTHER_TASK: The policy achieved the goal of another task of the scene.
+        NO_GOAL_REACHED: No goal of the scene's tasks held.
+        POLICY_ERROR: The policy returned a malformed action.
+        GAP: Infrastructure failed to run the episode: no verdict on the policy.
+    """
+
+    SUCCESS = "success"
+    PERSISTED = "persisted"
+    WRONG_ORDER = "wrong_order"
+    DID_SOURCE_TASK = "did_source_task"
+    DID_OTHER_TASK = "did_other_task"
+    NO_GOAL_REACHED = "no_goal_reached"
+    POLICY_ERROR = "policy_error"
+    GAP = "gap"
+
+
+class Stepping(StrEnum):
+    """How physics substeps are computed (`langgap.sim.stepping`). `exact` and `robosuite` give the same bits,
+    `fast` differs from them in the last bits (and then drifts), so a result's physics names it."""
+
+    EXACT = "exact"  # robosuite's bits, faster
+    FAST = "fast"  # the last bits differ, faster still
+    ROBOSUITE = "robosuite"  # robosuite's own code (for benchmarks and tests)
+
+
+class SeedScheme(StrEnum):
+    """How an episode's seed selects its fixture placement (`langgap.sim.env.TaskEnv.reset`)."""
+
+    PER_EPISODE = "per-episode"  # NumPy seeded with the episode's own seed (seed + k for init state k)
+    # openpi's LIBERO example: one stream per task seeded once (with the run seed), episode k drawing after k
+    # resets' draws
+    OPENPI = "openpi"
+
+
+def words(members: Iterable[str]) -> tuple[str, ...]:
+    """`members` as plain strings, for data a user holds and for what shows their `repr` (argparse's `invalid
+    choice` error quotes its choices' reprs)."""
+    return tuple(str(member) for member in members)
 
 
 class Verdict(StrEnum):

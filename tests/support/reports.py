@@ -7,8 +7,9 @@ from dataclasses import asdict
 from pathlib import Path
 
 from langgap.catalog.task import GateResult
-from langgap.records import EpisodeRecord, Outcome, Status, classify
+from langgap.records import EpisodeRecord, Status, classify
 from langgap.store import RunStore
+from langgap.vocabulary import Outcome
 
 SCENE = "libero_spatial/s0"
 SOURCE = "spatial/s0/bowl-on-plate"

@@ -8,8 +8,8 @@ from dataclasses import replace
 import pytest
 
 from langgap.catalog.task import GateResult
-from langgap.records import Outcome
 from langgap.report import load_runs, render, summarize
+from langgap.vocabulary import Outcome
 from tests.support.harness import run_cli
 from tests.support.reports import SOURCE, TASKS, episode, memoriser, reader, write_run
 

@@ -3,10 +3,10 @@ paraphrases paired against their original sentences (synthetic run stores, no si
 
 from __future__ import annotations
 
-from langgap.records import Outcome
 from langgap.report.load import load_runs
 from langgap.report.sections import DIAGNOSIS, report_data, report_tables
 from langgap.report.summary import summarize
+from langgap.vocabulary import Outcome
 from tests.support.reports import SOURCE, beyond_episode, episode, memoriser, write_run
 
 ORDERED = "spatial/s0/first-open-drawer-then-bowl-on-plate"

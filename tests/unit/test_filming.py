@@ -8,7 +8,7 @@ import pytest
 
 from langgap.engine.filming import VideoSelection, replay_matches
 from langgap.errors import LangGapError
-from langgap.records import Outcome
+from langgap.vocabulary import Outcome
 from tests.support.reports import SOURCE, episode
 
 TASKS = ("spatial/s0/ramekin-on-plate", "spatial/s0/bowl-on-stove")

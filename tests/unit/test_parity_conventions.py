@@ -10,6 +10,7 @@ import numpy as np
 from langgap import stack
 from langgap.catalog.catalog import load_catalog
 from langgap.sim.env import SETTLE_ACTION, SETTLE_STEPS
+from langgap.vocabulary import Stepping
 from tests.support.harness import REPO
 
 # openpi's examples/libero/main.py: max_steps per suite, num_steps_wait, LIBERO_DUMMY_ACTION.
@@ -31,7 +32,7 @@ def test_settle_is_openpis_wait():
 
 
 def test_every_result_records_the_start_and_image_conventions():
-    for stepping in stack.STEPPINGS:
+    for stepping in Stepping:
         physics = stack.physics_stack(stepping)
         assert physics["start"] == "fresh-env" and physics["images"] == "robosuite-sample"
 

@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 
 from langgap.catalog.task import GateResult
-from langgap.records import Outcome
 from langgap.report import diagnosis_text, render
+from langgap.vocabulary import Outcome
 from tests.support.reports import SOURCE, beyond_episode, memoriser, reader, write_run
 
 EXPECTED = Path(__file__).parent / "report_outputs"

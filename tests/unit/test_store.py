@@ -8,10 +8,11 @@ from dataclasses import fields
 
 import pytest
 
-from langgap.records import EpisodeKey, EpisodeRecord, Outcome, Privilege, Status, privilege
+from langgap.records import EpisodeKey, EpisodeRecord, Privilege, Status, privilege
 from langgap.report.load import load_runs
 from langgap.report.summary import results
 from langgap.store import SCHEMA_VERSION, RunStore, StoreError
+from langgap.vocabulary import Outcome
 
 # The schema-1 layout (LangGap before the `privileged` column), as such stores exist on disk.
 _SCHEMA_1 = """

@@ -7,9 +7,10 @@ import json
 
 import pytest
 
-from langgap.records import Outcome, Privilege
+from langgap.records import Privilege
 from langgap.report import load_runs, render, summarize
 from langgap.report.sections import report_data, report_tables
+from langgap.vocabulary import Outcome
 from tests.support.reports import SOURCE, TASKS, memoriser, reader, write_run
 
 

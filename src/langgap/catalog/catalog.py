@@ -20,10 +20,11 @@ import yaml
 
 from langgap.catalog.naming import SUITE_SHORT
 from langgap.catalog.switch_verdicts import snapshot_switch_verdicts
-from langgap.catalog.task import DIMENSIONS, KINDS, SPLITS, GateResult, Origin, Task
+from langgap.catalog.task import DIMENSIONS, SPLITS, GateResult, Origin, Task
 from langgap.catalog.verdicts import read_verdicts, snapshot_verdicts
 from langgap.errors import BddlError, CatalogError, UnknownTaskError
 from langgap.goals import goal_from_strings
+from langgap.vocabulary import TaskKind
 
 DEFAULT_CATALOG = "langgap99"
 _KEYWORDS_HELP = (
@@ -59,8 +60,10 @@ class Catalog:
             self._by_id[task.id] = task
         for task in self.tasks:
             source = self._by_id.get(task.source)
-            if source is None or source.kind != "original":
-                raise CatalogError(f"catalog {name}: task {task.id} has source {task.source!r}, not an original task")
+            if source is None or source.kind != TaskKind.ORIGINAL:
+                raise CatalogError(
+                    f"catalog {name}: task {task.id} has source {task.source!r}, not an {TaskKind.ORIGINAL} task"
+                )
             if (source.suite, source.scene_index, source.scene_task) != (task.suite, task.scene_index, task.scene_task):
                 raise CatalogError(f"catalog {name}: task {task.id} does not share the scene of its source")
 
@@ -160,7 +163,7 @@ class Catalog:
         suites = {**{s: s for s in SUITE_SHORT}, **{short: s for s, short in SUITE_SHORT.items()}}
         if term in suites:
             return {t.id for t in self.tasks if t.suite == suites[term]}
-        for attribute, values in (("kind", KINDS), ("dimension", DIMENSIONS), ("split", SPLITS)):
+        for attribute, values in (("kind", tuple(TaskKind)), ("dimension", DIMENSIONS), ("split", SPLITS)):
             if term in values:
                 return {t.id for t in self.tasks if getattr(t, attribute) == term}
         if any(ch in term for ch in "*?["):
@@ -177,9 +180,11 @@ def _task_from_entry(
 ) -> Task:
     try:
         kind = entry["kind"]
-        source_id = entry["id"] if kind == "original" else entry["source"]
+        source_id = entry["id"] if kind == TaskKind.ORIGINAL else entry["source"]
         if source_id not in originals:
-            raise CatalogError(f"catalog {catalog}: task {entry['id']} has source {source_id!r}, not an original task")
+            raise CatalogError(
+                f"catalog {catalog}: task {entry['id']} has source {source_id!r}, not an {TaskKind.ORIGINAL} task"
+            )
         scene = originals[source_id]
         suite = entry["suite"]
         return Task(
@@ -187,8 +192,8 @@ def _task_from_entry(
             catalog=catalog,
             suite=suite,
             kind=kind,
-            dimension=entry.get("dimension", "original"),
-            split=entry.get("split", "original"),
+            dimension=entry.get("dimension", TaskKind.ORIGINAL.value),
+            split=entry.get("split", TaskKind.ORIGINAL.value),
             source=source_id,
             scene_task=scene["libero_task"],
             scene_index=int(scene["libero_index"]),
@@ -255,7 +260,7 @@ def catalog_from_data(data: dict, *, source: str = "<data>", verdicts: dict[str,
         raise CatalogError(f"{source}: not a LangGap registry (needs 'catalog' and 'tasks')")
     name = data["catalog"]
     entries = data["tasks"]
-    originals = {e["id"]: e for e in entries if e.get("kind") == "original"}
+    originals = {e["id"]: e for e in entries if e.get("kind") == TaskKind.ORIGINAL}
     tasks = [_task_from_entry(name, e, data, originals, verdicts) for e in entries]
     return Catalog(name, tasks, description=data.get("description", ""))
 

@@ -23,6 +23,7 @@ from langgap.catalog.cache import cache_dir
 from langgap.catalog.task import Task
 from langgap.errors import BddlError
 from langgap.goals import atoms, conjunction
+from langgap.vocabulary import TaskKind
 
 
 def scene_bddl_path(task: Task) -> Path:
@@ -69,7 +70,7 @@ def task_bddl_text(task: Task) -> str:
             raise BddlError(f"task {task.id}: registry goal or instruction differs from {task.origin.file}")
         return text
     source_text = _read_text(scene_bddl_path(task))
-    if task.kind == "original":
+    if task.kind == TaskKind.ORIGINAL:
         shipped = parse_bddl(source_text, source=str(scene_bddl_path(task)))
         if conjunction(shipped.goal) != task.goal:
             raise BddlError(f"task {task.id}: registry goal {task.goal_strings} differs from LIBERO's BDDL")
@@ -86,7 +87,7 @@ def task_bddl_text(task: Task) -> str:
 
 def task_bddl_path(task: Task) -> Path:
     """A BDDL file for `task` that LIBERO can load; generated files are written atomically once."""
-    if task.kind == "original" or task.origin is not None:
+    if task.kind == TaskKind.ORIGINAL or task.origin is not None:
         task_bddl_text(task)  # checks the registry against the shipped file
         return scene_bddl_path(task)
     text = task_bddl_text(task)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from langgap.catalog.task import BEYOND_DIMENSIONS, PAPER_DIMENSIONS, SPLITS
+from langgap.vocabulary import TaskKind
 
 # The paper's Table VI order (not LIBERO's suite order).
 SUITE_ORDER = ("libero_spatial", "libero_goal", "libero_object", "libero_10")
@@ -12,7 +13,7 @@ SUITE_LABEL = {"libero_spatial": "Spatial", "libero_goal": "Goal", "libero_objec
 EXTENDED_DIMENSIONS = PAPER_DIMENSIONS
 ALL_EXTENDED_DIMENSIONS = (*PAPER_DIMENSIONS, *BEYOND_DIMENSIONS)
 DIMENSION_LABEL = {
-    "original": "Original",
+    TaskKind.ORIGINAL: "Original",
     "change_object": "Change Object",
     "change_target": "Change Target",
     "spatial_description": "Spatial Description",
@@ -25,10 +26,14 @@ DIMENSION_LABEL = {
     "language": "Language",
 }
 # Every extended dimension reports name, in table order: LangGap's, then other catalogs' (libero-pro's).
-KNOWN_DIMENSIONS = tuple(d for d in DIMENSION_LABEL if d != "original")
+KNOWN_DIMENSIONS = tuple(d for d in DIMENSION_LABEL if d != TaskKind.ORIGINAL)
 
 SPLIT_ORDER = SPLITS
-SPLIT_LABEL = {"original": "Original tasks", "train": "Extended, training split", "heldout": "Extended, held-out"}
+SPLIT_LABEL = {
+    TaskKind.ORIGINAL: "Original tasks",
+    "train": "Extended, training split",
+    "heldout": "Extended, held-out",
+}
 
 
 def label(names: dict[str, str], key: str) -> str:

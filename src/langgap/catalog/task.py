@@ -11,20 +11,20 @@ from langgap.bddl import Predicate
 from langgap.errors import CatalogError
 from langgap.goals import Goal, goal_strings, witness
 from langgap.stack import installed_differences
-from langgap.vocabulary import CEILING_TARGET, Verdict
+from langgap.vocabulary import CEILING_TARGET, TaskKind, Verdict
 
-KINDS = ("original", "extended")
 # The paper's four dimensions, then the four of the `langgap-beyond` catalog (`generation/beyond.py`).
 PAPER_DIMENSIONS = ("change_object", "change_target", "spatial_description", "drawer_action")
 BEYOND_DIMENSIONS = ("ordering", "negation", "paraphrase", "attribute_reference")
 # The perturbations of the field's benchmarks read from their packages (`generation/external.py`): another goal on
 # the same scene (LIBERO-PRO's *task*), and a reworded instruction (LIBERO-PRO's *lan*, LIBERO-Plus's language).
 EXTERNAL_DIMENSIONS = ("task", "language")
-DIMENSIONS = ("original", *PAPER_DIMENSIONS, *BEYOND_DIMENSIONS, *EXTERNAL_DIMENSIONS)
+# An original task's dimension and split are its kind's word.
+DIMENSIONS = (TaskKind.ORIGINAL.value, *PAPER_DIMENSIONS, *BEYOND_DIMENSIONS, *EXTERNAL_DIMENSIONS)
 # Dimensions whose tasks ask for their source's own goal in other words: a policy that ignores its instruction
 # does them as well as their sources, so they alone cannot show whether it reads.
 SAME_GOAL_DIMENSIONS = ("paraphrase", "language")
-SPLITS = ("original", "train", "heldout")
+SPLITS = (TaskKind.ORIGINAL.value, "train", "heldout")
 INSTRUCTION_STYLES = ("libero", "paper")
 DEFAULT_STYLE = "libero"
 
@@ -242,7 +242,8 @@ class Task:
         id: The task's id: its suite's short name, its scene and its name (`spatial/s0/black-bowl-1-on-plate`).
         catalog: The name of the catalog it belongs to.
         suite: Its LIBERO suite (`libero_spatial`, `libero_object`, `libero_goal`, `libero_10`).
-        kind: `original` (a LIBERO task) or `extended` (a task set on an original's scene and init states).
+        kind: Its `TaskKind`'s word: `original` (a LIBERO task) or `extended` (a task set on an original's scene
+            and init states).
         dimension: What an extended task changes (one of `DIMENSIONS`: the paper's `change_object`,
             `change_target`, `spatial_description`, `drawer_action`, and the other catalogs'); `original`
             for an original.
@@ -289,17 +290,19 @@ class Task:
     gate_from: str | None = None
 
     def __post_init__(self) -> None:
-        checks = {"kind": (self.kind, KINDS), "dimension": (self.dimension, DIMENSIONS), "split": (self.split, SPLITS)}
+        checks = {
+            "kind": (self.kind, tuple(TaskKind)),
+            "dimension": (self.dimension, DIMENSIONS),
+            "split": (self.split, SPLITS),
+        }
         for name, (value, allowed) in checks.items():
             if value not in allowed:
                 raise CatalogError(f"task {self.id}: {name} {value!r} is not one of {', '.join(allowed)}")
         missing = [s for s in INSTRUCTION_STYLES if not self.instructions.get(s)]
         if missing:
             raise CatalogError(f"task {self.id}: missing instruction style(s) {', '.join(missing)}")
-        if (self.kind == "original") != (self.dimension == "original") or (self.kind == "original") != (
-            self.split == "original"
-        ):
-            raise CatalogError(f"task {self.id}: kind, dimension and split disagree about being original")
+        if len({value == TaskKind.ORIGINAL for value in (self.kind, self.dimension, self.split)}) > 1:
+            raise CatalogError(f"task {self.id}: kind, dimension and split disagree about being {TaskKind.ORIGINAL}")
         if self.max_steps <= 0:
             raise CatalogError(f"task {self.id}: max_steps must be positive")
 

@@ -19,7 +19,8 @@ from langgap.engine.spec import (
     RESULT_STEPPINGS,
 )
 from langgap.errors import LangGapError
-from langgap.stack import DEFAULT_SEED_SCHEME, DEFAULT_STEPPING, SEED_SCHEMES
+from langgap.stack import DEFAULT_SEED_SCHEME, DEFAULT_STEPPING
+from langgap.vocabulary import Condition, SeedScheme, Stepping, words
 
 EXIT_GAPS = 3
 
@@ -67,11 +68,11 @@ def add_parser(subparsers) -> None:
     add_stepping_option(parser)
     parser.add_argument(
         "--seed-scheme",
-        choices=SEED_SCHEMES,
+        choices=words(SeedScheme),
         default=DEFAULT_SEED_SCHEME,
-        help="how seeds select fixture placements: per-episode (episode k seeds SEED+k: independent of order, "
-        "the default) or openpi (one stream per task seeded with SEED, as openpi's LIBERO example; the run "
-        "records it)",
+        help=f"how seeds select fixture placements: {SeedScheme.PER_EPISODE} (episode k seeds SEED+k: independent "
+        f"of order, the default) or {SeedScheme.OPENPI} (one stream per task seeded with SEED, as openpi's LIBERO "
+        "example; the run records it)",
     )
     parser.add_argument(
         "--repeats",
@@ -103,10 +104,10 @@ def add_stepping_option(parser) -> None:
     """`--stepping`, shared by the commands that run episodes."""
     parser.add_argument(
         "--stepping",
-        choices=RESULT_STEPPINGS,
+        choices=words(RESULT_STEPPINGS),
         default=DEFAULT_STEPPING,
-        help="physics substeps: exact (bit-identical to robosuite, the default) or fast (about 1.7x faster "
-        "steps; the last bits differ, the run records it)",
+        help=f"physics substeps: {Stepping.EXACT} (bit-identical to robosuite, the default) or {Stepping.FAST} "
+        "(about 1.7x faster steps; the last bits differ, the run records it)",
     )
 
 
@@ -125,7 +126,7 @@ def run(args) -> int:
         episodes=args.episodes,
         seed=args.seed,
         repeats=args.repeats,
-        conditions=tuple(args.condition or ("given",)),
+        conditions=tuple(args.condition or (Condition.GIVEN,)),
         style=args.style,
         stepping=args.stepping,
         seed_scheme=args.seed_scheme,

@@ -21,6 +21,7 @@ from langgap.generation.generate import (
     write_registry,
 )
 from langgap.stack import SUITES
+from langgap.vocabulary import TaskKind
 
 
 def add_parser(subparsers) -> None:
@@ -69,10 +70,10 @@ def summary_lines(tasks: list[Task]) -> list[str]:
     lines = [f"{'scene (source task)':<{width}}  " + "  ".join(columns)]
     for name, counts in [*scenes.items(), *suites.items(), ("total", total)]:
         lines.append(f"{name:<{width}}  " + "  ".join(f"{counts[c]:>{len(c)}}" for c in columns))
-    extended = len(tasks) - total["original"]
-    lines.append(f"{len(tasks)} tasks: {total['original']} original, {extended} extended")
+    originals = total[TaskKind.ORIGINAL]
+    lines.append(f"{len(tasks)} tasks: {originals} {TaskKind.ORIGINAL}, {len(tasks) - originals} {TaskKind.EXTENDED}")
 
-    if not any(t.in_langgap99 and t.kind == "extended" for t in tasks):
+    if not any(t.in_langgap99 and t.kind == TaskKind.EXTENDED for t in tasks):
         return lines  # a catalog built on the originals only (langgap-beyond)
     paper = [t for t in load_catalog(DEFAULT_CATALOG) if t.suite in suites]
     found = {t.id for t in tasks if t.in_langgap99}

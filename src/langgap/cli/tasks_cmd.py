@@ -11,14 +11,13 @@ from langgap.catalog.task import (
     DEFAULT_STYLE,
     DIMENSIONS,
     INSTRUCTION_STYLES,
-    KINDS,
     SAME_TRIAL,
     SPLITS,
     Task,
     verdict_counts,
 )
 from langgap.stack import SUITES
-from langgap.vocabulary import Verdict
+from langgap.vocabulary import SWITCH, TaskKind, Verdict, switch_step, words
 
 
 def add_catalog_option(parser) -> None:
@@ -52,9 +51,9 @@ def add_parser(subparsers) -> None:
     listing = verbs.add_parser("list", help="list tasks, optionally filtered")
     add_catalog_options(listing)
     listing.add_argument("--suite", choices=SUITES)
-    listing.add_argument("--kind", choices=KINDS)
+    listing.add_argument("--kind", choices=words(TaskKind))
     listing.add_argument("--dimension", choices=DIMENSIONS)
-    listing.add_argument("--split", choices=[s for s in SPLITS if s != "original"] + ["original"])
+    listing.add_argument("--split", choices=[s for s in SPLITS if s != TaskKind.ORIGINAL] + [TaskKind.ORIGINAL.value])
     _add_tasks_option(listing)
     listing.add_argument("--json", action="store_true", help="print a JSON array of task objects")
     listing.set_defaults(handler=run_list)
@@ -77,8 +76,8 @@ def add_parser(subparsers) -> None:
     gate.add_argument(
         "--condition",
         action="append",
-        metavar="switch:K",
-        help="count the switch gate's verdicts at K instead (repeatable; `langgap validate --condition switch:K`)",
+        metavar=f"{SWITCH}K",
+        help=f"count the switch gate's verdicts at K instead (repeatable; `langgap validate --condition {SWITCH}K`)",
     )
     gate.set_defaults(handler=run_gate)
 
@@ -139,10 +138,11 @@ def run_list(args) -> int:
             f"{t.instruction(args.style)}"
         )
     by_kind = Counter(t.kind for t in tasks)
-    by_dim = Counter(t.dimension for t in tasks if t.kind == "extended")
+    by_dim = Counter(t.dimension for t in tasks if t.kind == TaskKind.EXTENDED)
     rejected = [t.gate.verdict for t in tasks if not t.feasible]
     print(
-        f"\n{len(tasks)} tasks: {by_kind['original']} original, {by_kind['extended']} extended"
+        f"\n{len(tasks)} tasks: "
+        + ", ".join(f"{by_kind[kind]} {kind}" for kind in TaskKind)
         + (" (" + ", ".join(f"{d} {n}" for d, n in sorted(by_dim.items())) + ")" if by_dim else "")
         + f"; {len(rejected)} rejected by the feasibility gate"
         + (f" ({verdict_counts(rejected, always=())})" if rejected else "")
@@ -184,7 +184,7 @@ def run_show(args) -> int:
     print(f"{'bddl':<12} {info['bddl']}")
     if task.origin is not None:
         print(f"{'read':<12} from {task.origin.package} {task.origin.version}, unchanged")
-    elif task.kind == "extended":
+    elif task.kind == TaskKind.EXTENDED:
         print(f"{'generated':<12} from {info['scene_bddl']} (only language, obj_of_interest and goal differ)")
     print(f"{'init states':<12} {info['init_states']['count']} from {info['init_states']['from']}")
     print(f"{'':<12} {info['init_states']['file']}")
@@ -211,7 +211,6 @@ def _recorded_switch_verdicts(catalog: str, task_id: str) -> dict:
     """The task's switch verdicts (`switch:K` -> verdict, in K order) from the catalog's switch verdict file."""
     from langgap.catalog.catalog import registry_path
     from langgap.catalog.switch_verdicts import read_switch_verdicts
-    from langgap.engine.plan import switch_step
 
     by_k = read_switch_verdicts(registry_path(catalog)).get(task_id, {})
     return dict(sorted(by_k.items(), key=lambda item: switch_step(item[0]) or 0))

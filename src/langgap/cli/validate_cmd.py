@@ -13,7 +13,7 @@ from langgap.cli.tasks_cmd import add_catalog_option
 from langgap.errors import LangGapError
 from langgap.validity.rows import FULL_INITS
 from langgap.validity.search import BUDGET
-from langgap.vocabulary import FEASIBLE_RATE, SWITCH_RATE, Verdict
+from langgap.vocabulary import FEASIBLE_RATE, SWITCH, SWITCH_RATE, TaskKind, Verdict
 
 DEFAULT_POLICY = "oracle"
 
@@ -46,7 +46,8 @@ def add_parser(subparsers) -> None:
     parser.add_argument(
         "--blind",
         action="store_true",
-        help="also run `blind` on the same episodes and check its claims (originals as the oracle, 0 %% elsewhere)",
+        help=f"also run `blind` on the same episodes and check its claims ({TaskKind.ORIGINAL}s as the oracle, 0 %% "
+        "elsewhere)",
     )
     parser.add_argument(
         "--claims-only",
@@ -58,7 +59,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument(
         "--condition",
         action="append",
-        metavar="switch:K",
+        metavar=f"{SWITCH}K",
         help="the switch gate instead (repeatable): per task and K, the oracle must follow an instruction switched "
         f"at policy step K on {SWITCH_RATE:.0%}% of the init states, else the task is {Verdict.UNPROVEN} at that K; "
         "--record keeps the verdicts in <registry>.switch-gate.json",

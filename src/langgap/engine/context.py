@@ -6,6 +6,7 @@ from langgap.catalog.catalog import Catalog
 from langgap.catalog.task import DEFAULT_STYLE, Task
 from langgap.engine.plan import PlannedEpisode
 from langgap.policies.base import PrivilegedContext, TaskContext
+from langgap.vocabulary import Condition
 
 
 def task_context(
@@ -15,7 +16,7 @@ def task_context(
     init_index: int,
     seed: int,
     style: str = DEFAULT_STYLE,
-    condition: str = "given",
+    condition: str = Condition.GIVEN.value,
     instruction: str | None = None,
     instruction_goals: tuple[tuple[str, str], ...] = (),
 ) -> TaskContext:

@@ -3,7 +3,7 @@
 Besides success, every step evaluates the goals of all tasks set in the same scene (the task's
 scene mates, its source included). The record says which of them became true and when, and the
 episode is classified by what the policy did *instead* of its task:
-one of `langgap.records.Outcome` (`did_source_task` is the memorisation signature: an extended
+one of `langgap.vocabulary.Outcome` (`did_source_task` is the memorisation signature: an extended
 task's policy performed the original task of the scene).
 """
 
@@ -25,9 +25,10 @@ from langgap.engine.rollout import RolloutResult, StepHook, run_episode, run_sha
 from langgap.errors import one_line
 from langgap.goals import Goal
 from langgap.policies.base import Policy, PolicyOutputError
-from langgap.records import EpisodeRecord, FailureKind, Outcome, Status, classify
+from langgap.records import EpisodeRecord, FailureKind, Status, classify
 from langgap.sim.env import SETTLE_STEPS, TaskEnv
 from langgap.version import code_version
+from langgap.vocabulary import Outcome
 
 
 @dataclass(frozen=True)

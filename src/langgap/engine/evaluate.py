@@ -17,9 +17,10 @@ from langgap.engine.pools import WorkerPool, make_pool
 from langgap.engine.runner import RunnerSetup
 from langgap.engine.sharing import SharedRollout, policy_spec, share_rollouts
 from langgap.engine.spec import PLAN_FIELDS, ExecutionOptions, RunSpec, SpecError
-from langgap.records import EpisodeRecord, Outcome, Status
+from langgap.records import EpisodeRecord, Status
 from langgap.store import RunStore
 from langgap.version import code_version
+from langgap.vocabulary import Outcome
 
 
 @dataclass

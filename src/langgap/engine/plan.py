@@ -16,15 +16,19 @@ from langgap.catalog.catalog import Catalog
 from langgap.catalog.task import Task
 from langgap.errors import CatalogError, InitStateError, ParameterError
 from langgap.records import EpisodeKey
+from langgap.vocabulary import SWITCH, Condition, TaskKind, switch_step
 
-CONDITIONS = ("given", "empty", "shuffled", "source", "nonsense")
-SWITCH = "switch:"  # `switch:K`: the instruction changes at policy step K (`switch_step`)
-CONDITION_HELP = (
-    "given: the task's instruction; empty: an empty string; shuffled: the instruction of another task on the "
-    "same scene; source: the instruction of the task's source (original) task; nonsense: as many words drawn "
-    "from the catalog's vocabulary; switch:K: another task's instruction from the same scene (an extended "
-    "task's source, an original's sibling) until policy step K, then the task's own"
-)
+# What each condition sends the policy: every `--condition` flag's help, and the error naming an unknown one.
+_CONDITION_MEANING = {
+    Condition.GIVEN: "the task's instruction",
+    Condition.EMPTY: "an empty string",
+    Condition.SHUFFLED: "the instruction of another task on the same scene",
+    Condition.SOURCE: f"the instruction of the task's source ({TaskKind.ORIGINAL}) task",
+    Condition.NONSENSE: "as many words drawn from the catalog's vocabulary",
+    f"{SWITCH}K": f"another task's instruction from the same scene (an {TaskKind.EXTENDED} task's source, an "
+    f"{TaskKind.ORIGINAL}'s sibling) until policy step K, then the task's own",
+}
+CONDITION_HELP = "; ".join(f"{condition}: {meaning}" for condition, meaning in _CONDITION_MEANING.items())
 
 
 class PlanParameterError(CatalogError, ParameterError):
@@ -70,15 +74,9 @@ def repeat_of(seed: int, init_index: int, run_seed: int) -> int:
     return (seed - init_index - run_seed) // REPEAT_STRIDE
 
 
-def switch_step(condition: str) -> int | None:
-    """K of a valid `switch:K` condition (a positive number of policy steps); None for any other condition."""
-    k = condition.removeprefix(SWITCH)
-    return int(k) if condition.startswith(SWITCH) and k.isdigit() and int(k) >= 1 else None
-
-
 def unknown_conditions(conditions: tuple[str, ...]) -> list[str]:
-    """The conditions that are neither a fixed one (`CONDITIONS`) nor a valid `switch:K`."""
-    return [c for c in conditions if c not in CONDITIONS and switch_step(c) is None]
+    """The conditions that are neither a fixed one (`Condition`) nor a valid `switch:K`."""
+    return [c for c in conditions if c not in tuple(Condition) and switch_step(c) is None]
 
 
 def _pick(pool: list[Task], *salt) -> Task:
@@ -90,7 +88,7 @@ def _pick(pool: list[Task], *salt) -> Task:
 def _switch_pool(task: Task, catalog: Catalog, style: str) -> list[Task]:
     """The tasks a `switch:K` episode of `task` may start under: an extended task's source; for an original,
     the siblings of its scene with another instruction and goal."""
-    if task.kind != "original":
+    if task.kind != TaskKind.ORIGINAL:
         return [catalog.get(task.source)]
     own = task.instruction(style)
     return [
@@ -126,7 +124,7 @@ def switch_note(tasks: list[Task], catalog: Catalog, conditions: tuple[str, ...]
         return ""
     shown = ", ".join(missing[:4]) + (f", … ({len(missing) - 4} more)" if len(missing) > 4 else "")
     return (
-        f"note: {len(missing)} task(s) have no other task in their scene to start under; their switch:K "
+        f"note: {len(missing)} task(s) have no other task in their scene to start under; their {SWITCH}K "
         f"episodes are not planned: {shown}"
     )
 
@@ -144,15 +142,15 @@ def nonsense(task: Task, catalog: Catalog, style: str, init_index: int) -> str:
 
 def condition_instruction(task: Task, catalog: Catalog, condition: str, style: str, init_index: int) -> str:
     """The instruction a policy receives for `task` under a language `condition`."""
-    if condition == "given":
+    if condition == Condition.GIVEN:
         return task.instruction(style)
-    if condition == "empty":
+    if condition == Condition.EMPTY:
         return ""
-    if condition == "source":
+    if condition == Condition.SOURCE:
         return catalog.get(task.source).instruction(style)
-    if condition == "nonsense":
+    if condition == Condition.NONSENSE:
         return nonsense(task, catalog, style, init_index)
-    if condition == "shuffled":
+    if condition == Condition.SHUFFLED:
         own = task.instruction(style)
         pool = [t for t in catalog.scene_mates(task) if t.id != task.id and t.instruction(style) != own]
         if not pool:  # a scene with one task (e.g. libero_10): fall back to the suite
@@ -170,7 +168,7 @@ def build_plan(
     *,
     episodes: int,
     seed: int = 0,
-    conditions: tuple[str, ...] = ("given",),
+    conditions: tuple[str, ...] = (Condition.GIVEN.value,),
     style: str = "libero",
     first_init: int = 0,
     repeats: int = 1,

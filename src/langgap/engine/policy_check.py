@@ -42,8 +42,9 @@ from langgap.engine.spec import DEFAULT_TIMEOUT_S, PAPER_EPISODES, SpecParameter
 from langgap.errors import LangGapError, SimulationError
 from langgap.policies import policy_class, policy_kwargs
 from langgap.policies.base import Policy, PolicyOutputError, PolicySpec, PolicySpecError, as_action_chunk
-from langgap.records import EpisodeRecord, Outcome
+from langgap.records import EpisodeRecord
 from langgap.sim.env import ACTION_LIMIT, CAMERAS, EnvOptions, Observation, TaskEnv
+from langgap.vocabulary import Outcome
 
 CHECK_CALLS = 4  # policy calls per check episode: the first (often a warm-up) and three more to time
 UPRIGHT = (

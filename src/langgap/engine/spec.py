@@ -20,6 +20,7 @@ from langgap.engine.filming import VideoSelection
 from langgap.engine.plan import CONDITION_HELP, REPEAT_STRIDE, unknown_conditions
 from langgap.errors import LangGapError, ParameterError
 from langgap.policies import policy_kwargs
+from langgap.vocabulary import Condition, SeedScheme, Stepping, words
 
 PAPER_EPISODES = 20
 DEFAULT_TIMEOUT_S = 900.0
@@ -30,7 +31,7 @@ DEFAULT_MAX_WAIT_MS = 5.0  # shared policy: how long a query waits for others
 # The fields that only say which episodes a run holds: `--extend` lets a resumed run grow them.
 PLAN_FIELDS = ("selection", "tasks", "inits", "conditions", "repeats")
 # The steppings a run can choose: `robosuite` gives `exact`'s bits, slower (for benchmarks and tests).
-RESULT_STEPPINGS = tuple(s for s in stack.STEPPINGS if s != "robosuite")
+RESULT_STEPPINGS = tuple(s for s in Stepping if s is not Stepping.ROBOSUITE)
 
 
 class SpecError(LangGapError):
@@ -85,7 +86,7 @@ class RunSpec:
         episodes: int = PAPER_EPISODES,
         seed: int = 0,
         repeats: int = 1,
-        conditions: tuple[str, ...] = ("given",),
+        conditions: tuple[str, ...] = (Condition.GIVEN,),
         style: str = DEFAULT_STYLE,
         stepping: str = stack.DEFAULT_STEPPING,
         seed_scheme: str = stack.DEFAULT_SEED_SCHEME,
@@ -110,7 +111,7 @@ class RunSpec:
             style: The instruction style (`libero` or `paper`).
             stepping: How the physics substeps are computed: `exact` or `fast` (`RESULT_STEPPINGS`).
             seed_scheme: How an episode's seed selects its placement: `per-episode` or `openpi`
-                (`langgap.stack.SEED_SCHEMES`).
+                (`langgap.vocabulary.SeedScheme`).
 
         Returns:
             The spec, with the selection resolved to task ids and the catalog's hash and the installed physics
@@ -134,8 +135,8 @@ class RunSpec:
             raise SpecError(f"unknown instruction style {style!r} (known: {', '.join(INSTRUCTION_STYLES)})")
         if stepping not in RESULT_STEPPINGS:
             raise SpecError(f"unknown stepping {stepping!r} (known: {', '.join(RESULT_STEPPINGS)})")
-        if seed_scheme not in stack.SEED_SCHEMES:
-            raise SpecError(f"unknown seed scheme {seed_scheme!r} (known: {', '.join(stack.SEED_SCHEMES)})")
+        if seed_scheme not in tuple(SeedScheme):
+            raise SpecError(f"unknown seed scheme {seed_scheme!r} (known: {', '.join(SeedScheme)})")
         conditions = tuple(dict.fromkeys(conditions))
         unknown = unknown_conditions(conditions)
         if unknown or not conditions:
@@ -151,7 +152,7 @@ class RunSpec:
             inits=tuple(range(episodes)),
             seed=seed,
             repeats=repeats,
-            conditions=conditions,
+            conditions=words(conditions),  # plain strings: the spec is stored, and shown by `repr`
             style=style,
             physics=stack.physics_stack(stepping, seed_scheme),
         )

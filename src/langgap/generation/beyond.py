@@ -35,6 +35,7 @@ from langgap.generation.generate import BEYOND_CATALOG, source_tasks
 from langgap.generation.identity import original_in, same_trial
 from langgap.goals import And, Atom, Goal, Not, Or, Then, atoms, plain_atoms
 from langgap.stack import SUITES
+from langgap.vocabulary import TaskKind
 
 # The negation variants: which part of a pick-and-place goal the sentence negates.
 NEGATED_PARTS = {"not-where": "where", "not-what": "what"}
@@ -85,7 +86,7 @@ def _task(
         id=f"{SUITE_SHORT[source.suite]}/s{source.scene_index}/{slug}",
         catalog=BEYOND_CATALOG,
         suite=source.suite,
-        kind="extended",
+        kind=TaskKind.EXTENDED.value,
         dimension=dimension,
         split="heldout",
         source=source.id,

@@ -40,6 +40,7 @@ from langgap.validity.audit import (
     instruction_findings,
     scene_findings,
 )
+from langgap.vocabulary import TaskKind
 
 PRO_CATALOG = "libero-pro"
 PLUS_CATALOG = "libero-plus-language"
@@ -76,7 +77,7 @@ def _variant(catalog: str, source: Task, task_id: str, dimension: str, origin: O
             source,
             id=task_id,
             catalog=catalog,
-            kind="extended",
+            kind=TaskKind.EXTENDED.value,
             dimension=dimension,
             split="heldout",
             source=source.id,

@@ -27,6 +27,7 @@ from langgap.generation.candidates import candidate_goals, dimension, obj_of_int
 from langgap.generation.registry_writer import registry_text
 from langgap.goals import conjunction
 from langgap.stack import SUITES
+from langgap.vocabulary import TaskKind
 
 FULL_CATALOG = "full"
 FULL_DESCRIPTION = "Every candidate same-scene task of LIBERO's scenes, generated from their BDDL (langgap generate)."
@@ -63,14 +64,16 @@ def source_tasks(suites: Iterable[str] = SUITES) -> list[Task]:
     suites = resolve_suites(suites)
     paper = load_catalog(DEFAULT_CATALOG)
     return sorted(
-        (t for t in paper if t.kind == "original" and t.suite in suites),
+        (t for t in paper if t.kind == TaskKind.ORIGINAL and t.suite in suites),
         key=lambda t: (suites.index(t.suite), t.scene_index),
     )
 
 
 def generate_tasks(suites: Iterable[str] = SUITES) -> list[Task]:
     """Every candidate task of `suites`, originals first within each scene; deterministic."""
-    published = {(t.suite, t.scene_task, t.goal): t for t in load_catalog(DEFAULT_CATALOG) if t.kind == "extended"}
+    published = {
+        (t.suite, t.scene_task, t.goal): t for t in load_catalog(DEFAULT_CATALOG) if t.kind == TaskKind.EXTENDED
+    }
     return [task for source in source_tasks(suites) for task in _scene_tasks(source, published)]
 
 
@@ -93,7 +96,7 @@ def _extended_task(source: Task, goal: tuple[Predicate, ...], scene: BddlProblem
         id=task_id(source.suite, source.scene_index, goal, scene),
         catalog=FULL_CATALOG,
         suite=source.suite,
-        kind="extended",
+        kind=TaskKind.EXTENDED.value,
         dimension=dimension(goal[0], source.bddl_goal, scene),
         split="heldout",
         source=source.id,

@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from dataclasses import asdict
 
 from langgap.catalog.task import Task
+from langgap.vocabulary import TaskKind
 
 _FULL_HEADER = """\
 # The full same-scene task space of LIBERO: every candidate task that shares a LIBERO original's
@@ -94,7 +95,7 @@ def _entry(task: Task, default_steps: int) -> dict:
     if task.in_langgap99:
         entry["in_langgap99"] = True
     entry |= {"suite": task.suite, "kind": task.kind}
-    if task.kind == "original":
+    if task.kind == TaskKind.ORIGINAL:
         entry |= {"libero_task": task.scene_task, "libero_index": task.scene_index}
     else:
         entry |= {"dimension": task.dimension, "split": task.split, "source": task.source}
@@ -116,7 +117,7 @@ def _entry(task: Task, default_steps: int) -> dict:
 
 def registry_data(name: str, description: str, tasks: Sequence[Task]) -> dict:
     """The registry content for `tasks` as plain data (what the YAML text loads to)."""
-    max_steps = {t.suite: t.max_steps for t in tasks if t.kind == "original"}
+    max_steps = {t.suite: t.max_steps for t in tasks if t.kind == TaskKind.ORIGINAL}
     return {
         "catalog": name,
         "version": 1,

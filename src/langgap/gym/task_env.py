@@ -33,7 +33,6 @@ from langgap.engine.plan import (
     condition_instruction,
     episode_seed,
     switch_episode,
-    switch_step,
     unknown_conditions,
 )
 from langgap.engine.watch import SceneWatch
@@ -43,6 +42,7 @@ from langgap.records import EpisodeKey, classify
 from langgap.sim.env import ACTION_DIM, EnvOptions, Observation, TaskEnv
 from langgap.sim.privileged_schema import PrivilegedState
 from langgap.stack import DEFAULT_STEPPING
+from langgap.vocabulary import Condition, switch_step
 
 STATE_DIM = 8
 RENDER_CAMERA = "agentview"
@@ -175,7 +175,7 @@ class LangGapTaskEnv(gym.Env):
             raise LangGapError(
                 f"init_index must be an integer in 0..{len(sim.init_states) - 1} for {self.task.id}, got {init_index!r}"
             )
-        condition = options.get("condition", "given")
+        condition = options.get("condition", Condition.GIVEN.value)
         if not isinstance(condition, str) or unknown_conditions((condition,)):
             raise LangGapError(f"unknown condition {condition!r} ({CONDITION_HELP})")
         self._run_seed = run_seed(seed, self._run_seed, self.np_random)

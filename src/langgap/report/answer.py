@@ -16,6 +16,7 @@ from typing import ClassVar
 
 from langgap.report.data import Spec
 from langgap.report.stats import PairedTest, Rate
+from langgap.vocabulary import Condition, TaskKind
 
 READS = 0.8  # extended success at this share of original success or more: the policy reads its instruction
 WEAKLY = 0.2  # at this share or more (below READS): it reads its instruction weakly; below: hardly
@@ -49,7 +50,7 @@ class Switched:
         success, persisted = self.success, self.persisted
         return (
             f"at K={self.k} it did the task switched to in {percent(success.rate)} {interval(success)} of "
-            f"{success.episodes} extended episodes and went on with the first instruction's task in "
+            f"{success.episodes} {TaskKind.EXTENDED} episodes and went on with the first instruction's task in "
             f"{percent(persisted.rate)} {interval(persisted)}"
         )
 
@@ -85,7 +86,7 @@ class Answer:
     def _tests(self) -> str:
         parts = []
         if (test := self.against_originals) is not None:
-            parts.append(f"paired with their originals: {p_text(test)}")
+            parts.append(f"paired with their {TaskKind.ORIGINAL}s: {p_text(test)}")
         if (test := self.against_blind) is not None:
             blind = percent(test.rate_a)
             parts.append(f"against blind, {blind} on the same {test.pairs} episodes: {p_text(test)}")
@@ -94,33 +95,39 @@ class Answer:
     def _instead(self) -> str:
         failures = self.extended.episodes - self.extended.successes
         if not failures:
-            return "it failed no extended episode"
+            return f"it failed no {TaskKind.EXTENDED} episode"
         default = self.default_task
         return (
-            f"{percent(default.successes / failures)} of its extended-task failures did the scene's original task "
-            f"instead ({percent(default.rate)} {interval(default)} of its extended episodes)"
+            f"{percent(default.successes / failures)} of its {TaskKind.EXTENDED}-task failures did the scene's "
+            f"{TaskKind.ORIGINAL} task instead ({percent(default.rate)} {interval(default)} of its "
+            f"{TaskKind.EXTENDED} episodes)"
         )
 
     @property
     def text(self) -> str:
         """The sentence."""
         original, extended = self.original, self.extended
-        on_originals = f"{percent(original.rate)} on original tasks" if original.episodes else "no original tasks"
+        on_originals = (
+            f"{percent(original.rate)} on {TaskKind.ORIGINAL} tasks"
+            if original.episodes
+            else f"no {TaskKind.ORIGINAL} tasks"
+        )
         if not extended.episodes and self.switched:
             return self._switched_only(on_originals)
         if not extended.episodes:
             return (
-                f"{self.label}: {on_originals} {interval(original)}; the run has no extended tasks, so it does not "
-                "show whether the policy reads its instruction."
+                f"{self.label}: {on_originals} {interval(original)}; the run has no {TaskKind.EXTENDED} tasks, so it "
+                "does not show whether the policy reads its instruction."
             )
         if self.same_goal_only:
             return (
-                f"{self.label}: {on_originals} vs {percent(extended.rate)} {interval(extended)} on extended tasks"
-                f"{self._tests()}; every extended task asks for its original's goal in other words, which a policy "
-                "that ignores its instruction does as well, so these tasks cannot show whether it reads it."
+                f"{self.label}: {on_originals} vs {percent(extended.rate)} {interval(extended)} on "
+                f"{TaskKind.EXTENDED} tasks{self._tests()}; every {TaskKind.EXTENDED} task asks for its "
+                f"{TaskKind.ORIGINAL}'s goal in other words, which a policy that ignores its instruction does as well, "
+                "so these tasks cannot show whether it reads it."
             )
         if (verdict := self.verdict) is None:
-            verdict = "does no original task, so the gap cannot be measured" if original.episodes else ""
+            verdict = f"does no {TaskKind.ORIGINAL} task, so the gap cannot be measured" if original.episodes else ""
         head = f"{self.label} {verdict}" if verdict else self.label
         oracle = (
             "no oracle verdict covers them"
@@ -137,22 +144,30 @@ class Answer:
     def _switched_only(self, on_originals: str) -> str:
         """The sentence of a run whose extended tasks ran only under a switch: what it did after each K."""
         original = self.original
-        head = f"{on_originals} {interval(original)}" if original.episodes else "no episode under the given instruction"
+        head = (
+            f"{on_originals} {interval(original)}"
+            if original.episodes
+            else f"no episode under the {Condition.GIVEN} instruction"
+        )
         return (
-            f"{self.label}: {head}; its extended tasks ran only under a switch (another task's instruction first, "
-            f"their own from policy step K): {'; '.join(s.text for s in self.switched)} (a policy that reads its "
-            "instruction does the task switched to; one that ignores it goes on with the first)."
+            f"{self.label}: {head}; its {TaskKind.EXTENDED} tasks ran only under a switch (another task's "
+            f"instruction first, their own from policy step K): {'; '.join(s.text for s in self.switched)} (a "
+            "policy that reads its instruction does the task switched to; one that ignores it goes on with the first)."
         )
 
     def _which(self) -> str:
-        return "extended tasks that ask for another goal" if self.reworded_left_out else "extended tasks"
+        return (
+            f"{TaskKind.EXTENDED} tasks that ask for another goal"
+            if self.reworded_left_out
+            else f"{TaskKind.EXTENDED} tasks"
+        )
 
     def _left_out(self) -> str:
         if not self.reworded_left_out:
             return ""
         these = "task that rewords" if self.reworded_left_out == 1 else "tasks that reword"
         return (
-            f"; {self.reworded_left_out} {these} the original's goal left out (a policy that ignores its "
+            f"; {self.reworded_left_out} {these} the {TaskKind.ORIGINAL}'s goal left out (a policy that ignores its "
             "instruction does them as well)"
         )
 

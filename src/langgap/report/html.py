@@ -15,11 +15,11 @@ import urllib.parse
 from pathlib import Path
 
 from langgap.catalog.labels import DIMENSION_LABEL, label
-from langgap.records import Outcome
 from langgap.report.published import Published
 from langgap.report.sections import FULL_REPORT, report_data, report_tables
 from langgap.report.summary import Summary, shown_dimensions
 from langgap.report.tables import OUTCOME_NAME, Table, notes, selection_text
+from langgap.vocabulary import Condition, Outcome, TaskKind
 
 MEDIA_DIR = "media"
 
@@ -150,7 +150,7 @@ def _gallery(table: Table, ident: str, media: dict[str, str]) -> str:
                 else '<p class="note">clip not found</p>'
             )
             where = f"{row[column['Task']]} · init {row[column['Init']]} · seed {row[column['Seed']]}"
-            if row[column["Condition"]] != "given":
+            if row[column["Condition"]] != Condition.GIVEN:
                 where += f" · condition {row[column['Condition']]}"
             parts.append(
                 f"<figure>{player}<figcaption>“{html.escape(row[column['Instruction']])}”"
@@ -176,7 +176,7 @@ OUTCOME_COLOURS = {
 def outcome_chart(summary: Summary) -> str:
     """Per dimension (and the originals), one stacked bar per run: the share of each outcome (success, did
     source task, other task, no goal, ...), with the success rate's 95 % interval, as inline SVG."""
-    groups = ["original", *shown_dimensions(summary.runs)]
+    groups = [TaskKind.ORIGINAL, *shown_dimensions(summary.runs)]
     width, height, left, bottom = 760, 280, 40, 56
     slot = (width - left) / len(groups)
     bar = slot * 0.8 / max(1, len(summary.runs))
@@ -209,7 +209,7 @@ def outcome_chart(summary: Summary) -> str:
                     f"<title>{title}</title></rect>"
                 )
                 base += share
-            rates = {r.group: r for r in run.by_dimension} | {"original": run.source("original")}
+            rates = {r.group: r for r in run.by_dimension} | {TaskKind.ORIGINAL: run.source(TaskKind.ORIGINAL)}
             low, high = rates[group].ci
             middle = x + bar * 0.45
             parts.append(

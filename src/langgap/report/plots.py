@@ -6,6 +6,7 @@ from pathlib import Path
 
 from langgap.catalog.labels import DIMENSION_LABEL, label
 from langgap.report.summary import RunResults, Summary, shown_dimensions
+from langgap.vocabulary import TaskKind
 
 
 def _pyplot():
@@ -20,12 +21,12 @@ def _pyplot():
 def dimension_plot(summary: Summary, out: Path) -> Path:
     """Success per dimension (and on the originals) with 95 % intervals, runs side by side."""
     plt = _pyplot()
-    groups = ["original", *shown_dimensions(summary.runs)]
+    groups = [TaskKind.ORIGINAL, *shown_dimensions(summary.runs)]
     fig, ax = plt.subplots(figsize=(8, 4))
     runs = summary.runs
     width = 0.8 / max(1, len(runs))
     for i, run in enumerate(runs):
-        rates = {r.group: r for r in run.by_dimension} | {"original": run.source("original")}
+        rates = {r.group: r for r in run.by_dimension} | {TaskKind.ORIGINAL: run.source(TaskKind.ORIGINAL)}
         xs, ys, errs = [], [], [[], []]
         for j, name in enumerate(groups):
             r = rates.get(name)

@@ -38,6 +38,7 @@ from langgap.report.tables import (
     video_table,
     wording_table,
 )
+from langgap.vocabulary import TaskKind
 
 Tables = Table | list[Table] | None  # None: the section does not apply to these runs
 Rows = Callable[[RunResults], Iterable]
@@ -190,19 +191,19 @@ SECTIONS: dict[str, Section] = {
         ),
         Section(
             "suites",
-            "Success per suite, original vs extended tasks — success %, 95% CI",
+            f"Success per suite, {TaskKind.ORIGINAL} vs {TaskKind.EXTENDED} tasks — success %, 95% CI",
             "Table VI",
             tables=suite_table,
         ),
         Section(
             "dimensions",
-            "Success on extended tasks by dimension — success %, 95% CI, (tasks)",
+            f"Success on {TaskKind.EXTENDED} tasks by dimension — success %, 95% CI, (tasks)",
             "Table VII",
             tables=dimension_table,
         ),
         Section(
             "beyond",
-            "Success on extended tasks by the dimensions beyond the paper's — success %, 95% CI, (tasks)",
+            f"Success on {TaskKind.EXTENDED} tasks by the dimensions beyond the paper's — success %, 95% CI, (tasks)",
             tables=beyond_table,
         ),
         Section(

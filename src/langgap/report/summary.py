@@ -23,18 +23,16 @@ from langgap.catalog.labels import (
 )
 from langgap.catalog.switch_verdicts import SwitchVerdicts, accepted
 from langgap.catalog.task import SAME_GOAL_DIMENSIONS, GateResult
-from langgap.engine.plan import SWITCH, repeat_of, switch_step
+from langgap.engine.plan import repeat_of
 from langgap.engine.spec import spec_differences
-from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Outcome, Privilege, achieved
+from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Privilege, achieved
 from langgap.report.answer import Answer, Switched
 from langgap.report.card import PROTOCOL_ITEMS, protocol_card
 from langgap.report.data import MERGED, Spec
 from langgap.report.load import Run
 from langgap.report.stats import PairedTest, Rate
 from langgap.stack import stack_differences
-
-SOURCES = ("original", "extended", "total")
-KINDS = ("original", "extended")
+from langgap.vocabulary import SWITCH, Condition, Outcome, TaskKind, switch_step
 
 
 def oracle_ceiling(records: Iterable[EpisodeRecord], gates: Mapping[str, GateResult]) -> tuple[int, int]:
@@ -56,7 +54,7 @@ def dimension_order(present: Iterable[str]) -> list[str]:
 
 def extended_dimensions(records: Iterable[EpisodeRecord]) -> list[str]:
     """The dimensions of `records`' extended tasks (`dimension_order`)."""
-    return dimension_order(r.dimension for r in records if r.kind == "extended")
+    return dimension_order(r.dimension for r in records if r.kind == TaskKind.EXTENDED)
 
 
 def rate(group: str, records: Iterable[EpisodeRecord], gates: Mapping[str, GateResult] | None = None) -> Rate:
@@ -171,8 +169,10 @@ def spread(records: list[EpisodeRecord], run_seed: int) -> list[SpreadRow]:
     repeats = sorted({repeat_of(r.seed, r.init_index, run_seed) for r in records})
     if len(repeats) < 2:
         return []
-    groups = [("original", lambda r: r.kind == "original"), ("extended", lambda r: r.kind == "extended")]
-    groups += [(d, lambda r, d=d: r.kind == "extended" and r.dimension == d) for d in extended_dimensions(records)]
+    groups = [(kind, lambda r, kind=kind: r.kind == kind) for kind in TaskKind]
+    groups += [
+        (d, lambda r, d=d: r.kind == TaskKind.EXTENDED and r.dimension == d) for d in extended_dimensions(records)
+    ]
     rows = []
     for name, member in groups:
         chosen = [r for r in records if member(r)]
@@ -203,8 +203,8 @@ def outcome_row(group: str, records: list[EpisodeRecord]) -> OutcomeRow:
 
 # A switch episode's outcome in four: its own task, the first instruction's, another scene task's, or none.
 SWITCH_CLASSES = {
-    "success": (Outcome.SUCCESS,),
-    "persisted": (Outcome.PERSISTED,),
+    Outcome.SUCCESS: (Outcome.SUCCESS,),
+    Outcome.PERSISTED: (Outcome.PERSISTED,),
     "other": (Outcome.DID_SOURCE_TASK, Outcome.DID_OTHER_TASK, Outcome.WRONG_ORDER),
     "none": (Outcome.NO_GOAL_REACHED, Outcome.POLICY_ERROR),
 }
@@ -250,9 +250,12 @@ def switch_rows(records: list[EpisodeRecord], verdicts: SwitchVerdicts | None = 
     rows = []
     for k in sorted({k for r in records if (k := switch_step(r.condition)) is not None}):
         switched = [r for r in records if switch_step(r.condition) == k]
-        extended = [r for r in switched if r.kind == "extended"]
+        extended = [r for r in switched if r.kind == TaskKind.EXTENDED]
         groups = [(d, [r for r in extended if r.dimension == d]) for d in extended_dimensions(extended)]
-        groups += [("extended", extended), ("original", [r for r in switched if r.kind == "original"])]
+        groups += [
+            (TaskKind.EXTENDED, extended),
+            (TaskKind.ORIGINAL, [r for r in switched if r.kind == TaskKind.ORIGINAL]),
+        ]
         for group, members in groups:
             if not members:
                 continue
@@ -301,8 +304,9 @@ def condition_tests(records: list[EpisodeRecord]) -> list[PairedTest]:
     by_condition: dict[str, dict[tuple, EpisodeRecord]] = defaultdict(dict)
     for r in records:
         by_condition[r.condition][(r.task_id, r.init_index, r.seed)] = r
-    others = sorted(c for c in by_condition if c != "given")
-    tests = (paired(f"given vs {c}", by_condition["given"], by_condition[c]) for c in others)
+    given = by_condition[Condition.GIVEN]
+    others = sorted(c for c in by_condition if c != Condition.GIVEN)
+    tests = (paired(f"{Condition.GIVEN} vs {c}", given, by_condition[c]) for c in others)
     return [t for t in tests if t is not None]
 
 
@@ -313,27 +317,27 @@ REWORDED_DIMENSIONS = ("paraphrase", "attribute_reference")
 def wording_tests(records: list[EpisodeRecord]) -> list[PairedTest]:
     """Each rewording (a paraphrase template, attribute reference) against its sources' original sentences,
     episode by episode (same init state, seed and condition): the difference the words alone make."""
-    originals = {(r.task_id, r.init_index, r.seed, r.condition): r for r in records if r.kind == "original"}
+    originals = {(r.task_id, r.init_index, r.seed, r.condition): r for r in records if r.kind == TaskKind.ORIGINAL}
     variants: dict[str, dict[tuple, EpisodeRecord]] = defaultdict(dict)
     for r in records:
-        if r.kind == "extended" and r.dimension in REWORDED_DIMENSIONS:
+        if r.kind == TaskKind.EXTENDED and r.dimension in REWORDED_DIMENSIONS:
             name = f"{r.dimension} ~{r.task_id.rsplit('~', 1)[-1]}"
             variants[name][(r.source, r.init_index, r.seed, r.condition)] = r
-    tests = (paired(f"original vs {name}", originals, variants[name]) for name in sorted(variants))
+    tests = (paired(f"{TaskKind.ORIGINAL} vs {name}", originals, variants[name]) for name in sorted(variants))
     return [t for t in tests if t is not None]
 
 
 def against_sources(records: list[EpisodeRecord]) -> PairedTest | None:
     """Every extended episode against its source task's episode on the same init state, seed and condition
     (a source's episode stands beside each of its extended tasks): the drop the extended tasks make."""
-    originals = {(r.task_id, r.init_index, r.seed, r.condition): r for r in records if r.kind == "original"}
-    extended = {r.key: r for r in records if r.kind == "extended"}
+    originals = {(r.task_id, r.init_index, r.seed, r.condition): r for r in records if r.kind == TaskKind.ORIGINAL}
+    extended = {r.key: r for r in records if r.kind == TaskKind.EXTENDED}
     sources = {
         key: source
         for key, r in extended.items()
         if (source := originals.get((r.source, r.init_index, r.seed, r.condition))) is not None
     }
-    return paired("originals vs extended", sources, extended)
+    return paired(f"{TaskKind.ORIGINAL}s vs {TaskKind.EXTENDED}", sources, extended)
 
 
 def default_task(records: list[EpisodeRecord]) -> Rate:
@@ -341,7 +345,7 @@ def default_task(records: list[EpisodeRecord]) -> Rate:
     (as a `Rate`, for its interval)."""
     judged = [r for r in records if r.judged]
     return Rate(
-        group="did_source_task",
+        group=Outcome.DID_SOURCE_TASK,
         episodes=len(judged),
         successes=sum(r.outcome == Outcome.DID_SOURCE_TASK for r in judged),
         gaps=len(records) - len(judged),
@@ -416,13 +420,13 @@ class RunResults:
     @property
     def same_goal_only(self) -> bool:
         """Whether every extended task asks for its source's goal in other words."""
-        return 0 < self.reworded == self.source("extended").tasks
+        return 0 < self.reworded == self.source(TaskKind.EXTENDED).tasks
 
     @property
     def mixed(self) -> bool:
         """Whether the run has both rewordings of a source's goal and tasks asking for another goal: its answer
         rests on the latter."""
-        return 0 < self.reworded < self.source("extended").tasks
+        return 0 < self.reworded < self.source(TaskKind.EXTENDED).tasks
 
     @property
     def label(self) -> str:
@@ -437,11 +441,11 @@ class RunResults:
     @property
     def answer(self) -> Answer:
         """The run's opening sentence and what it rests on."""
-        original = self.source("original")
+        original = self.source(TaskKind.ORIGINAL)
         return Answer(
             self.label,
             original,
-            self.answered or self.source("extended"),
+            self.answered or self.source(TaskKind.EXTENDED),
             self.default_task,
             self.against_originals,
             self.against_blind,
@@ -449,22 +453,22 @@ class RunResults:
             self.same_goal_only,
             self.reworded if self.mixed else 0,
             tuple(
-                Switched(row.k, row.classes["success"], row.classes["persisted"])
+                Switched(row.k, row.classes[Outcome.SUCCESS], row.classes[Outcome.PERSISTED])
                 for row in self.switches
-                if row.group == "extended"
+                if row.group == TaskKind.EXTENDED
             ),
         )
 
 
 def results(run: Run) -> RunResults:
     """Aggregate one run."""
-    given = [r for r in run.records if r.condition == "given"]
-    extended = [r for r in given if r.kind == "extended"]
-    originals = [r for r in given if r.kind == "original"]
+    given = [r for r in run.records if r.condition == Condition.GIVEN]
+    extended = [r for r in given if r.kind == TaskKind.EXTENDED]
+    originals = [r for r in given if r.kind == TaskKind.ORIGINAL]
     reworded = {r.task_id for r in extended if r.dimension in SAME_GOAL_DIMENSIONS}
     mixed = 0 < len(reworded) < len({r.task_id for r in extended})
     answered = [r for r in extended if answer_rests_on(r, mixed=mixed)]
-    order = {d: i for i, d in enumerate(("original", *KNOWN_DIMENSIONS))}
+    order = {d: i for i, d in enumerate((TaskKind.ORIGINAL, *KNOWN_DIMENSIONS))}
     info = {r.task_id: r for r in given}
     per_outcome: dict[str, Counter] = defaultdict(Counter)
     for r in given:
@@ -477,7 +481,7 @@ def results(run: Run) -> RunResults:
     ]
     tasks.sort(key=lambda row: (order.get(row.dimension, len(order)), row.rate.group))
     outcome_groups = [(d, [r for r in extended if r.dimension == d]) for d in extended_dimensions(extended)]
-    outcome_groups += [("extended", extended), ("original", originals)]
+    outcome_groups += [(TaskKind.EXTENDED, extended), (TaskKind.ORIGINAL, originals)]
     return RunResults(
         name=run.name,
         path=run.path,
@@ -485,10 +489,14 @@ def results(run: Run) -> RunResults:
         privilege=run.privilege,
         episodes=len(run.records),
         gaps=sum(not r.judged for r in run.records),
-        by_source=[rate("original", originals, gates), rate("extended", extended, gates), rate("total", given, gates)],
+        by_source=[
+            rate(TaskKind.ORIGINAL, originals, gates),
+            rate(TaskKind.EXTENDED, extended, gates),
+            rate("total", given, gates),
+        ],
         by_dimension=rates_by(extended, lambda r: r.dimension, KNOWN_DIMENSIONS, gates),
         by_suite=rates_by(
-            given, lambda r: f"{r.suite}/{r.kind}", [f"{s}/{k}" for s in SUITE_ORDER for k in KINDS], gates
+            given, lambda r: f"{r.suite}/{r.kind}", [f"{s}/{k}" for s in SUITE_ORDER for k in TaskKind], gates
         ),
         by_split=rates_by(given, lambda r: r.split, SPLIT_ORDER, gates),
         tasks=tasks,
@@ -505,7 +513,7 @@ def results(run: Run) -> RunResults:
         against_originals=against_sources(originals + answered),
         default_task=default_task(answered),
         switches=switch_rows(run.records, run.switch_gates),
-        answered=rate("extended", answered, gates) if mixed else None,
+        answered=rate(TaskKind.EXTENDED, answered, gates) if mixed else None,
         reworded=len(reworded),
     )
 
@@ -513,7 +521,7 @@ def results(run: Run) -> RunResults:
 def answer_rests_on(record: EpisodeRecord, *, mixed: bool) -> bool:
     """Whether a run's answer rests on `record`: an extended episode under the given instruction, and in a run
     that `mixed` rewordings of a source's goal with tasks asking for another goal, one of the latter."""
-    extended = record.kind == "extended" and record.condition == "given"
+    extended = record.kind == TaskKind.EXTENDED and record.condition == Condition.GIVEN
     return extended and not (mixed and record.dimension in SAME_GOAL_DIMENSIONS)
 
 
@@ -546,7 +554,7 @@ class SideBySide:
     @staticmethod
     def rate(run: RunResults, group: str) -> Rate | None:
         """The run's rate of a column group's column (None: the run has no such tasks)."""
-        if group in ("original", "extended"):
+        if group in tuple(TaskKind):
             return run.source(group)
         return next((r for r in run.by_dimension if r.group == group), None)
 
@@ -571,7 +579,11 @@ def side_by_side(runs: list[RunResults]) -> SideBySide | None:
         rows += mine
     catalogs = list(dict.fromkeys(run.card["catalog"] for run in runs))
     groups = {
-        catalog: ["original", *present_dimensions([r for r in runs if r.card["catalog"] == catalog]), "extended"]
+        catalog: [
+            TaskKind.ORIGINAL,
+            *present_dimensions([r for r in runs if r.card["catalog"] == catalog]),
+            TaskKind.EXTENDED,
+        ]
         for catalog in catalogs
     }
     return SideBySide(catalogs, groups, rows)
@@ -642,5 +654,5 @@ def summarize(runs: list[Run], *, allow_mismatch: bool = False) -> Summary:
         matched = (blind for blind, blind_result in others if not protocol_differences(blind_result, result))
         blind = next(matched, others[0][0] if others and allow_mismatch else None)
         if blind is not None:
-            result.against_blind = paired("blind vs extended", keyed(blind, extended), keyed(run, extended))
+            result.against_blind = paired(f"blind vs {TaskKind.EXTENDED}", keyed(blind, extended), keyed(run, extended))
     return Summary(results_, comparisons, mismatches, refused, side_by_side(results_))

@@ -7,7 +7,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from langgap.catalog.labels import DIMENSION_LABEL, EXTENDED_DIMENSIONS, SPLIT_LABEL, SUITE_LABEL, SUITE_ORDER, label
-from langgap.records import JUDGED_OUTCOMES, Outcome, Privilege
+from langgap.records import JUDGED_OUTCOMES, Privilege
 from langgap.report.answer import percent
 from langgap.report.card import CARD_ITEMS
 from langgap.report.published import Published
@@ -21,12 +21,12 @@ from langgap.report.summary import (
     TaskRow,
     shown_dimensions,
 )
-from langgap.vocabulary import CEILING_TARGET, FEASIBLE_RATE, SWITCH_RATE, Verdict
+from langgap.vocabulary import CEILING_TARGET, FEASIBLE_RATE, SWITCH, SWITCH_RATE, Condition, Outcome, TaskKind, Verdict
 
 # A section's heading with its fields filled (`Section.title`): `run=` the run's label, and whatever else it names.
 Title = Callable[..., str]
 
-SOURCE_LABEL = {"original": "Original (LIBERO)", "extended": "Extended (LangGap)", "total": "Total"}
+SOURCE_LABEL = {TaskKind.ORIGINAL: "Original (LIBERO)", TaskKind.EXTENDED: "Extended (LangGap)", "total": "Total"}
 OUTCOME_LABEL = {
     Outcome.SUCCESS: "Success %",
     Outcome.PERSISTED: "Persisted %",
@@ -37,7 +37,7 @@ OUTCOME_LABEL = {
     Outcome.POLICY_ERROR: "Policy error %",
 }
 OUTCOME_NAME = {o: o.replace("_", " ") for o in Outcome}
-OUTCOME_GROUP_LABEL = {**DIMENSION_LABEL, "extended": "All extended"}
+OUTCOME_GROUP_LABEL = {**DIMENSION_LABEL, TaskKind.EXTENDED: "All extended"}
 PRIVILEGE_NOTES = {
     Privilege.GOAL: "† told the goal (task id and goal; shown the simulator state too): a scripted reference, "
     "not a policy under test",
@@ -157,11 +157,7 @@ def _heading(text: str) -> list[str]:
     return [f"*{text}*", *[""] * (len(_RATE_HEADERS) - 1)]
 
 
-SUITE_KIND_LABEL = {
-    f"{suite}/{kind}": f"{SUITE_LABEL[suite]}, {'original' if kind == 'original' else 'extended'}"
-    for suite in SUITE_ORDER
-    for kind in ("original", "extended")
-}
+SUITE_KIND_LABEL = {f"{suite}/{kind}": f"{SUITE_LABEL[suite]}, {kind}" for suite in SUITE_ORDER for kind in TaskKind}
 
 
 def source_table(run: RunResults, title: Title) -> Table:
@@ -180,16 +176,16 @@ def _published_cells(values: dict[str, float], keys: list[str]) -> list[str]:
 def suite_table(summary: Summary, published: Published | None, title: Title) -> Table:
     """Success per suite, original vs extended, one row per run (libero_10 has no extended tasks; the paper's
     Table VI); the paper's rows below them when `published` is given."""
-    keys = [f"{s}/{k}" for s in SUITE_ORDER for k in ("original", "extended") if (s, k) != ("libero_10", "extended")]
+    keys = [f"{s}/{k}" for s in SUITE_ORDER for k in TaskKind if (s, k) != ("libero_10", TaskKind.EXTENDED)]
     headers = ["Method"]
-    headers += [f"{SUITE_LABEL[k.split('/')[0]]} {'Orig' if k.endswith('original') else 'Ext'}" for k in keys]
+    headers += [f"{SUITE_LABEL[k.split('/')[0]]} {'Orig' if k.endswith(TaskKind.ORIGINAL) else 'Ext'}" for k in keys]
     rows = []
     for run in summary.runs:
         by_key = {r.group: r for r in run.by_suite}
         cells = [rate_cell(by_key.get(k)) for k in keys]
-        rows.append([run.label, *cells, rate_cell(run.source("original")), rate_cell(run.source("extended"))])
+        rows.append([run.label, *cells, *(rate_cell(run.source(kind)) for kind in TaskKind)])
     for row in published.suites if published else []:
-        cells = _published_cells(row.values, [*keys, "original", "extended"])
+        cells = _published_cells(row.values, [*keys, *TaskKind])
         rows.append([published.label(row.method, "Table VI"), *cells])
     return Table(title(), [*headers, "Total Orig", "Total Ext"], rows)
 
@@ -202,10 +198,10 @@ def dimension_table(summary: Summary, published: Published | None, title: Title)
     for run in summary.runs:
         by_dim = {r.group: r for r in run.by_dimension}
         cells = [rate_cell(r) + f" ({r.tasks})" if (r := by_dim.get(d)) else "–" for d in EXTENDED_DIMENSIONS]
-        total = run.source("extended")
+        total = run.source(TaskKind.EXTENDED)
         rows.append([run.label, *cells, rate_cell(total) + f" ({total.tasks})"])
     for row in published.dimensions if published else []:
-        cells = _published_cells(row.values, [*EXTENDED_DIMENSIONS, "extended"])
+        cells = _published_cells(row.values, [*EXTENDED_DIMENSIONS, TaskKind.EXTENDED])
         rows.append([published.label(row.method, "Table VII"), *cells])
     return Table(title(), headers, rows)
 
@@ -240,7 +236,7 @@ def side_by_side_table(summary: Summary, published: Published | None, title: Tit
     side: SideBySide | None = summary.side_by_side
     if side is None:
         return None
-    names = {**DIMENSION_LABEL, "extended": "All extended"}
+    names = {**DIMENSION_LABEL, TaskKind.EXTENDED: "All extended"}
     headers = ["Policy", *(f"{c}: {label(names, g)}" for c in side.catalogs for g in side.groups[c])]
     groups = (("", 1), *((c, len(side.groups[c])) for c in side.catalogs))
     rows = []
@@ -288,7 +284,7 @@ def split_table(run: RunResults, title: Title) -> Table:
 
 def mde_table(run: RunResults, title: Title) -> Table:
     """Per dimension: the smallest change in success rate another run of this size would detect."""
-    rates = [run.source("original"), *run.by_dimension, run.source("extended")]
+    rates = [run.source(TaskKind.ORIGINAL), *run.by_dimension, run.source(TaskKind.EXTENDED)]
     names = {**DIMENSION_LABEL, **SOURCE_LABEL}
     rows = [[label(names, r.group), str(r.episodes), pct(r.rate), pct(r.mde)] for r in rates if r.episodes]
     return Table(title(run=run.label), ["Category", "Episodes", "Rate %", "MDE (points)"], rows)
@@ -415,13 +411,13 @@ def _paired_table(title: str, tests: list[PairedTest], a: str, b: str, last: tup
 def wording_table(run: RunResults, title: Title) -> Table | None:
     """Paraphrases and attribute references against their sources' original sentences, episode by episode."""
     difference = ("Difference (points)", lambda t: f"{100 * (t.successes_b - t.successes_a) / t.pairs:+.1f}")
-    return _paired_table(title(run=run.label), run.wording, "Original", "Reworded", difference)
+    return _paired_table(title(run=run.label), run.wording, TaskKind.ORIGINAL.capitalize(), "Reworded", difference)
 
 
 def condition_table(run: RunResults, title: Title) -> Table | None:
     """Language conditions against `given`, episode by episode."""
     changed = ("Behaviour changed %", lambda t: pct(t.changed_behaviour))
-    return _paired_table(title(run=run.label), run.conditions, "Given", "Condition", changed)
+    return _paired_table(title(run=run.label), run.conditions, Condition.GIVEN.capitalize(), "Condition", changed)
 
 
 def switch_table(run: RunResults, title: Title) -> Table | None:
@@ -449,7 +445,8 @@ def switch_table(run: RunResults, title: Title) -> Table | None:
         named = ", ".join(f"{task} at K={k}" for k, task in unproven[:SHOWN_UNPROVEN])
         more = len(unproven) - SHOWN_UNPROVEN
         heading += (
-            f"; {CAPPED_MARK} the switch gate (oracle ≥ {percent(SWITCH_RATE)} under switch:K) has not accepted {named}"
+            f"; {CAPPED_MARK} the switch gate (oracle ≥ {percent(SWITCH_RATE)} under {SWITCH}K) has not "
+            f"accepted {named}"
         )
         heading += f" and {more} more (the JSON report's switches section lists them)" if more > 0 else ""
     return Table(heading, headers, rows)

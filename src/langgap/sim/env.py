@@ -41,7 +41,8 @@ from langgap.errors import InitStateError, SimulationError
 from langgap.goals import Goal, GoalProgress, holds_now
 from langgap.sim.privileged_schema import PrivilegedState
 from langgap.sim.resting import Placements
-from langgap.stack import DEFAULT_SEED_SCHEME, DEFAULT_STEPPING, SEED_SCHEMES, STEPPINGS
+from langgap.stack import DEFAULT_SEED_SCHEME, DEFAULT_STEPPING
+from langgap.vocabulary import SeedScheme, Stepping
 
 CAMERAS = ("agentview", "robot0_eye_in_hand")
 SETTLE_STEPS = 10
@@ -76,10 +77,9 @@ class EnvOptions:
     reflection: bool = True
     hard_reset: bool = False
     privileged: bool = False
-    # exact: bit-identical to robosuite's stepping, faster; fast: the last bits differ, faster still;
-    # robosuite: robosuite's own code (sim/stepping.py)
+    # how physics substeps are computed (`Stepping`: exact, fast or robosuite's own code; sim/stepping.py)
     stepping: str = DEFAULT_STEPPING
-    # how `reset(init_index, seed)` seeds the fixture placement (langgap.stack.SEED_SCHEMES)
+    # how `reset(init_index, seed)` seeds the fixture placement (`SeedScheme`)
     seed_scheme: str = DEFAULT_SEED_SCHEME
 
     def __post_init__(self) -> None:
@@ -88,10 +88,10 @@ class EnvOptions:
             raise SimulationError(f"unknown camera(s) {unknown}; LIBERO has {', '.join(CAMERAS)}")
         if len(set(self.cameras)) != len(self.cameras):
             raise SimulationError(f"camera listed twice: {list(self.cameras)}")
-        if self.stepping not in STEPPINGS:
-            raise SimulationError(f"unknown stepping {self.stepping!r} (known: {', '.join(STEPPINGS)})")
-        if self.seed_scheme not in SEED_SCHEMES:
-            raise SimulationError(f"unknown seed scheme {self.seed_scheme!r} (known: {', '.join(SEED_SCHEMES)})")
+        if self.stepping not in tuple(Stepping):
+            raise SimulationError(f"unknown stepping {self.stepping!r} (known: {', '.join(Stepping)})")
+        if self.seed_scheme not in tuple(SeedScheme):
+            raise SimulationError(f"unknown seed scheme {self.seed_scheme!r} (known: {', '.join(SeedScheme)})")
         if not 16 <= self.image_size <= 1024:
             raise SimulationError(f"image size must be in 16..1024, got {self.image_size}")
 
@@ -178,8 +178,8 @@ class TaskEnv:
         self._inner = self._env.env
         ContactIndex.install(self._inner)
         self._placements = Placements(self._inner)  # what `(Moved o)` reads: step 0's places, what the hand moved
-        if self.options.stepping != "robosuite":
-            FastStepping.install(self._inner, fast=self.options.stepping == "fast")
+        if self.options.stepping != Stepping.ROBOSUITE:
+            FastStepping.install(self._inner, fast=self.options.stepping == Stepping.FAST)
 
     # -- lifecycle ---------------------------------------------------------------------------
 
@@ -249,11 +249,13 @@ class TaskEnv:
             raise InitStateError(
                 f"init index {init_index} out of range: {self.task.id} has {len(self.init_states)} init states"
             )
-        if self.options.seed_scheme == "openpi" and init_index is not None and seed < init_index:
-            raise SimulationError(f"openpi seed scheme: seed {seed} is below init index {init_index} (run seed + k)")
+        if self.options.seed_scheme == SeedScheme.OPENPI and init_index is not None and seed < init_index:
+            raise SimulationError(
+                f"{SeedScheme.OPENPI} seed scheme: seed {seed} is below init index {init_index} (run seed + k)"
+            )
         # LIBERO samples object and fixture placements (fixtures are not part of an init state) from
         # NumPy's global RNG.
-        openpi_stream = self.options.seed_scheme == "openpi" and init_index is not None
+        openpi_stream = self.options.seed_scheme == SeedScheme.OPENPI and init_index is not None
         if openpi_stream:
             self._draw_openpi_stream(seed - init_index, init_index)
         else:

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 from langgap.catalog.catalog import Catalog
 from langgap.records import EpisodeRecord
+from langgap.vocabulary import TaskKind
 
 
 @dataclass
@@ -50,7 +51,8 @@ def start_claims(starts: list[Start]) -> list[Claim]:
     differing = [(scene, init, len(hashes)) for (scene, init), hashes in t0.items() if len(hashes) > 1]
     return [
         _claim(
-            "every extended task starts from its source's state (one t0 hash per source task and init state)",
+            f"every {TaskKind.EXTENDED} task starts from its source's state (one t0 hash per source task and init "
+            "state)",
             len(t0),
             [f"{scene} init {init}: {n} different t0 states" for scene, init, n in differing],
         ),
@@ -75,15 +77,15 @@ def benchmark_claims(
     if blind is None:
         return claims
     oracle = {r.key: r.success for r in judged}
-    originals = [r for r in blind if r.judged and r.kind == "original" and r.key in oracle]
+    originals = [r for r in blind if r.judged and r.kind == TaskKind.ORIGINAL and r.key in oracle]
     differing = [
         r
         for r in blind
-        if r.judged and r.kind == "extended" and catalog.get(r.task_id).goal != catalog.get(r.source).goal
+        if r.judged and r.kind == TaskKind.EXTENDED and catalog.get(r.task_id).goal != catalog.get(r.source).goal
     ]
     claims += [
         _claim(
-            "blind succeeds on an original task exactly where the oracle does",
+            f"blind succeeds on an {TaskKind.ORIGINAL} task exactly where the oracle does",
             len(originals),
             [
                 f"{r.task_id} init {r.init_index}: blind {r.success}, oracle {oracle[r.key]}"
@@ -92,7 +94,7 @@ def benchmark_claims(
             ],
         ),  # fmt: skip
         _claim(
-            "blind never succeeds on an extended task whose goal differs from its source's",
+            f"blind never succeeds on an {TaskKind.EXTENDED} task whose goal differs from its source's",
             len(differing),
             [f"{r.task_id} init {r.init_index}" for r in differing if r.success],
         ),

@@ -11,7 +11,7 @@ from langgap.catalog.catalog import Catalog
 from langgap.catalog.task import SETTLE_CHECK, GateResult, Task, verdict_of
 from langgap.goals import Goal, plain_atoms
 from langgap.records import EpisodeRecord
-from langgap.vocabulary import FEASIBLE_RATE, Verdict
+from langgap.vocabulary import FEASIBLE_RATE, TaskKind, Verdict
 
 FULL_INITS = 50
 SETTLE_TOLERANCE_M = 0.002
@@ -118,7 +118,7 @@ def task_row(
     done = [r for r in records if r.judged]
     wins = [r for r in done if r.success]
     source = catalog.get(task.source)
-    exclusive = task.kind == "extended" and goals_exclude(task.goal, source.goal)
+    exclusive = task.kind == TaskKind.EXTENDED and goals_exclude(task.goal, source.goal)
     t0 = sum(task.id in r.goals_at_start for r in done)
     source_at_end = sum(source.id in r.goals_at_end for r in wins) if exclusive else 0
     rate = len(wins) / len(done) if done else 0.0

@@ -19,7 +19,6 @@ from langgap.catalog.catalog import load_catalog, registry_path
 from langgap.catalog.switch_verdicts import SwitchVerdicts, record_switch_verdicts
 from langgap.catalog.task import GateResult, verdict_counts, verdict_of
 from langgap.engine.evaluate import evaluate
-from langgap.engine.plan import switch_step
 from langgap.engine.spec import ExecutionOptions, RunSpec
 from langgap.errors import LangGapError
 from langgap.records import EpisodeRecord
@@ -27,7 +26,7 @@ from langgap.stack import DEFAULT_STEPPING
 from langgap.store import RunStore
 from langgap.validity.recording import provenance
 from langgap.validity.rows import gate_result
-from langgap.vocabulary import SWITCH_RATE, Verdict
+from langgap.vocabulary import SWITCH, SWITCH_RATE, Verdict, switch_step
 
 
 @dataclass
@@ -72,7 +71,7 @@ def switch_conditions(conditions: list[str]) -> tuple[str, ...]:
     other = [c for c in conditions if switch_step(c) is None]
     if other:
         raise LangGapError(
-            f"validate --condition takes switch:K only (the plain gate needs no condition), got {', '.join(other)}"
+            f"validate --condition takes {SWITCH}K only (the plain gate needs no condition), got {', '.join(other)}"
         )
     return tuple(dict.fromkeys(conditions))
 
