@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import os
 import subprocess
 import sys
@@ -34,6 +35,15 @@ def run_cli(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
     return subprocess.run(
         [sys.executable, "-m", "langgap.cli.main", *args], capture_output=True, text=True, timeout=timeout, env=env
     )
+
+
+def cli_parsers(parser: argparse.ArgumentParser, prog: str = "langgap"):
+    """(command line, parser) for `parser` (`langgap.cli.main.build_parser()`) and every sub-parser below it."""
+    yield prog, parser
+    for action in parser._actions:  # argparse lists its actions only in this private field
+        if isinstance(action, argparse._SubParsersAction):
+            for name, child in action.choices.items():
+                yield from cli_parsers(child, f"{prog} {name}")
 
 
 def tiny_config():

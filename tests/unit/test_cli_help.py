@@ -12,18 +12,9 @@ import io
 import pytest
 
 from langgap.cli.main import build_parser, main
+from tests.support.harness import cli_parsers
 
-
-def _parsers(parser: argparse.ArgumentParser, prog: str = "langgap"):
-    """(command line, parser) for `parser` and every sub-parser below it."""
-    yield prog, parser
-    for action in parser._actions:
-        if isinstance(action, argparse._SubParsersAction):
-            for name, child in action.choices.items():
-                yield from _parsers(child, f"{prog} {name}")
-
-
-PARSERS = dict(_parsers(build_parser()))
+PARSERS = dict(cli_parsers(build_parser()))
 
 
 def test_the_walk_reaches_verbs_and_sub_verbs():

@@ -1,17 +1,35 @@
-"""One word per verdict, defined once in `langgap.vocabulary` and shown as such by every command and report."""
+"""LangGap's words, defined once in `langgap.vocabulary`: one word per verdict, shown as such by every command and
+report; the kinds of task, conditions, outcomes, steppings and seed schemes, the strings stored before they were
+enumerations, compared as members and kept plain wherever a member's repr would show."""
 
 from __future__ import annotations
 
+import argparse
 import ast
 import inspect
+from pathlib import Path
 
 import pytest
 
 import langgap.vocabulary
+from langgap import stack
 from langgap.catalog.task import GateResult
-from langgap.cli.main import main
+from langgap.cli.main import build_parser, main
+from langgap.engine.spec import RunSpec
 from langgap.validity.coverage import HEADER
-from langgap.vocabulary import CEILING_TARGET, FEASIBLE_RATE, SWITCH_RATE, Verdict
+from langgap.vocabulary import (
+    CEILING_TARGET,
+    FEASIBLE_RATE,
+    SWITCH_RATE,
+    Condition,
+    Outcome,
+    SeedScheme,
+    Stepping,
+    TaskKind,
+    Verdict,
+    switch_step,
+)
+from tests.support.harness import cli_parsers
 
 # A verdict of each word, the oracle at 50/50 where the word does not rest on its rate.
 VERDICTS = {
@@ -64,3 +82,62 @@ def test_a_task_whose_starts_do_not_come_to_rest_reads_unsettled_with_its_reason
     listed = capsys.readouterr().out
     assert [line.split()[4] for line in listed.splitlines() if line.startswith("spatial/s0/pro-")] == ["unsettled"] * 2
     assert "2 rejected by the feasibility gate (2 unsettled)" in listed
+
+
+def test_the_core_words_are_the_strings_registries_and_stores_hold():
+    assert [str(k) for k in TaskKind] == ["original", "extended"]
+    assert [str(c) for c in Condition] == ["given", "empty", "shuffled", "source", "nonsense"]
+    assert [switch_step(c) for c in ("switch:5", "switch:0", "switch:x", "given")] == [5, None, None, None]
+    assert [str(o) for o in Outcome] == [
+        "success", "persisted", "wrong_order", "did_source_task", "did_other_task", "no_goal_reached",
+        "policy_error", "gap",
+    ]  # fmt: skip
+    assert [str(s) for s in Stepping] == ["exact", "fast", "robosuite"]
+    assert [str(s) for s in SeedScheme] == ["per-episode", "openpi"]
+
+
+_WORDS = {str(w) for words in (TaskKind, Condition, Outcome, Stepping, SeedScheme) for w in words}
+# Fields whose own words share a core word's string: an `Origin`'s `init_runs` is `own` or `source` (its file).
+_OTHER_WORDS = {"init_runs"}
+
+
+def _field(node: ast.expr) -> str | None:
+    return node.attr if isinstance(node, ast.Attribute) else node.id if isinstance(node, ast.Name) else None
+
+
+def _literal_words(node: ast.expr) -> set[str]:
+    items = node.elts if isinstance(node, ast.Tuple | ast.List | ast.Set) else [node]
+    return {i.value for i in items if isinstance(i, ast.Constant) and i.value in _WORDS}
+
+
+def test_no_module_compares_with_a_word_written_as_a_string():
+    src = Path(langgap.vocabulary.__file__).parent
+    found = []
+    for path in sorted(src.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not isinstance(node, ast.Compare):
+                continue
+            operands = [node.left, *node.comparators]
+            if set().union(*map(_literal_words, operands)) and not {_field(o) for o in operands} & _OTHER_WORDS:
+                found.append(f"{path.relative_to(src)}:{node.lineno}")
+    assert not found, f"compare with the word's member in langgap.vocabulary: {found}"
+
+
+def test_every_flag_offers_plain_strings():
+    """argparse's `invalid choice` error quotes each choice's repr: a member's is `<TaskKind.ORIGINAL: ...>`."""
+    parsers = [parser for _, parser in cli_parsers(build_parser())]
+    actions = [a for p in parsers for a in p._actions if not isinstance(a, argparse._SubParsersAction)]
+    choices = [(a.dest, c) for a in actions for c in a.choices or ()]
+    defaults = [(a.dest, a.default) for a in actions if isinstance(a.default, str)]
+    assert ("kind", "original") in choices and ("stepping", "exact") in defaults
+    assert [(dest, value) for dest, value in choices + defaults if type(value) is not str] == []
+
+
+def test_a_spec_and_its_physics_hold_plain_strings_whatever_words_they_are_given():
+    spec = RunSpec.create(
+        "noop", tasks="spatial/s0/black-bowl-1-on-plate", episodes=1, conditions=(Condition.GIVEN, Condition.EMPTY),
+        stepping=Stepping.FAST, seed_scheme=SeedScheme.OPENPI,
+    )  # fmt: skip
+    assert repr(spec.conditions) == "('given', 'empty')"
+    assert {k: spec.physics[k] for k in stack.CHOSEN} == {"stepping": "fast", "seed_scheme": "openpi"}
+    assert all(type(v) is str for v in (*spec.conditions, *spec.physics.values()) if v is not None)
