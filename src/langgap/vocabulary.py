@@ -20,21 +20,34 @@ from enum import StrEnum
 
 
 class TaskKind(StrEnum):
-    """What a task is. An original's dimension and split are its kind's word too (`langgap.catalog.task`)."""
+    """What a task is. An original's dimension and split are its kind's word too (`langgap.catalog.task`).
 
-    ORIGINAL = "original"  # a LIBERO task, run from LIBERO's own BDDL file
-    EXTENDED = "extended"  # a LangGap task set on an original's scene and init states (its `source`)
+    Attributes:
+        ORIGINAL: A LIBERO task, run from LIBERO's own BDDL file.
+        EXTENDED: A LangGap task set on an original's scene and init states (its `source`).
+    """
+
+    ORIGINAL = "original"
+    EXTENDED = "extended"
 
 
 class Condition(StrEnum):
     """A language condition: which instruction an episode's policy receives (`langgap.engine.plan`). Beside
-    these fixed ones, `switch:K` (`SWITCH`) changes the instruction at policy step K."""
+    these fixed ones, `switch:K` (`SWITCH`) changes the instruction at policy step K.
 
-    GIVEN = "given"  # the task's own
-    EMPTY = "empty"  # an empty string
-    SHUFFLED = "shuffled"  # another task's on the same scene
-    SOURCE = "source"  # the task's source (original) task's
-    NONSENSE = "nonsense"  # as many words drawn from the catalog's instructions
+    Attributes:
+        GIVEN: The task's own.
+        EMPTY: An empty string.
+        SHUFFLED: Another task's on the same scene.
+        SOURCE: The task's source (original) task's.
+        NONSENSE: As many words as the task's, drawn from the catalog's instructions.
+    """
+
+    GIVEN = "given"
+    EMPTY = "empty"
+    SHUFFLED = "shuffled"
+    SOURCE = "source"
+    NONSENSE = "nonsense"
 
 
 # `switch:K`: another task's instruction until policy step K, then the task's own (`switch_step`).
@@ -72,20 +85,30 @@ class Outcome(StrEnum):
 
 
 class Stepping(StrEnum):
-    """How physics substeps are computed (`langgap.sim.stepping`). `exact` and `robosuite` give the same bits,
-    `fast` differs from them in the last bits (and then drifts), so a result's physics names it."""
+    """How physics substeps are computed (`langgap.sim.stepping`): `fast` differs from the others in the last bits
+    (and then drifts), so a result's physics names it.
 
-    EXACT = "exact"  # robosuite's bits, faster
-    FAST = "fast"  # the last bits differ, faster still
-    ROBOSUITE = "robosuite"  # robosuite's own code (for benchmarks and tests)
+    Attributes:
+        EXACT: The bits of robosuite's own stepping, faster.
+        FAST: The last bits differ, faster still.
+        ROBOSUITE: robosuite's own code, slower (for benchmarks and tests).
+    """
+
+    EXACT = "exact"
+    FAST = "fast"
+    ROBOSUITE = "robosuite"
 
 
 class SeedScheme(StrEnum):
-    """How an episode's seed selects its fixture placement (`langgap.sim.env.TaskEnv.reset`)."""
+    """How an episode's seed selects its fixture placement (`langgap.sim.env.TaskEnv.reset`).
 
-    PER_EPISODE = "per-episode"  # NumPy seeded with the episode's own seed (seed + k for init state k)
-    # openpi's LIBERO example: one stream per task seeded once (with the run seed), episode k drawing after k
-    # resets' draws
+    Attributes:
+        PER_EPISODE: NumPy seeded with the episode's own seed (run seed + k for init state k).
+        OPENPI: As openpi's LIBERO example: one stream per task seeded once (with the run seed), episode k drawing
+            after k resets' draws.
+    """
+
+    PER_EPISODE = "per-episode"
     OPENPI = "openpi"
 
 

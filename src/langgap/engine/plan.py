@@ -18,7 +18,7 @@ from langgap.errors import CatalogError, InitStateError, ParameterError
 from langgap.records import EpisodeKey
 from langgap.vocabulary import SWITCH, Condition, TaskKind, switch_step
 
-# What each condition sends the policy: every `--condition` flag's help, and the error naming an unknown one.
+# What each condition sends the policy: `langgap eval --condition`'s help, and the error naming an unknown condition.
 _CONDITION_MEANING = {
     Condition.GIVEN: "the task's instruction",
     Condition.EMPTY: "an empty string",

@@ -15,6 +15,7 @@ from langgap.report.published import Published
 from langgap.report.stats import Rate
 from langgap.report.summary import RunResults, SideBySide, Summary
 from langgap.report.tables import (
+    OUTCOME_NAME,
     Table,
     Title,
     beyond_table,
@@ -38,7 +39,7 @@ from langgap.report.tables import (
     video_table,
     wording_table,
 )
-from langgap.vocabulary import TaskKind
+from langgap.vocabulary import Outcome, TaskKind
 
 Tables = Table | list[Table] | None  # None: the section does not apply to these runs
 Rows = Callable[[RunResults], Iterable]
@@ -142,7 +143,7 @@ SECTIONS: dict[str, Section] = {
         ),
         Section(
             "outcomes",
-            "What the policy did instead — {run} (did source task = default-task rate)",
+            f"What the policy did instead — {{run}} ({OUTCOME_NAME[Outcome.DID_SOURCE_TASK]} = default-task rate)",
             run_tables=outcome_table,
             data=run_rows(outcomes="outcomes"),
         ),
@@ -172,8 +173,8 @@ SECTIONS: dict[str, Section] = {
         ),
         Section(
             "switches",
-            "Instruction switched at step K — {run} (persisted: after the switch it did what the first instruction "
-            "asked; other: another scene task)",
+            f"Instruction switched at step K — {{run}} ({Outcome.PERSISTED}: after the switch it did what the first "
+            "instruction asked; other: another scene task)",
             run_tables=switch_table,
             data=run_rows(switches="switches"),
         ),
