@@ -182,7 +182,7 @@ def test_pruned_init_files_are_read_as_arrays_and_nothing_else():
 
 
 def test_the_init_states_a_start_finding_names_are_shown_as_ranges():
-    from langgap.validity.starts import _inits_text
+    from langgap.validity.starts import inits_text
 
-    assert _inits_text(list(range(50)), 50) == "init state(s) 0–49 (50 of 50)"
-    assert _inits_text([0, 1, 2, 3, 7], 10) == "init state(s) 0–3, 7 (5 of 10)"
+    assert inits_text(list(range(50)), 50) == "init state(s) 0–49 (50 of 50)"
+    assert inits_text([0, 1, 2, 3, 7], 10) == "init state(s) 0–3, 7 (5 of 10)"

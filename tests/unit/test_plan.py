@@ -173,7 +173,7 @@ def test_a_spec_resolves_its_selection_and_records_what_determines_results():
         ({"episodes": 0}, SpecError, "^episodes must be at least 1, got 0$"),
         ({"repeats": 0}, SpecError, "^repeats must be between 1 and 1000, got 0$"),
         ({"repeats": 1001}, SpecError, "^repeats must be between 1 and 1000, got 1001$"),
-        ({"style": "shouting"}, SpecError, "unknown instruction style 'shouting' \\(known: libero, paper\\)"),
+        ({"style": "shouting"}, SpecError, "unknown instruction style 'shouting' \\(known: libero, paper, package\\)"),
         ({"conditions": ("given", "loud")}, SpecError, "unknown condition\\(s\\) \\['loud'\\]"),
         ({"conditions": ()}, SpecError, "unknown condition\\(s\\) \\[\\]"),
         ({"tasks": "spatial&libero10"}, LangGapError, "selection 'spatial&libero10' matches no task"),

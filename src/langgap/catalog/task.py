@@ -27,6 +27,10 @@ SAME_GOAL_DIMENSIONS = ("paraphrase", "language")
 SPLITS = (TaskKind.ORIGINAL.value, "train", "heldout")
 INSTRUCTION_STYLES = ("libero", "paper")
 DEFAULT_STYLE = "libero"
+# The sentence the task's own package's runner sends (`langgap.catalog.runner_sentences`): a style only tasks
+# read from a package, and their catalogs' originals, have.
+PACKAGE_STYLE = "package"
+RUN_STYLES = (*INSTRUCTION_STYLES, PACKAGE_STYLE)
 
 
 # The gate's check that a task's starts come to rest; a verdict's `reason` names the checks it failed, and one
@@ -212,7 +216,8 @@ class Origin:
     (`version`) and that file's SHA-256, and the init states file it ships (`init_file`, the SHA-256 of its
     states array); a task runs that BDDL file unchanged. `init_runs` says which file a run loads: `own` (the
     package's, an `.npz` inside LangGap's LIBERO package) or `source` (the source's, which the package's file
-    equals array for array; a file LangGap would have to unpickle to read)."""
+    equals array for array; a file LangGap would have to unpickle to read). `registered` says whether the
+    package's own runner reaches the file (its task map lists it; None: the package registers every file)."""
 
     package: str
     version: str
@@ -221,6 +226,7 @@ class Origin:
     init_file: str
     init_sha256: str
     init_runs: str = "own"
+    registered: bool | None = None
 
     def __post_init__(self) -> None:
         if self.init_runs not in ("own", "source"):
@@ -253,7 +259,8 @@ class Task:
         scene_index: The scene's number in its suite (the `s0` of the id).
         goal: What the episode must achieve (see above).
         obj_of_interest: The objects the goal is about, as the BDDL file lists them.
-        instructions: The instruction in each style (`libero`, `paper`); `instruction(style)` reads one.
+        instructions: The instruction in each style (`libero`, `paper`; `package` for a task read from a
+            package and its catalog's originals); `instruction(style)` reads one.
         max_steps: The episode's step limit.
         paper_id: The task's number in the paper (None: not one of the paper's tasks).
         notes: Remarks the registry keeps on the task.
@@ -310,16 +317,22 @@ class Task:
         """The exact string a policy receives under instruction `style`.
 
         Args:
-            style: An instruction style (`INSTRUCTION_STYLES`: `libero`, `paper`).
+            style: An instruction style (`RUN_STYLES`: `libero`, `paper`, or `package`: what the runner of the
+                package the task was read from sends).
 
         Returns:
             The instruction.
 
         Raises:
-            CatalogError: An unknown style.
+            CatalogError: An unknown style, or `package` for a task no package's runner runs.
         """
+        if style == PACKAGE_STYLE and style not in self.instructions:
+            raise CatalogError(
+                f"task {self.id} has no {PACKAGE_STYLE} sentence: it was not read from a benchmark's package "
+                "(the libero-pro and libero-plus-language catalogs have them)"
+            )
         if style not in self.instructions:
-            raise CatalogError(f"unknown instruction style {style!r} (known: {', '.join(INSTRUCTION_STYLES)})")
+            raise CatalogError(f"unknown instruction style {style!r} (known: {', '.join(RUN_STYLES)})")
         return self.instructions[style]
 
     @property

@@ -134,7 +134,7 @@ def _run_external(args) -> int:
     """Read the catalog from its package, write it, run the file checks and record their findings beside it."""
     from langgap.catalog.catalog import load_catalog_file
     from langgap.generation.external import GENERATORS, files_about, files_findings, write_external
-    from langgap.validity.audit import audit_text, record_audit
+    from langgap.validity.audit import audit_text, duplicate_counts_text, record_audit
 
     if args.gate_inits or args.suites != list(SUITES):
         raise LangGapError(
@@ -147,6 +147,8 @@ def _run_external(args) -> int:
     catalog = load_catalog_file(path)
     findings = generated.unreadable + files_findings(catalog, list(catalog))
     checked = [t.id for t in catalog if t.origin is not None] + [f.task for f in generated.unreadable]
+    about = files_about(catalog)
     print(audit_text(findings, checked))
-    print(f"recorded findings in {record_audit(path, 'files', files_about(catalog), findings, checked)}")
+    print(duplicate_counts_text(about["duplicate instructions"]))
+    print(f"recorded findings in {record_audit(path, 'files', about, findings, checked)}")
     return 0

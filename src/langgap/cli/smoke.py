@@ -25,6 +25,7 @@ CAPS = {
     "gate_inits": 1,
     "demos": 1,
     "starts": 1,
+    "references": 1,
     "steps": 20,
     "workers": 2,
 }

@@ -5,17 +5,19 @@ from __future__ import annotations
 import json
 from collections import Counter
 from dataclasses import asdict
+from pathlib import Path
 
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
 from langgap.catalog.task import (
     DEFAULT_STYLE,
     DIMENSIONS,
-    INSTRUCTION_STYLES,
+    RUN_STYLES,
     SAME_TRIAL,
     SPLITS,
     Task,
     verdict_counts,
 )
+from langgap.errors import LangGapError
 from langgap.stack import SUITES
 from langgap.vocabulary import SWITCH, TaskKind, Verdict, switch_step, words
 
@@ -33,8 +35,9 @@ def add_catalog_options(parser) -> None:
     parser.add_argument(
         "--style",
         default=DEFAULT_STYLE,
-        choices=INSTRUCTION_STYLES,
-        help="instruction style sent to policies (default: %(default)s)",
+        choices=RUN_STYLES,
+        help="which sentence policies are sent: LIBERO's wording, the paper's, or the one the task's own "
+        "benchmark runner sends (package: LIBERO-PRO's and LIBERO-Plus's task.language; default: %(default)s)",
     )
 
 
@@ -105,9 +108,23 @@ def add_parser(subparsers) -> None:
         help="also run the simulator checks (t0 state equals the source's, goal not true at t0) on init states "
         "0..K-1 (50: all); without it, the simulator checks' recorded findings are shown",
     )
+    audit.add_argument(
+        "--references",
+        type=int,
+        default=0,
+        metavar="K",
+        help="also resolve each sentence's referring expressions on init states 0..K-1, from the robot's and the "
+        "camera's viewpoint (does it pick the goal's objects?); without it, the recorded findings are shown",
+    )
     audit.add_argument("--examples", type=int, default=3, metavar="N", help="examples shown per finding")
     audit.add_argument("--record", action="store_true", help="record the checks that ran beside the registry")
-    audit.set_defaults(handler=run_audit, smoke=("tasks", "starts"))
+    audit.add_argument(
+        "--html",
+        metavar="DIR",
+        help="also write the audit as one self-contained page, DIR/index.html: each finding with its evidence "
+        "and the command that reproduces it",
+    )
+    audit.set_defaults(handler=run_audit, smoke=("tasks", "starts", "references"))
 
 
 def _filtered(args) -> list[Task]:
@@ -294,7 +311,7 @@ def run_audit(args) -> int:
     from langgap.catalog.catalog import registry_path
     from langgap.errors import CatalogError
     from langgap.generation.external import files_about, files_findings
-    from langgap.validity.audit import CHECKS, audit_text, read_audit, record_audit
+    from langgap.validity.audit import CHECKS, audit_text, duplicate_counts_text, read_audit, record_audit
 
     catalog = load_catalog(args.catalog)
     selected = catalog.select(args.tasks)
@@ -302,8 +319,9 @@ def run_audit(args) -> int:
     # A catalog of LangGap's own sentences (LIBERO's originals and generated tasks) gets the sentence check; a
     # package's catalog, the checks of its files (its originals are LIBERO's, checked with langgap99).
     own = [] if any(t.origin is not None for t in catalog) else selected
-    if args.starts < 0:
-        raise CatalogError("--starts must be 0 (recorded findings) or a number of init states")
+    for flag, value in (("--starts", args.starts), ("--references", args.references)):
+        if value < 0:
+            raise CatalogError(f"{flag} must be 0 (recorded findings) or a number of init states")
     if not tasks and not own:
         raise CatalogError(f"catalog {catalog.name}: no selected task was read from a package; nothing to audit")
     if not tasks and args.starts:
@@ -316,16 +334,36 @@ def run_audit(args) -> int:
         findings += files_findings(catalog, tasks) + [f for f in recorded if f.name == "unreadable"]
         ran["files"] = files_about(catalog)
         findings += _starts_check(args, catalog, tasks, about, recorded, ran)
+    findings += _references_check(args, tasks + own, about, recorded, ran)
     unreadable = [f.task for f in findings if f.name == "unreadable"]
     own_ids = [t.id for t in own]
     print(audit_text(findings, ids + unreadable + own_ids, examples=args.examples))
+    if tasks:
+        print(duplicate_counts_text(ran["files"]["duplicate instructions"]))
+    if args.html:
+        print(f"wrote {_write_audit_page(args, catalog, findings, ids + unreadable + own_ids, about | ran)}")
     if args.record:
-        checked = {"files": ids + unreadable, "starts": ids, "sentence": own_ids}
+        checked = {"files": ids + unreadable, "starts": ids, "sentence": own_ids, "references": ids + own_ids}
         for check, how in ran.items():
             mine = [f for f in findings if f.name in CHECKS[check]]
             path = record_audit(registry, check, how, mine, checked[check])
         print(f"recorded findings in {path}")
     return 0
+
+
+def _write_audit_page(args, catalog, findings: list, checked: list[str], about: dict) -> Path:
+    """Write the audit page (`--html DIR`) and return its path."""
+    from langgap.atomic import write_text_atomically
+    from langgap.catalog.catalog import catalog_hash
+    from langgap.validity.audit_page import audit_data, audit_page
+
+    data = audit_data(catalog, args.catalog, catalog_hash(args.catalog), findings, checked, about)
+    path = Path(args.html) / "index.html"
+    try:
+        write_text_atomically(path, audit_page(data))
+    except OSError as exc:
+        raise LangGapError(f"cannot write {path}: {exc.strerror}") from None
+    return path
 
 
 def _starts_check(args, catalog, tasks: list[Task], about: dict, recorded: list, ran: dict) -> list:
@@ -346,6 +384,29 @@ def _starts_check(args, catalog, tasks: list[Task], about: dict, recorded: list,
         return [f for f in recorded if f.name in CHECKS["starts"] and f.task in chosen]
     print(f"starts: not checked (langgap tasks audit --catalog {args.catalog} --starts 50)")
     return []
+
+
+def _references_check(args, tasks: list[Task], about: dict, recorded: list, ran: dict) -> list:
+    """The reference check's findings: run now (`--references K`, added to `ran`), else as recorded."""
+    from langgap.validity.audit import CHECKS
+
+    if args.references:
+        from langgap.validity.reference_check import reference_findings
+        from langgap.validity.references import MARGIN
+        from langgap.validity.starts import SEED
+
+        found, checked = reference_findings(tasks, args.references, progress=lambda line: print(line, flush=True))
+        unread = [f"{task}: {phrase}" for task, phrases in sorted(checked.unread.items()) for phrase in phrases]
+        how = {"inits": args.references, "seed": SEED, "margin_m": MARGIN, "judged": checked.judged}
+        ran["references"] = {args.tasks: how | {"unread": len(unread), "unread_examples": unread[:10]}}
+        print(f"references: {checked.judged} expression(s) judged on init states 0..{args.references - 1} from the "
+              f"robot's and the camera's viewpoint (seed {SEED}); {len(unread)} not read")  # fmt: skip
+        return found
+    for selection, how in about.get("references", {}).items():
+        print(f"references: recorded for tasks {selection!r} on init states 0..{how['inits'] - 1}, "
+              f"{how['judged']} judged, {how['unread']} not read (rerun: --references K)")  # fmt: skip
+    chosen = {t.id for t in tasks}
+    return [f for f in recorded if f.name in CHECKS["references"] and f.task in chosen]
 
 
 def _sentence_check(tasks: list[Task]) -> tuple[list, dict]:

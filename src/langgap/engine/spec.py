@@ -15,7 +15,7 @@ from dataclasses import asdict, dataclass, fields
 
 from langgap import stack
 from langgap.catalog.catalog import DEFAULT_CATALOG, catalog_hash, load_catalog
-from langgap.catalog.task import DEFAULT_STYLE, INSTRUCTION_STYLES
+from langgap.catalog.task import DEFAULT_STYLE, RUN_STYLES
 from langgap.engine.filming import VideoSelection
 from langgap.engine.plan import CONDITION_HELP, REPEAT_STRIDE, unknown_conditions
 from langgap.errors import LangGapError, ParameterError
@@ -108,7 +108,8 @@ class RunSpec:
                 seed + r * REPEAT_STRIDE + k.
             conditions: The language conditions (`given`, `empty`, `shuffled`, `source`, `nonsense`,
                 `switch:K`; `langgap.engine.plan.CONDITION_HELP`); one named twice runs once.
-            style: The instruction style (`libero` or `paper`).
+            style: The instruction style: `libero` or `paper` (the catalog's wording), or `package` (what the
+                runner of the benchmark a task was read from sends: LIBERO-PRO's and LIBERO-Plus's `task.language`).
             stepping: How the physics substeps are computed: `exact` or `fast` (`RESULT_STEPPINGS`).
             seed_scheme: How an episode's seed selects its placement: `per-episode` or `openpi`
                 (`langgap.vocabulary.SeedScheme`).
@@ -131,8 +132,8 @@ class RunSpec:
             raise SpecParameterError(
                 "{repeats} must be between 1 and {most}, got {got}", most=REPEAT_STRIDE, got=repeats
             )
-        if style not in INSTRUCTION_STYLES:
-            raise SpecError(f"unknown instruction style {style!r} (known: {', '.join(INSTRUCTION_STYLES)})")
+        if style not in RUN_STYLES:
+            raise SpecError(f"unknown instruction style {style!r} (known: {', '.join(RUN_STYLES)})")
         if stepping not in RESULT_STEPPINGS:
             raise SpecError(f"unknown stepping {stepping!r} (known: {', '.join(RESULT_STEPPINGS)})")
         if seed_scheme not in tuple(SeedScheme):
@@ -142,6 +143,8 @@ class RunSpec:
         if unknown or not conditions:
             raise SpecError(f"unknown condition(s) {unknown} ({CONDITION_HELP})")
         selected = load_catalog(catalog).select(tasks)
+        for task in selected:
+            task.instruction(style)  # `package`: every task must have a runner's sentence
         return cls(
             policy=policy,
             policy_args=policy_args,

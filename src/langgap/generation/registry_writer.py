@@ -109,7 +109,7 @@ def _entry(task: Task, default_steps: int) -> dict:
     if task.notes:
         entry["notes"] = list(task.notes)
     if task.origin is not None:
-        entry["origin"] = asdict(task.origin)
+        entry["origin"] = {k: v for k, v in asdict(task.origin).items() if v is not None}
     if task.gate_from is not None:
         entry["gate_from"] = task.gate_from
     return entry

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
+from langgap.catalog.task import PACKAGE_STYLE
 from langgap.records import Privilege
 from langgap.report.load import Run
 
@@ -60,6 +61,12 @@ def _seeds(spec: dict) -> str:
     return f"run seed {spec['seed']} + init index" + (f", {repeats} repeats" if repeats > 1 else "")
 
 
+def _style(spec: dict) -> str:
+    """The instruction style, saying what `package` sends."""
+    style = str(spec.get("style", "?"))
+    return f"{style} (the benchmark runner's task.language)" if style == PACKAGE_STYLE else style
+
+
 def protocol_card(run: Run) -> dict[str, str]:
     """What determines a run's numbers, as shown at the top of its report (from its spec and records)."""
     spec, records = run.spec, [r for r in run.records if r.judged] or run.records
@@ -69,7 +76,7 @@ def protocol_card(run: Run) -> dict[str, str]:
     return {
         "catalog": str(spec.get("catalog", "?")),
         "catalog hash": str(spec.get("catalog_hash", "?"))[:12],
-        "instruction style": str(spec.get("style", "?")),
+        "instruction style": _style(spec),
         "step limits": _joined(f"{suite} {n}" for suite, n in sorted(steps.items())),
         "settle steps": _joined(sorted({r.settle_steps or "?" for r in records}, key=str)),  # 0: not recorded
         "init states": _indices(list(inits)),

@@ -21,7 +21,7 @@ import numpy as np
 from langgap.atomic import write_text_atomically
 from langgap.bddl import PREDICATE_ARITY, parse_bddl, read_tree, section_texts, strip_sections
 from langgap.catalog import packages
-from langgap.catalog.task import Task
+from langgap.catalog.task import PACKAGE_STYLE, Task
 from langgap.errors import CatalogError
 
 # Every finding a check can make, with what it means (the audit prints these).
@@ -39,18 +39,27 @@ FINDINGS = {
     "instruction is a file name": "the instruction is the BDDL file's name, not the sentence its (:language) has",
     "instruction carries an id": "the instruction carries a perturbation id or a number suffix",
     "instruction is not about the task": "the instruction is an LLM's preamble or commentary, not a request",
+    "runner sends another sentence": "its package's runner sends another instruction than its (:language)",
+    "runner changes its case": "its package's runner sends its (:language) lowercased",
+    "runner does not reach it": "its package's runner does not list the file, so it never runs the task",
+    "sentence picks another object": "a referring expression picks another object than the goal names (references)",
+    "sentence picks no object": "a referring expression fits no object of the scene (references)",
+    "sentence is ambiguous": "a referring expression fits more than one object of the scene (references)",
     "goal narrower than its sentence": "the goal rejects a state its sentence allows (sentence check)",
     "goal wider than its sentence": "the goal accepts a state its sentence does not allow (sentence check)",
 }
 # The checks, by what they need: `files` reads the packages' files (here), `starts` runs the simulator
-# (`langgap.validity.starts`), `sentence` reads a generated task's goal and scene (`langgap.validity.sentences`);
+# (`langgap.validity.starts`), `sentence` reads a generated task's goal and scene (`langgap.validity.sentences`),
+# `references` resolves its sentence on the simulator's scenes (`langgap.validity.reference_check`);
 # each makes the findings listed.
 _STARTS = ("starts elsewhere", "goal holds at t0")
 _SENTENCE = ("goal narrower than its sentence", "goal wider than its sentence")
+_REFERENCES = ("sentence picks another object", "sentence picks no object", "sentence is ambiguous")
 CHECKS = {
-    "files": tuple(name for name in FINDINGS if name not in _STARTS + _SENTENCE),
+    "files": tuple(name for name in FINDINGS if name not in _STARTS + _SENTENCE + _REFERENCES),
     "starts": _STARTS,
     "sentence": _SENTENCE,
+    "references": _REFERENCES,
 }
 # Sections a variant may change, by dimension; every other byte must be its source's.
 MAY_CHANGE = {"language": (":language",), "task": (":language", ":obj_of_interest", ":goal")}
@@ -173,6 +182,23 @@ def instruction_findings(task_id: str, instruction: str, file_name: str) -> list
     return found
 
 
+def runner_findings(task: Task) -> list[Finding]:
+    """What the runner of the package `task` was read from does with it: it sends another sentence than the
+    task's `(:language)` (LIBERO-PRO's, made of the file's name), or the same lowercased (LIBERO-Plus's); it does
+    not list the task's file (`Origin.registered`). See `langgap.catalog.runner_sentences`."""
+    if task.origin is None:
+        return []
+    found = []
+    if task.origin.registered is False:
+        found.append(Finding("runner does not reach it", task.id, f"{task.origin.file} is not in its task map"))
+    sent, own = task.instruction(PACKAGE_STYLE), task.instruction("paper")
+    if sent.split() == own.lower().split() and sent != own:
+        found.append(Finding("runner changes its case", task.id, f"it sends {sent!r}"))
+    elif sent != own:
+        found.append(Finding("runner sends another sentence", task.id, f"it sends {sent!r}, not {own!r}"))
+    return found
+
+
 def duplicate_findings(tasks: Iterable[Task], scene_of) -> list[Finding]:
     """`duplicate goal` for each task whose scene (`scene_of(task)`: layout and init states) holds another task
     with the same goal, a language variant and its source excepted (they share a goal by design);
@@ -193,10 +219,40 @@ def duplicate_findings(tasks: Iterable[Task], scene_of) -> list[Finding]:
             by_sentence.setdefault((task.source, task.instruction("paper").lower()), []).append(task)
     for group in by_sentence.values():
         for task in group:
-            others = [o.id for o in group if o.id != task.id]
-            if others:
-                found.append(Finding("duplicate instruction", task.id, f"same instruction as {', '.join(others)}"))
+            exact = [o.id for o in group if o.id != task.id and o.instruction("paper") == task.instruction("paper")]
+            cased = [o.id for o in group if o.id != task.id and o.id not in exact]
+            if exact:
+                found.append(Finding("duplicate instruction", task.id, f"same instruction as {', '.join(exact)}"))
+            if cased:
+                shown = ", ".join(cased)
+                found.append(Finding("duplicate instruction", task.id, f"same instruction but for case as {shown}"))
     return found
+
+
+def duplicate_counts(tasks: Iterable[Task]) -> dict[str, dict[str, int]]:
+    """How many language variants share their sentence with another variant of the same source, and how many
+    sentences they share, compared as exact strings and case-insensitively (`{"exact": {"variants": ..,
+    "sentences": ..}, "case-insensitive": {...}}`): a runner that lowercases (LIBERO-Plus's) sends the second."""
+    counts = {}
+    for how, key in (("exact", str), ("case-insensitive", str.lower)):
+        groups: dict[tuple, int] = {}
+        for task in tasks:
+            if task.dimension == "language":
+                sentence = (task.source, key(task.instruction("paper")))
+                groups[sentence] = groups.get(sentence, 0) + 1
+        shared = [n for n in groups.values() if n > 1]
+        counts[how] = {"variants": sum(shared), "sentences": len(shared)}
+    return counts
+
+
+def duplicate_counts_text(counts: dict[str, dict[str, int]]) -> str:
+    """`duplicate_counts` as one line."""
+    exact, cased = counts["exact"], counts["case-insensitive"]
+    return (
+        f"language variants sharing a sentence with another of their source: {exact['variants']} "
+        f"({exact['sentences']} sentences) as exact strings, {cased['variants']} ({cased['sentences']} sentences) "
+        "case-insensitively"
+    )
 
 
 def _language_pair(a: Task, b: Task) -> bool:

@@ -28,7 +28,7 @@ def _start_group(task: Task) -> tuple[str, str]:
     return hashlib.sha256(scene.encode("utf-8")).hexdigest(), str(files.init_states_path(task))
 
 
-def _inits_text(inits: list[int], of: int) -> str:
+def inits_text(inits: list[int], of: int) -> str:
     """`init state(s) 0–3, 7 (5 of 10)`: runs of consecutive init states as ranges."""
     runs: list[list[int]] = []
     for index in inits:
@@ -72,9 +72,9 @@ def starts_findings(
         if differing:
             found.append(
                 Finding(
-                    "starts elsewhere", task.id, f"t0 differs from its source's on {_inits_text(differing, len(ours))}"
+                    "starts elsewhere", task.id, f"t0 differs from its source's on {inits_text(differing, len(ours))}"
                 )
             )
         if task.id in holds:
-            found.append(Finding("goal holds at t0", task.id, f"on {_inits_text(holds[task.id], len(ours))}"))
+            found.append(Finding("goal holds at t0", task.id, f"on {inits_text(holds[task.id], len(ours))}"))
     return found
