@@ -4,8 +4,9 @@ A region of a page between `<!-- generated: WHAT -->` and `<!-- /generated -->` 
 
 * `verdicts CATALOG`: the catalog's gate verdicts in one phrase ("848 tasks: 621 doable, 227 unproven"), counted
   by `langgap.validity.coverage`, as `langgap tasks gate` counts them; it fits inside a sentence or a table cell;
-* `langgap tasks ARGS` (read-only: `gate`, `audit` without `--starts` or `--record`, `list`, `show`): what that
-  command prints, run in process; a Markdown table as it is, any other text in a ```text block.
+* `langgap tasks ARGS` (read-only: `gate`, `audit` without `--starts`, `--references`, `--record` or `--html`,
+  `list`, `show`): what that command prints, run in process; a Markdown table as it is, any other text in a
+  ```text block.
 
     python -m tools.docs_counts            # rewrite every region (from the repository root)
     python -m tools.docs_counts --check    # exit 1 naming each region that is not current
@@ -68,7 +69,7 @@ def command_output(argv: list[str]) -> str:
 
     if argv[:2] != ["langgap", "tasks"] or len(argv) < 3 or argv[2] not in READ_ONLY:
         raise CountsError(f"not a read-only `langgap tasks` command: {shlex.join(argv)}")
-    if argv[2] == "audit" and ({"--starts", "--record"} & set(argv)):
+    if argv[2] == "audit" and ({"--starts", "--references", "--record", "--html"} & set(argv)):
         raise CountsError(f"an audit that simulates or records: {shlex.join(argv)}")
     out = io.StringIO()
     with contextlib.redirect_stdout(out), _unshrunk():
