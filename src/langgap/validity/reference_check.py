@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from langgap.bddl import Predicate
+from langgap.bddl import BddlProblem, Predicate
 from langgap.catalog import files
 from langgap.catalog.task import Task
 from langgap.validity.audit import Finding
@@ -52,22 +52,21 @@ class Checked:
     unread: dict[str, list[str]] = field(default_factory=dict)
 
 
-def needs_resolving(mention: Mention, task: Task) -> bool:
+def needs_resolving(mention: Mention, scene: BddlProblem) -> bool:
     """Whether `mention` must tell objects apart: a moved, target or excluded object (not a landmark, not "both")
     whose category the scene holds more than once. (Of a category the scene holds once, the noun says which; what
     follows it may as well be where it goes.)"""
     if mention.role == "landmark" or mention.plural:
         return False
-    return len(instances(mention.category, files.scene_problem(task))) > 1
+    return len(instances(mention.category, scene)) > 1
 
 
-def _expressions(task: Task) -> list[tuple[str, Mention, list[Mention]]]:
+def _expressions(task: Task, scene: BddlProblem) -> list[tuple[str, Mention, list[Mention]]]:
     """(sentence, mention, all its mentions) for each expression to resolve, over the task's distinct sentences."""
-    scene = files.scene_problem(task)
     out = []
     for sentence in dict.fromkeys(task.instruction(style) for style in STYLES):
         found = mentions(sentence, scene)
-        out += [(sentence, m, found) for m in found if needs_resolving(m, task)]
+        out += [(sentence, m, found) for m in found if needs_resolving(m, scene)]
     return out
 
 
@@ -96,12 +95,11 @@ def _views(env) -> dict[str, View]:
     }
 
 
-def _layout(env, task: Task) -> Layout:
+def _layout(env, scene: BddlProblem) -> Layout:
     """The scene at the current state: positions of objects, fixtures and regions, which `On` / `In` hold."""
     from langgap.sim.privileged import privileged_state
 
     state = privileged_state(env)
-    scene = files.scene_problem(task)
     positions = {k[len("body/") :]: np.array(v[:3]) for k, v in state.arrays.items() if k.startswith("body/")}
     positions |= {k[len("site/") :]: np.array(v) for k, v in state.arrays.items() if k.startswith("site/")}
     receivers = [n for n in (*scene.objects, *(r.entity for r in scene.regions)) if n in positions]
@@ -128,9 +126,10 @@ def reference_findings(
     from langgap.sim.env import TaskEnv
 
     checked = Checked()
+    scenes = {task.id: files.scene_problem(task) for task in tasks}  # parsed once: the loops below are per init
     todo: dict[str, list] = {}
     for task in tasks:
-        for sentence, mention, found in _expressions(task):
+        for sentence, mention, found in _expressions(task, scenes[task.id]):
             if mention.unread:
                 checked.unread.setdefault(task.id, []).append(f"{mention.phrase} (in {sentence!r})")
             else:
@@ -148,19 +147,22 @@ def reference_findings(
             for index in range(count):
                 env.reset(index, seed=SEED, render=False)
                 env.settle()
-                layout = _layout(env, members[0])
+                scene = scenes[members[0].id]  # the group's tasks share their scene's objects and placements
+                layout = _layout(env, scene)
+                resolved: dict[tuple[Mention, str], tuple[str, ...]] = {}  # tasks of a scene repeat expressions
                 for task in members:
-                    scene = files.scene_problem(task)
                     for sentence, mention, _ in todo[task.id]:
                         for view in VIEWS:
-                            key = (task.id, sentence, mention, view)
-                            picks.setdefault(key, []).append((index, resolve(mention, scene, layout, views[view])))
+                            if (mention, view) not in resolved:
+                                resolved[mention, view] = resolve(mention, scene, layout, views[view])
+                            picks.setdefault((task.id, sentence, mention, view), []).append(
+                                (index, resolved[mention, view])
+                            )
     found = []
     for task in tasks:
-        scene = files.scene_problem(task)
         for sentence, mention, all_mentions in todo.get(task.id, []):
             checked.judged += 1
-            expected = expected_entity(mention, all_mentions, task.goal, scene)
+            expected = expected_entity(mention, all_mentions, task.goal, scenes[task.id])
             found += _judged(
                 task, sentence, mention, expected, {v: picks[(task.id, sentence, mention, v)] for v in VIEWS}
             )
