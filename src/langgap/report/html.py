@@ -15,6 +15,7 @@ import urllib.parse
 from pathlib import Path
 
 from langgap.catalog.labels import DIMENSION_LABEL, label
+from langgap.page_style import PAGE_STYLE
 from langgap.report.published import Published
 from langgap.report.sections import FULL_REPORT, report_data, report_tables
 from langgap.report.summary import Summary, shown_dimensions
@@ -23,15 +24,11 @@ from langgap.vocabulary import Condition, Outcome, TaskKind
 
 MEDIA_DIR = "media"
 
-_STYLE = """
-body { font: 14px/1.4 system-ui, sans-serif; margin: 2em auto; max-width: 1200px; color: #222; }
-h1 { font-size: 1.6em; } h2 { font-size: 1.15em; margin-top: 2em; }
-table { border-collapse: collapse; margin: .5em 0; }
-th, td { border: 1px solid #ccc; padding: .25em .5em; text-align: left; }
+_STYLE = (
+    PAGE_STYLE
+    + """
 th { background: #f3f3f3; cursor: pointer; user-select: none; }
 th[aria-sort=ascending]::after { content: " ▲"; } th[aria-sort=descending]::after { content: " ▼"; }
-input.filter { margin: .25em 0; padding: .2em .4em; width: 20em; }
-.note { color: #555; font-size: .9em; }
 #answer p { font-size: 1.1em; border-left: 4px solid #2ca02c; padding: .2em .8em; background: #f6faf6; }
 svg text { font: 11px system-ui, sans-serif; }
 select.column-filter { margin: .25em 0 .25em .5em; }
@@ -41,6 +38,7 @@ tr.column-groups td { text-align: center; font-weight: bold; background: #f3f3f3
 figure { margin: 0; width: 370px; } figure video { width: 100%; background: #000; }
 figcaption { font-size: .9em; }
 """
+)
 
 _SCRIPT = """
 function cellValue(cell) {

@@ -14,18 +14,17 @@ from collections.abc import Iterable
 
 from langgap.catalog.catalog import Catalog
 from langgap.catalog.task import PACKAGE_STYLE, Task
+from langgap.page_style import PAGE_STYLE
 from langgap.validity.audit import CHECKS, FINDINGS, Finding, duplicate_counts_text
 
-_STYLE = """
-body { font: 14px/1.4 system-ui, sans-serif; margin: 2em auto; max-width: 1200px; color: #222; }
-h1 { font-size: 1.6em; } h2 { font-size: 1.15em; margin-top: 2em; }
-table { border-collapse: collapse; margin: .5em 0; }
-th, td { border: 1px solid #ccc; padding: .25em .5em; text-align: left; vertical-align: top; overflow-wrap: anywhere; }
+_STYLE = (
+    PAGE_STYLE
+    + """
+th, td { vertical-align: top; overflow-wrap: anywhere; }
 th { background: #f3f3f3; }
 code, .sha { font-family: ui-monospace, monospace; font-size: .85em; word-break: break-all; }
-input.filter { margin: .25em 0; padding: .2em .4em; width: 20em; }
-.note { color: #555; font-size: .9em; }
 """
+)
 
 _SCRIPT = """
 document.querySelectorAll("input.filter").forEach(input => input.addEventListener("input", () => {
