@@ -108,15 +108,23 @@ def test_serve_binds_the_host_and_port_it_is_given():
     assert mine == [f"127.0.0.2:{port}"]
 
 
-def test_small_bc_training_options_reach_the_config(tmp_path):
-    """`--lr`, `--seed` and `--loss` land in the training config, over a `--config` file's values."""
+@pytest.mark.parametrize("kind", ["small-bc", "small-vla"])
+def test_small_bc_training_options_reach_the_config(tmp_path, kind):
+    """`--lr`, `--seed` and `--loss` land in the training config, over a `--config` file's values; so does the file's
+    `model` mapping, as the kind's own model config."""
     from langgap.cli.main import build_parser
-    from langgap.cli.train_cmd import _small_bc_config
+    from langgap.cli.train_cmd import _training_config
+    from langgap.policies.small_bc.model import ModelConfig
+    from langgap.policies.small_vla.model import VisionConfig
 
+    model_config = {"small-bc": ModelConfig, "small-vla": VisionConfig}[kind]
     config_file = tmp_path / "bc.yaml"
-    config_file.write_text("lr: 0.5\nseed: 3\nloss: l1\n")
-    base = ["train", "small-bc", "--config", str(config_file), "--data", "d", "--out", "o.safetensors"]
-    from_file, _ = _small_bc_config(build_parser().parse_args(base))
+    config_file.write_text("lr: 0.5\nseed: 3\nloss: l1\nmodel:\n  chunk: 4\n")
+    base = ["train", kind, "--config", str(config_file), "--data", "d", "--out", "o.safetensors"]
+    from_file, _ = _training_config(build_parser().parse_args(base), model_config)
     assert (from_file.lr, from_file.seed, from_file.loss) == (0.5, 3, "l1")
-    flags, _ = _small_bc_config(build_parser().parse_args([*base, "--lr", "0.01", "--seed", "9", "--loss", "mse"]))
+    assert from_file.model == model_config(chunk=4)
+    flags, _ = _training_config(
+        build_parser().parse_args([*base, "--lr", "0.01", "--seed", "9", "--loss", "mse"]), model_config
+    )
     assert (flags.lr, flags.seed, flags.loss) == (0.01, 9, "mse")

@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from langgap.policies.small_bc.text import Vocabulary, words
+from langgap.policies.text import Vocabulary, words
 from tests.support.harness import TINY_TASK, run_cli, store_rows
 
 torch = pytest.importorskip("torch", reason="small-bc needs PyTorch (pip install 'langgap[train]')")
@@ -110,7 +110,7 @@ def test_eval_runs_small_bc_in_a_worker(checkpoint, tmp_path):
 
 def test_missing_or_foreign_checkpoint_is_a_clear_error(tmp_path):
     from langgap.policies import make_policy
-    from langgap.policies.small_bc.model import CheckpointError
+    from langgap.policies.checkpoints import CheckpointError
 
     with pytest.raises(CheckpointError, match="no small-bc checkpoint"):
         make_policy("small-bc", {"checkpoint": str(tmp_path / "none.safetensors")})

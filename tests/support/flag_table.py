@@ -80,6 +80,9 @@ _CLAIMS_EXECUTION = "tests/test_validate.py::test_claims_only_runs_its_probes_on
 _SWITCH_GATE = "tests/test_switch_gate.py::test_the_switch_gate_records_counts_and_marks_verdicts_per_task_and_k"
 _RAY_WORK = "tests/test_ray.py::test_every_kind_of_work_runs_on_a_worker_node_that_sees_another_disk"
 _SMALL_BC_CLI = "tests/test_small_bc.py::test_training_is_deterministic_and_checkpoint_round_trips"
+_SMALL_VLA = ("train", "small-vla", "--data", "{collection}", "--out", "{dir}/vla.safetensors")
+_SMALL_VLA_CLI = "tests/test_small_vla.py::test_training_is_deterministic_and_checkpoint_round_trips"
+_SMALL_VLA_ERRORS = "tests/test_small_vla.py::test_what_cannot_be_trained_or_loaded_is_a_clear_error"
 _HDF5_CLI = "tests/test_hdf5.py::test_cli_refuses_to_overwrite_and_rejects_what_is_not_a_collection"
 _SERVE = "tests/test_flags.py::test_serve_binds_the_host_and_port_it_is_given"
 _SHARED_ROLLOUTS = "tests/test_shared_rollouts.py::test_shared_rollouts_give_each_episode_its_own_record"
@@ -349,7 +352,12 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "export-hdf5 --images": (ProvenBy("tests/test_hdf5.py::test_images_are_upright_renders_of_the_recorded_states"),),
     "export-hdf5 --workers": (
         ProvenBy("tests/test_hdf5.py::test_images_are_upright_renders_of_the_recorded_states"),
-        Refused(("export-hdf5", "{collection}", "--workers", "2"), "--workers sets how many processes render"),
+        Refused(("export-hdf5", "{collection}", "--workers", "2"), "--workers is about rendered images"),
+    ),
+    "export-hdf5 --image-size": (
+        ProvenBy("tests/test_small_vla.py::test_images_are_exported_at_the_asked_size"),
+        Refused(("export-hdf5", "{collection}", "--image-size", "64"), "--image-size is about rendered images"),
+        Refused(("export-hdf5", "{collection}", "--images", "--image-size", "8"), "image size must be in 16..1024"),
     ),
     "export-hdf5 --force": (ProvenBy(_HDF5_CLI),),
     "export-hdf5 --no-progress": (ProvenBy(_HDF5_CLI),),
@@ -368,6 +376,19 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "train small-bc --seed": (ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),),
     "train small-bc --threads": (ProvenBy(_SMALL_BC_CLI),),
     "train small-bc --loss": (ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),),
+    "train small-vla --config": (ProvenBy(_SMALL_VLA_ERRORS),),
+    "train small-vla --data": (ProvenBy(_SMALL_VLA_CLI),),
+    "train small-vla --catalog": (
+        Refused((*_SMALL_VLA, "--catalog", "{catalog}"), "--catalog only says where --tasks' selection is looked up"),
+    ),
+    "train small-vla --tasks": (Refused((*_SMALL_VLA, "--tasks", "levitate"), "levitate"),),
+    "train small-vla --out": (ProvenBy(_SMALL_VLA_CLI),),
+    "train small-vla --steps": (ProvenBy(_SMALL_VLA_CLI),),
+    "train small-vla --batch-size": (ProvenBy(_SMALL_VLA_CLI),),
+    "train small-vla --lr": (ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),),
+    "train small-vla --seed": (ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),),
+    "train small-vla --threads": (ProvenBy(_SMALL_VLA_CLI),),
+    "train small-vla --loss": (ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),),
     "train lerobot --dataset-root": (Differs(_LEROBOT, ("--dataset-root", "{dir}/other")),),
     "train lerobot --dataset-repo-id": (Differs(_LEROBOT, ("--dataset-repo-id", "me/demos")),),
     "train lerobot --output-dir": (Differs(_LEROBOT, ("--output-dir", "{dir}/elsewhere")),),

@@ -12,6 +12,9 @@ def add_parser(subparsers) -> None:
     parser.add_argument("collection", metavar="DIR", help="a directory written by `langgap collect`")
     parser.add_argument("--out", metavar="OUT", help="output directory (default DIR/hdf5)")
     parser.add_argument("--images", action="store_true", help="also render both cameras by replaying the states (slow)")
+    parser.add_argument(
+        "--image-size", type=int, metavar="PX", help="with --images: their height and width (default: 256)"
+    )
     parser.add_argument("--workers", type=int, help="with --images: rendering processes (default: 1; 0: here)")
     parser.add_argument("--force", action="store_true", help="replace existing HDF5 files")
     parser.add_argument("--no-progress", action="store_true")
@@ -20,13 +23,19 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int:
     from langgap.demos.hdf5 import write_hdf5
+    from langgap.demos.render import IMAGE_SIZE
+    from langgap.sim.env import EnvOptions
 
-    if args.workers is not None and not args.images:
-        raise LangGapError("--workers sets how many processes render images: it needs --images")
+    for flag, value in (("--workers", args.workers), ("--image-size", args.image_size)):
+        if value is not None and not args.images:
+            raise LangGapError(f"{flag} is about rendered images: it needs --images")
+    if args.image_size is not None:
+        EnvOptions(image_size=args.image_size)  # the sizes LangGap renders: anything else is refused here
     paths = write_hdf5(
         args.collection,
         out=args.out,
         images=args.images,
+        image_size=args.image_size or IMAGE_SIZE,
         workers=1 if args.workers is None else args.workers,
         progress=not args.no_progress,
         force=args.force,

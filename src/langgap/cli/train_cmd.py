@@ -1,29 +1,26 @@
-"""`langgap train`: `small-bc` on this machine (CPU), or the paper's LeRobot fine-tuning (`lerobot`, a GPU machine)."""
+"""`langgap train`: `small-bc` and `small-vla` on this machine (CPU), or the paper's LeRobot fine-tuning (`lerobot`,
+a GPU machine)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 from langgap.errors import LangGapError
+from langgap.training import LOSSES
 
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser("train", help="train small-bc on demonstrations, or launch LeRobot fine-tuning")
     kinds = parser.add_subparsers(dest="train_kind", required=True, metavar="small-bc|lerobot")
 
-    bc = kinds.add_parser("small-bc", help="train the small language-conditioned policy on CPU")
-    bc.add_argument("--config", metavar="FILE", help="YAML file with any of the options below (flags override it)")
-    bc.add_argument("--data", action="append", metavar="DIR", help="collection directory (repeatable)")
-    bc.add_argument("--catalog", help="with --tasks: the catalog it selects from (default: langgap99)")
-    bc.add_argument("--tasks", metavar="SELECTION", help="train on these tasks' demonstrations only (default: all)")
-    bc.add_argument("--out", metavar="CKPT", help="checkpoint file to write (.safetensors)")
-    bc.add_argument("--steps", type=int, help="optimisation steps (default: 3000)")
-    bc.add_argument("--batch-size", type=int, help="frames per step (default: 128)")
-    bc.add_argument("--lr", type=float, help="peak learning rate (default: 1e-3)")
-    bc.add_argument("--seed", type=int, help="training seed (default: 0)")
-    bc.add_argument("--threads", type=int, help="torch CPU threads (default: 2)")
-    bc.add_argument("--loss", choices=("l1", "mse"), help="regression loss on the action chunk (default: l1)")
+    bc = kinds.add_parser("small-bc", help="train the small language-conditioned policy on simulator state (CPU)")
+    _add_training_flags(bc, data="collection directory (repeatable)")
     bc.set_defaults(handler=run_small_bc, smoke=("steps", "collected_tasks"))
+    vla = kinds.add_parser(
+        "small-vla", help="train the small vision-language policy on camera images (CPU, or a GPU unchanged)"
+    )
+    _add_training_flags(vla, data="collection directory with images (`langgap export-hdf5 DIR --images`; repeatable)")
+    vla.set_defaults(handler=run_small_vla, smoke=("steps", "collected_tasks"))
 
     lr = kinds.add_parser(
         "lerobot", help="launch lerobot-train (PEFT LoRA on pi0.5) for one of the paper's experiments"
@@ -39,12 +36,28 @@ def add_parser(subparsers) -> None:
     lr.set_defaults(handler=run_lerobot)
 
 
-def _small_bc_config(args):
+def _add_training_flags(parser, *, data: str) -> None:
+    """The flags `small-bc` and `small-vla` share."""
+    parser.add_argument("--config", metavar="FILE", help="YAML file with any of the options below (flags override it)")
+    parser.add_argument("--data", action="append", metavar="DIR", help=data)
+    parser.add_argument("--catalog", help="with --tasks: the catalog it selects from (default: langgap99)")
+    parser.add_argument("--tasks", metavar="SELECTION", help="train on these tasks' demonstrations only (default: all)")
+    parser.add_argument("--out", metavar="CKPT", help="checkpoint file to write (.safetensors)")
+    parser.add_argument("--steps", type=int, help="optimisation steps (default: 3000)")
+    parser.add_argument("--batch-size", type=int, help="frames per step (default: 128)")
+    parser.add_argument("--lr", type=float, help="peak learning rate (default: 1e-3)")
+    parser.add_argument("--seed", type=int, help="training seed (default: 0)")
+    parser.add_argument("--threads", type=int, help="torch CPU threads (default: 2)")
+    parser.add_argument("--loss", choices=LOSSES, help="regression loss on the action chunk (default: l1)")
+
+
+def _training_config(args, model_config: type):
+    """The `TrainConfig` of the flags over the `--config` file, and the checkpoint to write; `model_config`: the
+    model's config class (the file's `model` mapping)."""
     import yaml
 
     from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
-    from langgap.policies.small_bc.model import ModelConfig
-    from langgap.training.train_small_bc import TrainConfig
+    from langgap.training.loop import TrainConfig
 
     values: dict = {}
     if args.config:
@@ -60,26 +73,40 @@ def _small_bc_config(args):
             values[key] = getattr(args, key)
     unknown = set(values) - {*options, "model"}
     if unknown:
-        raise LangGapError(f"unknown small-bc option(s): {', '.join(sorted(unknown))}")
+        raise LangGapError(f"unknown {args.train_kind} option(s): {', '.join(sorted(unknown))}")
     if "catalog" in values and "tasks" not in values:
         raise LangGapError("--catalog only says where --tasks' selection is looked up: give --tasks too")
     for key in ("data", "out"):
         if not values.get(key):
-            raise LangGapError(f"small-bc needs --{key}")
+            raise LangGapError(f"{args.train_kind} needs --{key}")
     data = values.pop("data")
     out = values.pop("out")
     catalog = values.pop("catalog", DEFAULT_CATALOG)
     selection = values.pop("tasks", None)
     tasks = tuple(t.id for t in load_catalog(catalog).select(selection)) if selection else None
-    model = ModelConfig(**values.pop("model", {}))
+    try:
+        model = model_config(**values.pop("model")) if "model" in values else None
+    except TypeError as exc:
+        raise LangGapError(f"{args.config}: model: {exc}") from None
     data = tuple(str(d) for d in ([data] if isinstance(data, str) else data))
     return TrainConfig(data=data, tasks=tasks, model=model, **values), out
 
 
 def run_small_bc(args) -> int:
+    from langgap.policies.small_bc.model import ModelConfig
     from langgap.training.train_small_bc import train
 
-    config, out = _small_bc_config(args)
+    return _trained(train, *_training_config(args, ModelConfig))
+
+
+def run_small_vla(args) -> int:
+    from langgap.policies.small_vla.model import VisionConfig
+    from langgap.training.train_small_vla import train
+
+    return _trained(train, *_training_config(args, VisionConfig))
+
+
+def _trained(train, config, out) -> int:
     facts = train(config, out)
     print(
         f"trained on {facts['demos']} demonstrations ({facts['frames']} frames) of {len(facts['tasks'])} tasks "

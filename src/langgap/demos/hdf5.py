@@ -53,7 +53,8 @@ ROBOSUITE_ENV_TYPE = 1  # robomimic's EnvType.ROBOSUITE_TYPE (LIBERO's files say
 GZIP_LEVEL = 4
 
 
-def _h5py():
+def require_h5py():
+    """The h5py module, or a DependencyNotInstalled that says how to install it."""
     try:
         import h5py
     except ImportError:
@@ -78,17 +79,19 @@ def write_hdf5(
     *,
     out: str | Path | None = None,
     images: bool = False,
+    image_size: int = IMAGE_SIZE,
     workers: int = 1,
     progress: bool = True,
     force: bool = False,
 ) -> list[Path]:
     """Write the collection at `root` as one HDF5 file per task in `out` (default `root/hdf5`); returns them.
 
-    `images` renders both cameras by replaying the recorded states, in `workers` processes (0: here).
+    `images` renders both cameras (`image_size` square) by replaying the recorded states, in `workers` processes
+    (0: here).
     Each file is written under a temporary name and renamed when complete. Existing files are replaced only
     with `force`; without it, any one of them stops the export before anything is written.
     """
-    h5py = _h5py()
+    h5py = require_h5py()
     root = Path(root)
     manifest = read_manifest(root)
     paths = demo_files(root)
@@ -102,7 +105,9 @@ def write_hdf5(
         raise LangGapError(f"{existing[0]} exists already{more}; pass --force to overwrite")
     catalog = load_catalog(manifest["catalog"])
     out.mkdir(parents=True, exist_ok=True)
-    demos = iter_demos(manifest["catalog"], paths, render=images, workers=workers, progress=progress)
+    demos = iter_demos(
+        manifest["catalog"], paths, render=images, workers=workers, progress=progress, image_size=image_size
+    )
     settings = {key: value for key, value in manifest.items() if key != "tasks"}
     written = []
     # `paths` is ordered by task, so each task's demonstrations arrive together.
@@ -112,7 +117,7 @@ def write_hdf5(
             task=catalog.get(task_id),
             demos=group,
             collection={**settings, "task": manifest["tasks"][task_id]},
-            images=images,
+            image_size=image_size if images else 0,
         )
         _write_atomically(h5py, targets[task_id], write)
         written.append(targets[task_id])
@@ -132,8 +137,9 @@ def _write_atomically(h5py, path: Path, write) -> None:
 
 
 def _write_task(
-    f, *, task: Task, demos: Iterable[tuple[Demo, dict[str, np.ndarray]]], collection: dict, images: bool
+    f, *, task: Task, demos: Iterable[tuple[Demo, dict[str, np.ndarray]]], collection: dict, image_size: int
 ) -> None:
+    """One task's file; `image_size` 0: without images."""
     data = f.create_group("data")
     instruction = None
     total = 0
@@ -153,9 +159,9 @@ def _write_task(
         "language_instruction": instruction,
     }
     env_kwargs: dict = {"robots": [ROBOT], "controller": CONTROLLER, "control_freq": FPS}
-    if images:
+    if image_size:
         env_kwargs.update(
-            camera_names=list(IMAGE_KEYS), camera_heights=IMAGE_SIZE, camera_widths=IMAGE_SIZE, use_camera_obs=True
+            camera_names=list(IMAGE_KEYS), camera_heights=image_size, camera_widths=image_size, use_camera_obs=True
         )
         data.attrs["image_orientation"] = IMAGE_ORIENTATION
     env_args = {

@@ -1,7 +1,7 @@
 """Stored demonstrations read back in collection order, with camera frames rendered by replaying their states.
 
 Shared by the exports (LeRobot, HDF5): a demonstration's frames exist nowhere but here, so every form of
-the collection shows the same pixels. Frames are LangGap's images (`TaskEnv.render`): `IMAGE_SIZE`
+the collection shows the same pixels. Frames are LangGap's images (`TaskEnv.render`): `IMAGE_SIZE` (or a policy's size)
 square, upright, i.e. the raw MuJoCo render rotated 180 degrees (`raw[::-1, ::-1]`) — the orientation of
 `lerobot/libero` and openpi's LIBERO data (LIBERO's own HDF5 files hold the raw, upside-down render).
 
@@ -53,6 +53,7 @@ class RenderDemo(Job):
 
     index: int
     path: str
+    image_size: int = IMAGE_SIZE
 
     @property
     def task_id(self) -> str:
@@ -63,15 +64,22 @@ class RenderDemo(Job):
         from langgap.sim.env import CAMERAS, EnvOptions
 
         demo = load_demo(Path(self.path))
-        options = EnvOptions(cameras=CAMERAS, image_size=IMAGE_SIZE)
+        options = EnvOptions(cameras=CAMERAS, image_size=self.image_size)
         env = runner.kept_env(runner.catalog.get(demo.task_id), options)
         return self.index, demo, render_frames(env, demo)
 
 
 def iter_demos(
-    catalog: str, paths: list[Path], *, render: bool, workers: int = 1, progress: bool = True
+    catalog: str,
+    paths: list[Path],
+    *,
+    render: bool,
+    workers: int = 1,
+    progress: bool = True,
+    image_size: int = IMAGE_SIZE,
 ) -> Iterator[tuple[Demo, dict[str, np.ndarray]]]:
-    """Each demonstration of `paths`, in that order, with its frames per camera when `render` (else `{}`).
+    """Each demonstration of `paths`, in that order, with its frames per camera (`image_size` square) when
+    `render` (else `{}`).
 
     Rendering runs on `workers` local worker processes (0: here), through the engine's scheduler; the
     order is that of `paths` whatever their number, so an exported dataset does not depend on it.
@@ -79,7 +87,7 @@ def iter_demos(
     if not render:
         yield from with_progress(((load_demo(p), {}) for p in paths), len(paths), unit="demo", enabled=progress)
         return
-    items = [RenderDemo(i, str(p)) for i, p in enumerate(paths)]
+    items = [RenderDemo(i, str(p), image_size) for i, p in enumerate(paths)]
     options = ExecutionOptions(workers=workers, progress=progress)
     waiting: dict[int, tuple[Demo, dict[str, np.ndarray]]] = {}
     next_index = 0

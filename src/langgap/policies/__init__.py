@@ -24,6 +24,7 @@ REGISTRY: dict[str, str] = {
     "oracle": "langgap.policies.oracle:OraclePolicy",
     "blind": "langgap.policies.oracle:BlindPolicy",
     "small-bc": "langgap.policies.small_bc.policy:SmallBCPolicy",
+    "small-vla": "langgap.policies.small_vla.policy:SmallVLAPolicy",
 }
 
 

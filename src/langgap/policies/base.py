@@ -217,6 +217,13 @@ class PolicyOutputError(ValueError):
         self.remedy = remedy
 
 
+def regressed_chunk(actions: np.ndarray) -> np.ndarray:
+    """A regression model's (k, 7) output as actions: within [-1, 1], the gripper either open (-1) or closed (+1)."""
+    actions = np.clip(np.asarray(actions, dtype=np.float64), -1.0, 1.0)
+    actions[:, 6] = np.where(actions[:, 6] >= 0, 1.0, -1.0)
+    return actions
+
+
 def as_action_chunk(output, spec: PolicySpec) -> np.ndarray:
     """Validate a policy's output and return it as a (k, 7) float64 chunk, 1 <= k <= spec.chunk.
 

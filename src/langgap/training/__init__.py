@@ -1,1 +1,3 @@
-"""Training: the `small-bc` trainer (CPU, PyTorch) and the paper's LeRobot fine-tuning experiments."""
+"""Training: the `small-bc` and `small-vla` trainers (PyTorch) and the paper's LeRobot fine-tuning experiments."""
+
+LOSSES = ("l1", "mse")  # the regression losses on the action chunk (`TrainConfig.loss`)

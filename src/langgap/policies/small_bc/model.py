@@ -14,29 +14,27 @@ their length.
 
 from __future__ import annotations
 
-import json
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 
-from langgap.errors import DependencyNotInstalled, LangGapError
+from langgap.errors import DependencyNotInstalled
+from langgap.policies.checkpoints import read_checkpoint, write_checkpoint
 from langgap.policies.small_bc.features import ENTITY_DIM, PROPRIO_DIM
-from langgap.policies.small_bc.text import Vocabulary
+from langgap.policies.text import Vocabulary
 
 try:
     import torch
     from torch import nn
+
+    from langgap.policies.word_encoding import encode_words, transformer_layer
 except ImportError:  # pragma: no cover - depends on the environment
     raise DependencyNotInstalled(
         "small-bc needs PyTorch: pip install 'langgap[train]' (./setup.sh installs it)"
     ) from None
 
 FORMAT = "langgap-small-bc/1"
-
-
-class CheckpointError(LangGapError):
-    """A small-bc checkpoint is missing or not a small-bc checkpoint."""
 
 
 @dataclass(frozen=True)
@@ -90,11 +88,7 @@ class SmallBC(nn.Module):
 
     def encode_text(self, instruction: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """(S, L) word ids -> per-word encodings (S, L, d) and pooled sentence vectors (S, d)."""
-        positions = torch.arange(instruction.shape[1], device=instruction.device)
-        pad = instruction == 0
-        words = self.text(self.words(instruction) + self.word_position(positions), src_key_padding_mask=pad)
-        keep = (~pad).unsqueeze(-1).float()
-        return words, (words * keep).sum(1) / keep.sum(1).clamp(min=1.0)
+        return encode_words(self.words, self.word_position, self.text, instruction)
 
     def forward(
         self, proprio: torch.Tensor, entities: torch.Tensor, names: torch.Tensor, instruction: torch.Tensor
@@ -124,49 +118,23 @@ class SmallBC(nn.Module):
 
 
 def _layer(config: ModelConfig) -> nn.TransformerEncoderLayer:
-    d = config.d_model
-    return nn.TransformerEncoderLayer(d, config.heads, 4 * d, dropout=0.0, batch_first=True, norm_first=True)
+    return transformer_layer(config.d_model, config.heads)
 
 
 def save_checkpoint(path: str | Path, model: SmallBC, vocab: Vocabulary, training: dict) -> Path:
     """Write weights and metadata to one safetensors file."""
-    from safetensors.torch import save_file
-
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    metadata = {
-        "format": FORMAT,
-        "config": json.dumps(asdict(model.config)),
-        "vocab": json.dumps(vocab.tokens),
-        "training": json.dumps(training, sort_keys=True),
-    }
-    state = {k: v.contiguous() for k, v in model.state_dict().items()}
-    save_file(state, str(path), metadata=metadata)
-    return path
+    return write_checkpoint(
+        path, model.state_dict(), format=FORMAT, config=asdict(model.config), vocab=vocab.tokens, training=training
+    )
 
 
 def load_checkpoint(path: str | Path) -> tuple[SmallBC, Vocabulary, dict]:
     """Read a checkpoint written by `save_checkpoint`; returns (model in eval mode, vocabulary, training info)."""
-    from safetensors import safe_open
-    from safetensors.torch import load_file
-
-    path = Path(path)
-    if not path.is_file():
-        raise CheckpointError(f"no small-bc checkpoint at {path}")
-    try:
-        with safe_open(str(path), framework="pt") as f:
-            metadata = f.metadata() or {}
-        if metadata.get("format") != FORMAT:
-            raise CheckpointError(f"{path} is not a small-bc checkpoint (format {metadata.get('format')!r})")
-        state = load_file(str(path))
-    except (OSError, ValueError, RuntimeError) as exc:
-        raise CheckpointError(f"cannot read small-bc checkpoint {path}: {exc}") from None
-    config = ModelConfig(**json.loads(metadata["config"]))
-    vocab = Vocabulary(json.loads(metadata["vocab"]))
+    state, config, vocab, training = read_checkpoint(path, format=FORMAT, kind="small-bc")
     normalizer = Normalizer(
         **{k: state[k].tolist() for k in ("proprio_mean", "proprio_std", "entity_mean", "entity_std")}
     )
-    model = SmallBC(config, len(vocab), normalizer)
+    model = SmallBC(ModelConfig(**config), len(vocab), normalizer)
     model.load_state_dict(state)
     model.eval()
-    return model, vocab, json.loads(metadata["training"])
+    return model, Vocabulary(vocab), training

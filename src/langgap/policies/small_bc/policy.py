@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from langgap.policies.base import PolicySpec, TaskContext, current_instruction, simulator_state
+from langgap.policies.base import PolicySpec, TaskContext, current_instruction, regressed_chunk, simulator_state
 from langgap.sim.env import Observation
 
 
@@ -18,7 +18,8 @@ class SmallBCPolicy:
     """`--policy-arg checkpoint=PATH` (required); `replan=k` executes the first k actions of each chunk."""
 
     def __init__(self, checkpoint: str = "", replan: int = 2):
-        from langgap.policies.small_bc.model import CheckpointError, load_checkpoint
+        from langgap.policies.checkpoints import CheckpointError
+        from langgap.policies.small_bc.model import load_checkpoint
 
         if not checkpoint:
             raise CheckpointError("small-bc needs --policy-arg checkpoint=PATH (a file written by `langgap train`)")
@@ -71,6 +72,4 @@ class SmallBCPolicy:
                 self._name_ids,
                 self._instruction,
             )[0].numpy()
-        actions = np.clip(actions.astype(np.float64), -1.0, 1.0)
-        actions[:, 6] = np.where(actions[:, 6] >= 0, 1.0, -1.0)
-        return actions
+        return regressed_chunk(actions)

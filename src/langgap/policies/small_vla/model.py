@@ -1,0 +1,157 @@
+"""The `small-vla` model: both cameras, the 8-D state and the instruction in, a chunk of actions out.
+
+* Text: the instruction's words through the word-level encoder `small-bc` uses (`langgap.policies.word_encoding`).
+* Vision: one small convolutional network for both cameras (stride-2 stages); after every stage the feature
+  maps are modulated by the sentence (FiLM: a per-channel scale and shift computed from the pooled instruction),
+  so what the network extracts depends on what it was asked. The last map's cells become tokens (with their
+  position and camera), and each token attends to the instruction's words (cross-attention).
+* A transformer over [action query, state, pooled instruction, image tokens]; the query's output is decoded into
+  `chunk` 7-D actions.
+
+Saved as one safetensors file (weights + JSON metadata: config, vocabulary, state normalisation).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from langgap.errors import DependencyNotInstalled
+from langgap.policies.checkpoints import read_checkpoint, write_checkpoint
+from langgap.policies.text import Vocabulary
+
+try:
+    import torch
+    from torch import nn
+
+    from langgap.policies.word_encoding import encode_words, transformer_layer
+except ImportError:  # pragma: no cover - depends on the environment
+    raise DependencyNotInstalled(
+        "small-vla needs PyTorch: pip install 'langgap[train]' (./setup.sh installs it)"
+    ) from None
+
+FORMAT = "langgap-small-vla/1"
+STATE_DIM = 8
+CAMERA_COUNT = 2  # agentview and the wrist camera (`langgap.sim.env.CAMERAS`), in that order
+
+
+@dataclass(frozen=True)
+class VisionConfig:
+    """The model's sizes. `image_size` is the cameras' (square) size in pixels: the policy asks for it."""
+
+    image_size: int = 96
+    channels: tuple[int, ...] = (32, 64, 64, 128)  # one stride-2 stage each: 96 px -> a 6 x 6 map
+    d_model: int = 64
+    heads: int = 4
+    layers: int = 2
+    text_layers: int = 1
+    chunk: int = 8
+    max_words: int = 24
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "channels", tuple(self.channels))  # JSON gives a list back
+
+    @property
+    def grid(self) -> int:
+        """The last feature map's side: the image tokens per camera are its square."""
+        side = self.image_size
+        for _ in self.channels:
+            side = (side + 1) // 2
+        return side
+
+
+@dataclass
+class StateNormalizer:
+    """Mean and std of the 8-D state over the training frames."""
+
+    state_mean: list[float]
+    state_std: list[float]
+
+    @classmethod
+    def fit(cls, states: np.ndarray) -> StateNormalizer:
+        return cls(states.mean(0).tolist(), (states.std(0) + 1e-3).tolist())
+
+
+class FilmStage(nn.Module):
+    """A stride-2 convolution, group norm, a sentence-conditioned per-channel scale and shift, GELU."""
+
+    def __init__(self, in_channels: int, out_channels: int, d_model: int):
+        super().__init__()
+        self.conv = nn.Conv2d(in_channels, out_channels, 3, stride=2, padding=1)
+        self.norm = nn.GroupNorm(8, out_channels)
+        self.film = nn.Linear(d_model, 2 * out_channels)
+        nn.init.zeros_(self.film.weight)  # starts as the identity: scale 1, shift 0
+        nn.init.zeros_(self.film.bias)
+
+    def forward(self, x: torch.Tensor, sentence: torch.Tensor) -> torch.Tensor:
+        scale, shift = self.film(sentence).unsqueeze(-1).unsqueeze(-1).chunk(2, dim=1)
+        return nn.functional.gelu(self.norm(self.conv(x)) * (1 + scale) + shift)
+
+
+class SmallVLA(nn.Module):
+    def __init__(self, config: VisionConfig, vocab_size: int, normalizer: StateNormalizer):
+        super().__init__()
+        self.config = config
+        d = config.d_model
+        self.words = nn.Embedding(vocab_size, d, padding_idx=0)
+        self.word_position = nn.Embedding(config.max_words, d)
+        self.text = nn.TransformerEncoder(
+            transformer_layer(d, config.heads), config.text_layers, enable_nested_tensor=False
+        )
+        widths = (3, *config.channels)
+        self.stages = nn.ModuleList(FilmStage(a, b, d) for a, b in zip(widths, widths[1:], strict=False))
+        self.project = nn.Linear(config.channels[-1], d)
+        self.cell = nn.Parameter(torch.zeros(config.grid * config.grid, d))  # where a token is in its image
+        self.camera = nn.Embedding(CAMERA_COUNT, d)
+        self.kind = nn.Embedding(4, d)  # query, state, instruction, image
+        self.query = nn.Parameter(torch.zeros(d))
+        self.state = nn.Sequential(nn.Linear(STATE_DIM, d), nn.GELU(), nn.Linear(d, d))
+        self.ground = nn.MultiheadAttention(d, config.heads, batch_first=True)
+        self.encoder = nn.TransformerEncoder(
+            transformer_layer(d, config.heads), config.layers, enable_nested_tensor=False
+        )
+        self.head = nn.Sequential(nn.LayerNorm(d), nn.Linear(d, d), nn.GELU(), nn.Linear(d, config.chunk * 7))
+        nn.init.normal_(self.cell, std=0.02)
+        for name, values in asdict(normalizer).items():
+            self.register_buffer(name, torch.tensor(values, dtype=torch.float32))
+
+    def forward(self, images: torch.Tensor, state: torch.Tensor, instruction: torch.Tensor) -> torch.Tensor:
+        """images (B, 2, H, W, 3) uint8 (agentview, wrist), state (B, 8), instruction (B, L) word ids
+        -> actions (B, chunk, 7)."""
+        batch = state.shape[0]
+        sentences, which = torch.unique(instruction, dim=0, return_inverse=True)  # each sentence encoded once
+        words, pooled = encode_words(self.words, self.word_position, self.text, sentences)
+        words, pooled, word_pad = words[which], pooled[which], (sentences == 0)[which]
+        pixels = images.flatten(0, 1).permute(0, 3, 1, 2).float() / 255.0 - 0.5  # (B * 2, 3, H, W)
+        sentence = pooled.repeat_interleave(CAMERA_COUNT, dim=0)
+        for stage in self.stages:
+            pixels = stage(pixels, sentence)
+        tokens = self.project(pixels.flatten(2).transpose(1, 2)) + self.cell  # (B * 2, cells, d)
+        tokens = tokens.view(batch, CAMERA_COUNT, -1, tokens.shape[-1]) + self.camera.weight[:, None]
+        tokens = tokens.flatten(1, 2)
+        grounded, _ = self.ground(tokens, words, words, key_padding_mask=word_pad, need_weights=False)
+        tokens = tokens + grounded + self.kind.weight[3]
+        query = (self.query + self.kind.weight[0]).expand(batch, 1, -1)
+        state_token = self.state((state - self.state_mean) / self.state_std) + self.kind.weight[1]
+        text_token = pooled + self.kind.weight[2]
+        sequence = torch.cat([query, state_token.unsqueeze(1), text_token.unsqueeze(1), tokens], dim=1)
+        return self.head(self.encoder(sequence)[:, 0]).view(batch, self.config.chunk, 7)
+
+
+def save_checkpoint(path: str | Path, model: SmallVLA, vocab: Vocabulary, training: dict) -> Path:
+    """Write weights and metadata to one safetensors file."""
+    return write_checkpoint(
+        path, model.state_dict(), format=FORMAT, config=asdict(model.config), vocab=vocab.tokens, training=training
+    )
+
+
+def load_checkpoint(path: str | Path) -> tuple[SmallVLA, Vocabulary, dict]:
+    """Read a checkpoint written by `save_checkpoint`; returns (model in eval mode, vocabulary, training info)."""
+    state, config, vocab, training = read_checkpoint(path, format=FORMAT, kind="small-vla")
+    normalizer = StateNormalizer(state["state_mean"].tolist(), state["state_std"].tolist())
+    model = SmallVLA(VisionConfig(**config), len(vocab), normalizer)
+    model.load_state_dict(state)
+    model.eval()
+    return model, Vocabulary(vocab), training

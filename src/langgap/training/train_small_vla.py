@@ -1,0 +1,78 @@
+"""Training `small-vla` by behaviour cloning on demonstrations with images (CPU, or a GPU unchanged).
+
+Every frame of every selected demonstration is a sample: both cameras, the 8-D state, the instruction, and the
+next `chunk` actions (the loss ignores steps past the demonstration's end). Images are shifted at random by up to
+`SHIFT` pixels (edges repeated), a standard regulariser for behaviour cloning from pixels. Deterministic for a given
+seed and thread count.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from langgap.errors import LangGapError
+from langgap.policies.small_vla.model import SmallVLA, StateNormalizer, VisionConfig, save_checkpoint
+from langgap.policies.text import Vocabulary
+from langgap.training.image_demos import ImageDemo, load_image_demos
+from langgap.training.loop import TrainConfig, chunk_loss, optimise, selected, training_facts
+
+SHIFT = 4  # pixels, at 96 px (scaled with the image size)
+
+
+def chunk_targets(labels: np.ndarray, chunk: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each frame's next `chunk` labels (the last one repeated past the end) and which of them exist."""
+    n = len(labels)
+    index = np.arange(n)[:, None] + np.arange(chunk)[None, :]
+    return labels[np.minimum(index, n - 1)].astype(np.float32), index < n
+
+
+def random_shift(images: torch.Tensor, pad: int, generator: torch.Generator) -> torch.Tensor:
+    """(B, C, H, W, 3) uint8 -> the same shape as float, each image moved by up to `pad` pixels each way."""
+    batch, cameras, height, width, _ = images.shape
+    flat = images.flatten(0, 1).permute(0, 3, 1, 2).float()
+    padded = torch.nn.functional.pad(flat, (pad, pad, pad, pad), mode="replicate")
+    offsets = torch.randint(2 * pad + 1, (len(flat), 2), generator=generator).tolist()
+    shifted = torch.stack([padded[i, :, y : y + height, x : x + width] for i, (y, x) in enumerate(offsets)])
+    return shifted.permute(0, 2, 3, 1).reshape(batch, cameras, height, width, 3)
+
+
+def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=print) -> dict:
+    """Train a small-vla model on `config`'s demonstrations (their images at the model's size) and save it to
+    `out`; returns training facts."""
+    started = time.perf_counter()
+    torch.set_num_threads(config.threads)
+    torch.manual_seed(config.seed)
+    demos: list[ImageDemo] = selected(config, load_image_demos(config.data, config.tasks), log)
+    size = demos[0].image_size
+    model_config = config.model or VisionConfig(image_size=size)
+    if model_config.image_size != size:
+        raise LangGapError(
+            f"the model takes {model_config.image_size} px images and the demonstrations hold {size} px: "
+            f"export them with --image-size {model_config.image_size}, or set model.image_size to {size}"
+        )
+    vocab = Vocabulary.from_texts(d.instruction for d in demos)
+    targets = [chunk_targets(d.labels, model_config.chunk) for d in demos]
+    images = torch.from_numpy(np.concatenate([d.images for d in demos]))
+    states = torch.from_numpy(np.concatenate([d.states for d in demos]))
+    words = [vocab.encode(d.instruction, model_config.max_words) for d in demos]
+    instruction = torch.tensor(
+        np.concatenate([np.tile(w, (len(d.states), 1)) for w, d in zip(words, demos, strict=True)])
+    )
+    actions = torch.from_numpy(np.concatenate([t[0] for t in targets]))
+    mask = torch.from_numpy(np.concatenate([t[1] for t in targets]))
+    model = SmallVLA(model_config, len(vocab), StateNormalizer.fit(states.numpy()))
+    shifts = torch.Generator().manual_seed(config.seed + 1)
+    pad = max(1, round(SHIFT * size / 96))
+
+    def loss_of(batch: torch.Tensor) -> torch.Tensor:
+        predicted = model(random_shift(images[batch], pad, shifts), states[batch], instruction[batch])
+        return chunk_loss(predicted, actions[batch], mask[batch], config.loss)
+
+    loss_value = optimise(model, loss_of, len(states), config, log_every=log_every, log=log)
+    facts = training_facts(config, demos, len(states), loss_value, started) | {"image_size": size}
+    save_checkpoint(out, model, vocab, facts)
+    return facts
