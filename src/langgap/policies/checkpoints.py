@@ -4,9 +4,12 @@ config, its vocabulary and how it was trained)."""
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from langgap.errors import LangGapError
+from langgap.policies.text import Vocabulary
 
 
 class CheckpointError(LangGapError):
@@ -29,6 +32,25 @@ def write_checkpoint(
     }
     save_file({k: v.contiguous() for k, v in state.items()}, str(path), metadata=metadata)
     return path
+
+
+def save_model(path: str | Path, model, vocab, training: dict, *, format: str) -> Path:
+    """Write `model` (a torch module with a dataclass `config`), its vocabulary and training facts to `path`."""
+    from dataclasses import asdict
+
+    return write_checkpoint(
+        path, model.state_dict(), format=format, config=asdict(model.config), vocab=vocab.tokens, training=training
+    )
+
+
+def load_model(path: str | Path, *, format: str, kind: str, build: Callable[[dict, int, dict], Any]) -> tuple:
+    """(model in eval mode, vocabulary, training facts) of a checkpoint `save_model` wrote; `build(config, vocabulary
+    size, tensors)` makes the untrained model (its normalisation statistics come from the tensors)."""
+    state, config, vocab, training = read_checkpoint(path, format=format, kind=kind)
+    model = build(config, len(vocab), state)
+    model.load_state_dict(state)
+    model.eval()
+    return model, Vocabulary(vocab), training
 
 
 def read_checkpoint(path: str | Path, *, format: str, kind: str) -> tuple[dict, dict, list[str], dict]:

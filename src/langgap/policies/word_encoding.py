@@ -1,10 +1,20 @@
 """The word-level instruction encoder `small-bc` and `small-vla` share: learned word embeddings and positions
-through a small transformer encoder (PyTorch); words come from `langgap.policies.text.Vocabulary`."""
+through a small transformer encoder; words come from `langgap.policies.text.Vocabulary`. Both models import PyTorch
+through this module, which says how to install it when it is missing."""
 
 from __future__ import annotations
 
-import torch
-from torch import nn
+from langgap.errors import DependencyNotInstalled
+
+try:
+    import torch
+    from torch import nn
+except ImportError:  # pragma: no cover - depends on the environment
+    raise DependencyNotInstalled(
+        "small-bc and small-vla need PyTorch: pip install 'langgap[train]' (./setup.sh installs it)"
+    ) from None
+
+__all__ = ["encode_words", "nn", "torch", "transformer_layer"]
 
 
 def transformer_layer(d_model: int, heads: int) -> nn.TransformerEncoderLayer:

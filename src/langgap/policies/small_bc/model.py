@@ -19,20 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
-from langgap.errors import DependencyNotInstalled
-from langgap.policies.checkpoints import read_checkpoint, write_checkpoint
+from langgap.policies.checkpoints import load_model, save_model
 from langgap.policies.small_bc.features import ENTITY_DIM, PROPRIO_DIM
 from langgap.policies.text import Vocabulary
-
-try:
-    import torch
-    from torch import nn
-
-    from langgap.policies.word_encoding import encode_words, transformer_layer
-except ImportError:  # pragma: no cover - depends on the environment
-    raise DependencyNotInstalled(
-        "small-bc needs PyTorch: pip install 'langgap[train]' (./setup.sh installs it)"
-    ) from None
+from langgap.policies.word_encoding import encode_words, nn, torch, transformer_layer
 
 FORMAT = "langgap-small-bc/1"
 
@@ -123,18 +113,14 @@ def _layer(config: ModelConfig) -> nn.TransformerEncoderLayer:
 
 def save_checkpoint(path: str | Path, model: SmallBC, vocab: Vocabulary, training: dict) -> Path:
     """Write weights and metadata to one safetensors file."""
-    return write_checkpoint(
-        path, model.state_dict(), format=FORMAT, config=asdict(model.config), vocab=vocab.tokens, training=training
-    )
+    return save_model(path, model, vocab, training, format=FORMAT)
 
 
 def load_checkpoint(path: str | Path) -> tuple[SmallBC, Vocabulary, dict]:
     """Read a checkpoint written by `save_checkpoint`; returns (model in eval mode, vocabulary, training info)."""
-    state, config, vocab, training = read_checkpoint(path, format=FORMAT, kind="small-bc")
-    normalizer = Normalizer(
-        **{k: state[k].tolist() for k in ("proprio_mean", "proprio_std", "entity_mean", "entity_std")}
-    )
-    model = SmallBC(ModelConfig(**config), len(vocab), normalizer)
-    model.load_state_dict(state)
-    model.eval()
-    return model, Vocabulary(vocab), training
+
+    def build(config: dict, vocab_size: int, state: dict) -> SmallBC:
+        stats = {k: state[k].tolist() for k in ("proprio_mean", "proprio_std", "entity_mean", "entity_std")}
+        return SmallBC(ModelConfig(**config), vocab_size, Normalizer(**stats))
+
+    return load_model(path, format=FORMAT, kind="small-bc", build=build)

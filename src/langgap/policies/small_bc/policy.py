@@ -10,55 +10,34 @@ from __future__ import annotations
 
 import numpy as np
 
-from langgap.policies.base import PolicySpec, TaskContext, current_instruction, regressed_chunk, simulator_state
+from langgap.policies.base import PolicySpec, TaskContext, regressed_chunk, simulator_state
+from langgap.policies.learned import LearnedPolicy
 from langgap.sim.env import Observation
 
 
-class SmallBCPolicy:
+class SmallBCPolicy(LearnedPolicy):
     """`--policy-arg checkpoint=PATH` (required); `replan=k` executes the first k actions of each chunk."""
 
     def __init__(self, checkpoint: str = "", replan: int = 2):
-        from langgap.policies.checkpoints import CheckpointError
         from langgap.policies.small_bc.model import load_checkpoint
 
-        if not checkpoint:
-            raise CheckpointError("small-bc needs --policy-arg checkpoint=PATH (a file written by `langgap train`)")
-        import torch
-
-        torch.set_num_threads(1)
-        self.checkpoint = checkpoint
-        self._torch = torch
-        self.model, self.vocab, self.training = load_checkpoint(checkpoint)
+        super().__init__(checkpoint, kind="small-bc", load=load_checkpoint)
         chunk = self.model.config.chunk
         # It reads the simulator state but is never told the goal: a learned policy under test.
         self.spec = PolicySpec(sees_state=True, chunk=chunk, replan=min(replan, chunk))
-        self._instruction = None
-        self._text: str | None = None
-        self._context: TaskContext | None = None
         self._names: list[str] | None = None
         self._name_ids = None
 
-    def config(self) -> dict:
-        return {"checkpoint": self.checkpoint, "training": self.training}
-
     def reset(self, context: TaskContext) -> None:
-        self._context = context
-        self._encode(context.instruction)
+        super().reset(context)
         self._names = None
-
-    def _encode(self, instruction: str) -> None:
-        ids = self.vocab.encode(instruction, self.model.config.max_words)
-        self._text = instruction
-        self._instruction = self._torch.tensor([ids], dtype=self._torch.int64)
 
     def act(self, observation: Observation) -> np.ndarray:
         from langgap.policies.small_bc import features
 
         torch = self._torch
         privileged = simulator_state(observation, "small-bc")
-        instruction = current_instruction(observation, self._context)
-        if instruction != self._text:  # the instruction changed mid-episode
-            self._encode(instruction)
+        instruction = self.instruction_ids(observation)
         if self._names is None:
             self._names = features.entity_names(privileged)
             width = self.model.config.max_name_words
@@ -70,6 +49,6 @@ class SmallBCPolicy:
                 torch.from_numpy(features.proprio(privileged))[None],
                 torch.from_numpy(features.entities(privileged, self._names))[None],
                 self._name_ids,
-                self._instruction,
+                instruction,
             )[0].numpy()
         return regressed_chunk(actions)

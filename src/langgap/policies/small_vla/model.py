@@ -18,19 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from langgap.errors import DependencyNotInstalled
-from langgap.policies.checkpoints import read_checkpoint, write_checkpoint
+from langgap.policies.checkpoints import load_model, save_model
 from langgap.policies.text import Vocabulary
-
-try:
-    import torch
-    from torch import nn
-
-    from langgap.policies.word_encoding import encode_words, transformer_layer
-except ImportError:  # pragma: no cover - depends on the environment
-    raise DependencyNotInstalled(
-        "small-vla needs PyTorch: pip install 'langgap[train]' (./setup.sh installs it)"
-    ) from None
+from langgap.policies.word_encoding import encode_words, nn, torch, transformer_layer
 
 FORMAT = "langgap-small-vla/1"
 STATE_DIM = 8
@@ -142,16 +132,14 @@ class SmallVLA(nn.Module):
 
 def save_checkpoint(path: str | Path, model: SmallVLA, vocab: Vocabulary, training: dict) -> Path:
     """Write weights and metadata to one safetensors file."""
-    return write_checkpoint(
-        path, model.state_dict(), format=FORMAT, config=asdict(model.config), vocab=vocab.tokens, training=training
-    )
+    return save_model(path, model, vocab, training, format=FORMAT)
 
 
 def load_checkpoint(path: str | Path) -> tuple[SmallVLA, Vocabulary, dict]:
     """Read a checkpoint written by `save_checkpoint`; returns (model in eval mode, vocabulary, training info)."""
-    state, config, vocab, training = read_checkpoint(path, format=FORMAT, kind="small-vla")
-    normalizer = StateNormalizer(state["state_mean"].tolist(), state["state_std"].tolist())
-    model = SmallVLA(VisionConfig(**config), len(vocab), normalizer)
-    model.load_state_dict(state)
-    model.eval()
-    return model, Vocabulary(vocab), training
+
+    def build(config: dict, vocab_size: int, state: dict) -> SmallVLA:
+        normalizer = StateNormalizer(state["state_mean"].tolist(), state["state_std"].tolist())
+        return SmallVLA(VisionConfig(**config), vocab_size, normalizer)
+
+    return load_model(path, format=FORMAT, kind="small-vla", build=build)
