@@ -110,8 +110,8 @@ def test_serve_binds_the_host_and_port_it_is_given():
 
 @pytest.mark.parametrize("kind", ["small-bc", "small-vla"])
 def test_small_bc_training_options_reach_the_config(tmp_path, kind):
-    """`--lr`, `--seed` and `--loss` land in the training config, over a `--config` file's values; so does the file's
-    `model` mapping, as the kind's own model config."""
+    """`--lr`, `--seed`, `--loss` and `--device` land in the training config, over a `--config` file's values; so does
+    the file's `model` mapping, as the kind's own model config."""
     from langgap.cli.main import build_parser
     from langgap.cli.train_cmd import _training_config
     from langgap.policies.small_bc.model import ModelConfig
@@ -119,12 +119,14 @@ def test_small_bc_training_options_reach_the_config(tmp_path, kind):
 
     model_config = {"small-bc": ModelConfig, "small-vla": VisionConfig}[kind]
     config_file = tmp_path / "bc.yaml"
-    config_file.write_text("lr: 0.5\nseed: 3\nloss: l1\nmodel:\n  chunk: 4\n")
+    config_file.write_text("lr: 0.5\nseed: 3\nloss: l1\ndevice: cuda\nmodel:\n  chunk: 4\n")
     base = ["train", kind, "--config", str(config_file), "--data", "d", "--out", "o.safetensors"]
     from_file, _ = _training_config(build_parser().parse_args(base), model_config)
-    assert (from_file.lr, from_file.seed, from_file.loss) == (0.5, 3, "l1")
+    assert (from_file.lr, from_file.seed, from_file.loss, from_file.device) == (0.5, 3, "l1", "cuda")
     assert from_file.model == model_config(chunk=4)
     flags, _ = _training_config(
-        build_parser().parse_args([*base, "--lr", "0.01", "--seed", "9", "--loss", "mse"]), model_config
+        build_parser().parse_args([*base, "--lr", "0.01", "--seed", "9", "--loss", "mse", "--device", "cpu"]),
+        model_config,
     )
-    assert (flags.lr, flags.seed, flags.loss) == (0.01, 9, "mse")
+    assert (flags.lr, flags.seed, flags.loss, flags.device) == (0.01, 9, "mse", "cpu")
+    assert flags.torch_device().type == "cpu"  # the device the trainer moves the model to

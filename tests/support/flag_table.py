@@ -376,6 +376,10 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "train small-bc --seed": (ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),),
     "train small-bc --threads": (ProvenBy(_SMALL_BC_CLI),),
     "train small-bc --loss": (ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),),
+    "train small-bc --device": (
+        ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),
+        Refused((*_SMALL_BC, "--device", "meta"), "--device meta: only cpu and cuda are supported"),
+    ),
     "train small-vla --config": (ProvenBy(_SMALL_VLA_ERRORS),),
     "train small-vla --data": (ProvenBy(_SMALL_VLA_CLI),),
     "train small-vla --catalog": (
@@ -389,6 +393,10 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "train small-vla --seed": (ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),),
     "train small-vla --threads": (ProvenBy(_SMALL_VLA_CLI),),
     "train small-vla --loss": (ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),),
+    "train small-vla --device": (
+        ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),
+        Refused((*_SMALL_VLA, "--device", "meta"), "--device meta: only cpu and cuda are supported"),
+    ),
     "train lerobot --dataset-root": (Differs(_LEROBOT, ("--dataset-root", "{dir}/other")),),
     "train lerobot --dataset-repo-id": (Differs(_LEROBOT, ("--dataset-repo-id", "me/demos")),),
     "train lerobot --output-dir": (Differs(_LEROBOT, ("--output-dir", "{dir}/elsewhere")),),

@@ -49,6 +49,7 @@ def _add_training_flags(parser, *, data: str) -> None:
     parser.add_argument("--seed", type=int, help="training seed (default: 0)")
     parser.add_argument("--threads", type=int, help="torch CPU threads (default: 2)")
     parser.add_argument("--loss", choices=LOSSES, help="regression loss on the action chunk (default: l1)")
+    parser.add_argument("--device", help="where the model trains: cpu (the default) or a GPU, e.g. cuda")
 
 
 def _training_config(args, model_config: type):
@@ -67,7 +68,7 @@ def _training_config(args, model_config: type):
             raise LangGapError(f"--config {args.config}: {exc}") from None
         if not isinstance(values, dict):
             raise LangGapError(f"{args.config}: expected a mapping of options")
-    options = ("data", "catalog", "tasks", "out", "steps", "batch_size", "lr", "seed", "threads", "loss")
+    options = ("data", "catalog", "tasks", "out", "steps", "batch_size", "lr", "seed", "threads", "loss", "device")
     for key in options:
         if getattr(args, key) is not None:
             values[key] = getattr(args, key)

@@ -29,12 +29,25 @@ class TrainConfig:
     lr: float = 1e-3
     seed: int = 0
     threads: int = 2
+    device: str = "cpu"  # where the model trains: "cpu", or a PyTorch device such as "cuda" (same code, same steps)
     loss: str = "l1"  # on the action chunk: one of LOSSES
     model: Any = None
 
     def __post_init__(self) -> None:
         if self.loss not in LOSSES:
             raise LangGapError(f"unknown loss {self.loss!r} ({' or '.join(LOSSES)})")
+
+    def torch_device(self) -> torch.device:
+        """The training device, checked: one this machine's PyTorch can use, or a LangGapError that says why not."""
+        try:
+            device = torch.device(self.device)
+        except RuntimeError as exc:
+            raise LangGapError(f"--device {self.device}: {exc}") from None
+        if device.type == "cuda" and not torch.cuda.is_available():
+            raise LangGapError(f"--device {self.device}: PyTorch sees no CUDA device on this machine")
+        if device.type not in ("cpu", "cuda"):
+            raise LangGapError(f"--device {self.device}: only cpu and cuda are supported")
+        return device
 
 
 class _OfTask(Protocol):
@@ -82,6 +95,7 @@ def training_facts(
         "lr": config.lr,
         "loss": config.loss,
         "seed": config.seed,
+        "device": config.device,
         "final_loss": final_loss,
         "train_time_s": round(time.perf_counter() - started, 1),
     }

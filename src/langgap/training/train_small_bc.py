@@ -72,15 +72,16 @@ def select_demos(config: TrainConfig, log=print) -> list[Demo]:
 def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=print) -> dict:
     """Train a small-bc model on `config`'s demonstrations and save it to `out`; returns training facts."""
     started = time.perf_counter()
+    device = config.torch_device()
     torch.set_num_threads(config.threads)
     torch.manual_seed(config.seed)
     model_config = config.model or ModelConfig()
     demos = select_demos(config, log)
     vocab = build_vocabulary(demos)
     samples = build_samples(demos, vocab, model_config)
-    tensors = {k: torch.from_numpy(np.ascontiguousarray(v)) for k, v in asdict(samples).items()}
+    tensors = {k: torch.from_numpy(np.ascontiguousarray(v)).to(device) for k, v in asdict(samples).items()}
     normalizer = Normalizer.fit(samples.proprio, samples.entities, samples.names[..., 0] > 0)
-    model = SmallBC(model_config, len(vocab), normalizer)
+    model = SmallBC(model_config, len(vocab), normalizer).to(device)
     frames = len(samples.proprio)
 
     def loss_of(batch: torch.Tensor) -> torch.Tensor:
@@ -94,5 +95,5 @@ def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=pri
 
     loss_value = optimise(model, loss_of, frames, config, log_every=log_every, log=log)
     facts = training_facts(config, demos, frames, loss_value, started)
-    save_checkpoint(out, model, vocab, facts)
+    save_checkpoint(out, model.cpu(), vocab, facts)
     return facts

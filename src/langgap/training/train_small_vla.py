@@ -44,6 +44,7 @@ def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=pri
     """Train a small-vla model on `config`'s demonstrations (their images at the model's size) and save it to
     `out`; returns training facts."""
     started = time.perf_counter()
+    device = config.torch_device()
     torch.set_num_threads(config.threads)
     torch.manual_seed(config.seed)
     demos: list[ImageDemo] = selected(config, load_image_demos(config.data, config.tasks), log)
@@ -64,15 +65,17 @@ def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=pri
     )
     actions = torch.from_numpy(np.concatenate([t[0] for t in targets]))
     mask = torch.from_numpy(np.concatenate([t[1] for t in targets]))
-    model = SmallVLA(model_config, len(vocab), StateNormalizer.fit(states.numpy()))
+    model = SmallVLA(model_config, len(vocab), StateNormalizer.fit(states.numpy())).to(device)
     shifts = torch.Generator().manual_seed(config.seed + 1)
     pad = max(1, round(SHIFT * size / 96))
 
     def loss_of(batch: torch.Tensor) -> torch.Tensor:
-        predicted = model(random_shift(images[batch], pad, shifts), states[batch], instruction[batch])
-        return chunk_loss(predicted, actions[batch], mask[batch], config.loss)
+        # The data stays in memory here; each batch goes to the device (a no-op on the CPU).
+        shifted = random_shift(images[batch], pad, shifts).to(device)
+        predicted = model(shifted, states[batch].to(device), instruction[batch].to(device))
+        return chunk_loss(predicted, actions[batch].to(device), mask[batch].to(device), config.loss)
 
     loss_value = optimise(model, loss_of, len(states), config, log_every=log_every, log=log)
     facts = training_facts(config, demos, len(states), loss_value, started) | {"image_size": size}
-    save_checkpoint(out, model, vocab, facts)
+    save_checkpoint(out, model.cpu(), vocab, facts)
     return facts
