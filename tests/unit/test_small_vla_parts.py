@@ -9,7 +9,7 @@ torch = pytest.importorskip("torch", reason="small-vla needs PyTorch (pip instal
 
 
 def test_chunk_targets_repeat_the_last_label_and_mask_past_the_end():
-    from langgap.training.train_small_vla import chunk_targets
+    from langgap.training.loop import chunk_targets
 
     labels = np.arange(3 * 7, dtype=np.float64).reshape(3, 7)
     targets, mask = chunk_targets(labels, 4)

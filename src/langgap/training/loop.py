@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol, TypeVar
 
+import numpy as np
 import torch
 
 from langgap.demos.compact import read_manifest
@@ -108,6 +109,13 @@ def lr_factor(step: int, total: int) -> float:
         return (step + 1) / warmup
     progress = (step - warmup) / max(1, total - warmup)
     return 0.1 + 0.45 * (1 + math.cos(math.pi * progress))
+
+
+def chunk_targets(labels: np.ndarray, chunk: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each frame's next `chunk` labels (the last one repeated past the end) and which of them exist."""
+    n = len(labels)
+    index = np.arange(n)[:, None] + np.arange(chunk)[None, :]
+    return labels[np.minimum(index, n - 1)].astype(np.float32), index < n
 
 
 def chunk_loss(predicted: torch.Tensor, target: torch.Tensor, mask: torch.Tensor, kind: str) -> torch.Tensor:

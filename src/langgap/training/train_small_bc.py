@@ -19,7 +19,7 @@ from langgap.demos.record import Demo
 from langgap.policies.small_bc import features
 from langgap.policies.small_bc.model import ModelConfig, Normalizer, SmallBC, save_checkpoint
 from langgap.policies.text import Vocabulary
-from langgap.training.loop import TrainConfig, chunk_loss, optimise, selected, training_facts
+from langgap.training.loop import TrainConfig, chunk_loss, chunk_targets, optimise, selected, training_facts
 
 __all__ = ["TrainConfig", "train"]
 
@@ -45,7 +45,6 @@ def build_samples(demos: list[Demo], vocab: Vocabulary, config: ModelConfig) -> 
     """Turn demonstrations into training arrays."""
     max_entities = max(len(features.entity_names(d.privileged)) for d in demos)
     parts: dict[str, list[np.ndarray]] = {k: [] for k in Samples.__dataclass_fields__}
-    steps = np.arange(config.chunk)
     for demo in demos:
         n = demo.length
         names = features.entity_names(demo.privileged)
@@ -54,13 +53,13 @@ def build_samples(demos: list[Demo], vocab: Vocabulary, config: ModelConfig) -> 
         name_ids = np.zeros((max_entities, config.max_name_words), dtype=np.int64)
         for i, name in enumerate(names):
             name_ids[i] = vocab.encode(features.name_words(name), config.max_name_words)
-        index = np.arange(n)[:, None] + steps[None, :]
+        targets, mask = chunk_targets(demo.labels, config.chunk)
         parts["proprio"].append(features.proprio(demo.privileged))
         parts["entities"].append(ents)
         parts["names"].append(np.broadcast_to(name_ids, (n, *name_ids.shape)))
         parts["instruction"].append(np.tile(vocab.encode(demo.instruction, config.max_words), (n, 1)))
-        parts["actions"].append(demo.labels[np.minimum(index, n - 1)].astype(np.float32))
-        parts["action_mask"].append(index < n)
+        parts["actions"].append(targets)
+        parts["action_mask"].append(mask)
     return Samples(**{k: np.concatenate(v) for k, v in parts.items()})
 
 

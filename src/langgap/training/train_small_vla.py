@@ -18,16 +18,9 @@ from langgap.errors import LangGapError
 from langgap.policies.small_vla.model import SmallVLA, StateNormalizer, VisionConfig, save_checkpoint
 from langgap.policies.text import Vocabulary
 from langgap.training.image_demos import ImageDemo, load_image_demos
-from langgap.training.loop import TrainConfig, chunk_loss, optimise, selected, training_facts
+from langgap.training.loop import TrainConfig, chunk_loss, chunk_targets, optimise, selected, training_facts
 
 SHIFT = 4  # pixels, at 96 px (scaled with the image size)
-
-
-def chunk_targets(labels: np.ndarray, chunk: int) -> tuple[np.ndarray, np.ndarray]:
-    """Each frame's next `chunk` labels (the last one repeated past the end) and which of them exist."""
-    n = len(labels)
-    index = np.arange(n)[:, None] + np.arange(chunk)[None, :]
-    return labels[np.minimum(index, n - 1)].astype(np.float32), index < n
 
 
 def random_shift(images: torch.Tensor, pad: int, generator: torch.Generator) -> torch.Tensor:

@@ -21,10 +21,11 @@ import numpy as np
 from langgap.policies.checkpoints import load_model, save_model
 from langgap.policies.text import Vocabulary
 from langgap.policies.word_encoding import encode_words, nn, torch, transformer_layer
+from langgap.sim.env import CAMERAS
 
 FORMAT = "langgap-small-vla/1"
 STATE_DIM = 8
-CAMERA_COUNT = 2  # agentview and the wrist camera (`langgap.sim.env.CAMERAS`), in that order
+CAMERA_COUNT = len(CAMERAS)  # agentview and the wrist camera, in that order
 
 
 @dataclass(frozen=True)
