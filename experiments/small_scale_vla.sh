@@ -21,7 +21,9 @@
 # DEMOS), NOISE (execution noise of the demonstrations, default 0.3), SIZE (image size, default 96), STEPS (training
 # steps, default 3000), BATCH (frames per step, default 64), THREADS (training threads, default 2), EPISODES (per
 # task, default 10), WORKERS (default 2), SEEDS (training seeds, default "0 1 2"; seed 0 writes <name>.safetensors
-# and runs/<name>, seed N <name>-seedN.*). Every step's wall time is appended to OUT/times.tsv.
+# and runs/<name>, seed N <name>-seedN.*), CONFIGS (the policies to train, in order; default "original extended mixed
+# diluted": a subset runs one row over every seed first, and the report compares the first with the rest and
+# `blind`). Every step's wall time is appended to OUT/times.tsv.
 # Needs `langgap` with the train and hdf5 extras on PATH (source .venv/bin/activate).
 set -euo pipefail
 OUT="${1:-runs/small_scale_vla}"
@@ -35,7 +37,13 @@ THREADS="${THREADS:-2}"
 EPISODES="${EPISODES:-10}"
 WORKERS="${WORKERS:-2}"
 SEEDS="${SEEDS:-0 1 2}"
+CONFIGS="${CONFIGS:-original extended mixed diluted}"
 SCENE="spatial/s0/*"
+declare -A TRAIN=([original]="$SCENE&original" [extended]="$SCENE&train" [mixed]="$SCENE&original,$SCENE&train"
+    [diluted]="original,$SCENE&train")
+for name in $CONFIGS; do
+    [ -n "${TRAIN[$name]:-}" ] || { echo "error: CONFIGS: unknown policy '$name' (known: ${!TRAIN[*]})" >&2; exit 2; }
+done
 if [ -n "${LANGGAP_SMOKE:-}" ] && [ "$SEEDS" != "${SEEDS%% *}" ]; then  # every command shrinks itself; so do the seeds
     echo "note: LANGGAP_SMOKE is set, so this script is shrunk: SEEDS '$SEEDS' -> '${SEEDS%% *}'" >&2
     SEEDS="${SEEDS%% *}"
@@ -67,8 +75,6 @@ images() {  # images DIR: both cameras at SIZE px, rendered by replaying the dem
 collect "$OUT/demos" "$SCENE&original,$SCENE&train" "$DEMOS"
 images "$OUT/demos"
 
-declare -A TRAIN=([original]="$SCENE&original" [extended]="$SCENE&train" [mixed]="$SCENE&original,$SCENE&train"
-    [diluted]="original,$SCENE&train")
 suffix() { [ "$1" = 0 ] || echo "-seed$1"; }  # seed 0 keeps the plain names
 evaluate() {  # evaluate RUN TASKS POLICY [POLICY-ARG]
     [ -f "$OUT/runs/$1/complete" ] && return
@@ -87,15 +93,16 @@ train() {  # train NAME SEED
 evaluate blind "$SCENE" blind
 for seed in $SEEDS; do
     s=$(suffix "$seed")
-    for name in original extended mixed diluted; do
+    runs=()
+    for name in $CONFIGS; do
         if [ "$name" = diluted ]; then
             collect "$OUT/demos-originals" "original&!$SCENE" "$ORIGINAL_DEMOS"  # the other 39 scenes' originals
             images "$OUT/demos-originals"
         fi
         train "$name" "$seed"
         evaluate "$name$s" "$SCENE" small-vla "checkpoint=$OUT/$name$s.safetensors"
+        runs+=("$OUT/runs/$name$s")
     done
-    langgap report "$OUT/runs/original$s" --compare "$OUT/runs/extended$s" "$OUT/runs/mixed$s" "$OUT/runs/diluted$s" \
-        "$OUT/runs/blind" > "$OUT/report$s.md"
+    langgap report "${runs[0]}" --compare "${runs[@]:1}" "$OUT/runs/blind" > "$OUT/report$s.md"
     echo "wrote $OUT/report$s.md"
 done
