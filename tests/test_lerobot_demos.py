@@ -43,6 +43,22 @@ def dataset(exported):
     return root, ds
 
 
+SMALL = 64
+
+
+@pytest.fixture(scope="module")
+def small_dataset(tiny_collection, tmp_path_factory):
+    """`langgap export-lerobot DIR --image-size 64` on a copy of the tiny collection."""
+    from langgap.cli.main import main
+
+    root = tmp_path_factory.mktemp("export-small") / "tiny"
+    shutil.copytree(tiny_collection, root)
+    command = ["export-lerobot", str(root), "--workers", "0", "--no-progress", "--image-size", str(SMALL)]
+    with contextlib.redirect_stderr(io.StringIO()):
+        assert main(command) == 0
+    return root, LeRobotDataset("local/langgap_demos", root=root / "lerobot", video_backend="pyav")
+
+
 def test_dataset_has_the_lerobot_libero_schema(dataset, catalog):
     root, ds = dataset
     demos = [load_demo(p) for p in demo_files(root)]
@@ -79,10 +95,13 @@ def test_export_lerobot_cli_writes_the_dataset_it_is_told(exported, tiny_collect
         )
 
 
-def test_frames_are_oriented_as_lerobots_libero_processor_makes_them(dataset, catalog):
-    root, ds = dataset
+@pytest.mark.parametrize(("exported_at", "size"), [("dataset", 256), ("small_dataset", SMALL)])
+def test_frames_are_oriented_as_lerobots_libero_processor_makes_them(exported_at, size, catalog, request):
+    """The frames are the upright render at the dataset's size: 256 by default, `--image-size`'s otherwise."""
+    root, ds = request.getfixturevalue(exported_at)
+    assert all(tuple(ds.meta.features[key]["shape"]) == (size, size, 3) for key in CAMERA_FEATURES.values())
     demo = load_demo(demo_files(root)[0])
-    with TaskEnv(catalog.get(TINY_TASK), EnvOptions(cameras=CAMERAS, image_size=256)) as env:
+    with TaskEnv(catalog.get(TINY_TASK), EnvOptions(cameras=CAMERAS, image_size=size)) as env:
         start_episode(env, demo)
         expected = lerobot_libero_batch(env, demo.instruction)
     frame = ds[0]

@@ -348,6 +348,10 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     # -- verify-demos, export-lerobot, export-hdf5 ---------------------------------------------------------
     "export-lerobot --workers": (ProvenBy(_LEROBOT_EXPORT),),
     "export-lerobot --no-progress": (ProvenBy(_LEROBOT_EXPORT),),
+    "export-lerobot --image-size": (
+        ProvenBy("tests/test_lerobot_demos.py::test_frames_are_oriented_as_lerobots_libero_processor_makes_them"),
+        Refused(("export-lerobot", "{collection}", "--image-size", "8"), "image size must be in 16..1024"),
+    ),
     "export-hdf5 --out": (ProvenBy(_HDF5_CLI),),
     "export-hdf5 --images": (ProvenBy("tests/test_hdf5.py::test_images_are_upright_renders_of_the_recorded_states"),),
     "export-hdf5 --workers": (

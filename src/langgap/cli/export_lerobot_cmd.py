@@ -9,14 +9,21 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument("collection", metavar="DIR", help="a directory written by `langgap collect`")
     parser.add_argument("--workers", type=int, default=1, help="rendering processes (0: here)")
+    parser.add_argument("--image-size", type=int, metavar="PX", help="the images' height and width (default: 256)")
     parser.add_argument("--no-progress", action="store_true")
     parser.set_defaults(handler=run, smoke=("workers",))
 
 
 def run(args) -> int:
     from langgap.demos.export import write_lerobot_dataset
+    from langgap.demos.render import IMAGE_SIZE
+    from langgap.sim.env import EnvOptions
 
+    if args.image_size is not None:
+        EnvOptions(image_size=args.image_size)  # the sizes LangGap renders: anything else is refused before rendering
     # No --repo-id: LeRobot keeps a dataset's repo id only to upload it, and nothing is uploaded.
-    path = write_lerobot_dataset(args.collection, workers=args.workers, progress=not args.no_progress)
+    path = write_lerobot_dataset(
+        args.collection, workers=args.workers, image_size=args.image_size or IMAGE_SIZE, progress=not args.no_progress
+    )
     print(f"wrote the LeRobot dataset to {path}")
     return 0

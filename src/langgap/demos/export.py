@@ -1,11 +1,12 @@
 """The LeRobot v3 form of a collection, written with LeRobot's own dataset API.
 
 Schema of `lerobot/libero`: `observation.images.image` (agentview) and `observation.images.image2`
-(wrist), 256x256 upright (LangGap's images: the raw render rotated 180 degrees, what LeRobot's
-`LiberoProcessorStep` makes of the raw render), `observation.state` 8-D, `action` 7-D (the oracle's
-command, without the execution noise of `collect --noise`), the task string (the exact catalog
-instruction in the collection's style), fps 20 (the control rate: one frame per action). Frames are
-rendered by replaying the recorded states of kept demonstrations.
+(wrist), 256x256 by default (`image_size` renders another square size) and upright (LangGap's images:
+the raw render rotated 180 degrees, what LeRobot's `LiberoProcessorStep` makes of the raw render),
+`observation.state` 8-D, `action` 7-D (the oracle's command, without the execution noise of
+`collect --noise`), the task string (the exact catalog instruction in the collection's style), fps 20
+(the control rate: one frame per action). Frames are rendered by replaying the recorded states of kept
+demonstrations.
 """
 
 from __future__ import annotations
@@ -29,9 +30,9 @@ def lerobot_available() -> bool:
     return importlib.util.find_spec("lerobot") is not None
 
 
-def features() -> dict:
-    """The dataset features, as in `lerobot/libero`."""
-    image = {"dtype": "video", "shape": (IMAGE_SIZE, IMAGE_SIZE, 3), "names": ["height", "width", "rgb"]}
+def features(image_size: int = IMAGE_SIZE) -> dict:
+    """The dataset features, as in `lerobot/libero` (whose images are `IMAGE_SIZE` square)."""
+    image = {"dtype": "video", "shape": (image_size, image_size, 3), "names": ["height", "width", "rgb"]}
     return {
         **{key: dict(image) for key in CAMERA_FEATURES.values()},
         "observation.state": {
@@ -48,9 +49,15 @@ def features() -> dict:
 
 
 def write_lerobot_dataset(
-    root: str | Path, *, repo_id: str = "local/langgap_demos", workers: int = 1, progress: bool = True
+    root: str | Path,
+    *,
+    repo_id: str = "local/langgap_demos",
+    workers: int = 1,
+    image_size: int = IMAGE_SIZE,
+    progress: bool = True,
 ) -> Path:
-    """Write the collection at `root` as a LeRobot v3 dataset in `root/lerobot`; returns that path."""
+    """Write the collection at `root` as a LeRobot v3 dataset in `root/lerobot`, both cameras rendered
+    `image_size` square; returns that path."""
     if not lerobot_available():
         raise DependencyNotInstalled("LeRobot is not installed; run this in .venv-lerobot (./setup.sh makes it)")
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
@@ -64,9 +71,12 @@ def write_lerobot_dataset(
     if not paths:
         raise LangGapError(f"{root} holds no demonstrations")
     dataset = LeRobotDataset.create(
-        repo_id=repo_id, fps=FPS, features=features(), root=out, robot_type="panda", use_videos=True
+        repo_id=repo_id, fps=FPS, features=features(image_size), root=out, robot_type="panda", use_videos=True
     )
-    for demo, frames in iter_demos(manifest["catalog"], paths, render=True, workers=workers, progress=progress):
+    rendered = iter_demos(
+        manifest["catalog"], paths, render=True, workers=workers, progress=progress, image_size=image_size
+    )
+    for demo, frames in rendered:
         actions = demo.labels.astype(np.float32)
         for t in range(demo.length):
             dataset.add_frame(
