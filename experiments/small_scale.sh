@@ -20,7 +20,8 @@
 # Environment: DEMOS (per task, default 12), NOISE (execution noise of the demonstrations, default 0.3),
 # STEPS (training steps, default 4000), EPISODES (per task, default 10), WORKERS (default 2), SEEDS (training
 # seeds, default 0; seed 0 writes <name>.safetensors and runs/<name>, seed N <name>-seedN.*: the spread over
-# seeds is the training noise the episode intervals do not cover).
+# seeds is the training noise the episode intervals do not cover; OUT/pooled.md pools each policy's runs over
+# SEEDS: `langgap report --pool`).
 # Needs `langgap` with the train extra on PATH (source .venv/bin/activate).
 set -euo pipefail
 OUT="${1:-runs/small_scale}"
@@ -64,6 +65,12 @@ for seed in $SEEDS; do
         "$OUT/runs/blind" > "$OUT/report$s.md"
     echo "wrote $OUT/report$s.md"
 done
+pools=(--pool "blind=$OUT/runs/blind")
+for name in original extended mixed diluted; do
+    pools+=(--pool "$name=$(for seed in $SEEDS; do echo "$OUT/runs/$name$(suffix "$seed")"; done | paste -sd,)")
+done
+langgap report "${pools[@]}" > "$OUT/pooled.md"  # the results table: each policy pooled over its training seeds
+echo "wrote $OUT/pooled.md"
 
 # The first seed's diluted policy on all 40 original tasks: it learned the data it was diluted with.
 s=$(suffix "${SEEDS%% *}")

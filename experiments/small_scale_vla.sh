@@ -23,7 +23,8 @@
 # task, default 10), WORKERS (default 2), SEEDS (training seeds, default "0 1 2"; seed 0 writes <name>.safetensors
 # and runs/<name>, seed N <name>-seedN.*), CONFIGS (the policies to train, in order; default "original extended mixed
 # diluted": a subset runs one row over every seed first, and the report compares the first with the rest and
-# `blind`). Every step's wall time is appended to OUT/times.tsv.
+# `blind`). Every step's wall time is appended to OUT/times.tsv; OUT/pooled.md is the results table (every finished
+# run of each policy pooled over its seeds: `langgap report --pool`).
 # Needs `langgap` with the train and hdf5 extras on PATH (source .venv/bin/activate).
 set -euo pipefail
 OUT="${1:-runs/small_scale_vla}"
@@ -106,3 +107,17 @@ for seed in $SEEDS; do
     langgap report "${runs[0]}" --compare "${runs[@]:1}" "$OUT/runs/blind" > "$OUT/report$s.md"
     echo "wrote $OUT/report$s.md"
 done
+
+# The results table: every finished run of each policy in OUT, pooled over its training seeds (those of earlier
+# invocations too), with each seed's successes beside the pooled rate.
+shopt -s nullglob
+pools=(--pool "blind=$OUT/runs/blind")
+for name in original extended mixed diluted; do
+    finished=("$OUT/runs/$name"-seed*/complete)  # seed 0's plain name first (a literal path: nullglob keeps it)
+    [ -f "$OUT/runs/$name/complete" ] && finished=("$OUT/runs/$name/complete" "${finished[@]}")
+    [ ${#finished[@]} -gt 0 ] || continue
+    dirs=$(printf '%s\n' "${finished[@]%/complete}" | paste -sd,)
+    pools+=(--pool "$name=$dirs")
+done
+langgap report "${pools[@]}" > "$OUT/pooled.md"
+echo "wrote $OUT/pooled.md"

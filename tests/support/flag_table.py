@@ -234,8 +234,14 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
         Differs(_REPORT, ("--format", "json")),
         Refused((*_REPORT, "--summary", "--format", "json"), "--summary shows the diagnosis as md or latex"),
         Differs((*_REPORT, "--summary"), ("--format", "latex")),
+        Differs(("report", "--pool", "a={stored}"), ("--format", "csv")),
     ),
     "report --summary": (Differs(_REPORT, ("--summary",)),),
+    "report --pool": (
+        ProvenBy("tests/unit/test_pooled.py::test_the_cli_prints_the_pooled_table_in_the_format_asked"),
+        Differs(("report", "--pool", "a={stored}"), ("--pool", "b={same}")),
+        Refused((*_REPORT, "--pool", "a={same}"), "--pool prints the pooled table only"),
+    ),
     "report --no-published": (Differs(("report", "{stored}"), ("--no-published",)),),
     "report --allow-mismatch": (
         Differs((*_REPORT, "--compare", "{reseeded}"), ("--allow-mismatch",)),
@@ -243,6 +249,7 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
             (*_REPORT, "--summary", "--compare", "{reseeded}"),
             ("--allow-mismatch",),
         ),
+        Differs(("report", "--pool", "a={stored},{reseeded}"), ("--allow-mismatch",)),
     ),
     "report --html": (Differs(_REPORT, ("--html", "{dir}/html")),),
     "report --plots": (Differs(_REPORT, ("--plots", "{dir}/plots")),),

@@ -11,9 +11,18 @@ def add_parser(subparsers) -> None:
     parser.add_argument(
         "run",
         metavar="RUN",
-        nargs="+",
+        nargs="*",
         help="run directories, side by side (the first is the reference for comparisons; one policy's runs on "
         "several catalogs get a column group per catalog)",
+    )
+    parser.add_argument(
+        "--pool",
+        action="append",
+        default=[],
+        metavar="LABEL=RUN,RUN...",
+        help="replicate runs of one configuration (training seeds, say) counted together in one row of a pooled "
+        "table, beside each run's successes; repeat it for more rows. With --pool, the report is that table "
+        "(it shows no published rows)",
     )
     parser.add_argument("--compare", nargs="+", default=[], metavar="RUN2", help="more runs, side by side")
     parser.add_argument("--format", choices=sorted(FORMATS), default="md")
@@ -39,9 +48,36 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(handler=run)
 
 
-def run(args) -> int:
-    from langgap.report import diagnosis_text, load_runs, render, summarize
+def _pools(entries: list[str]) -> dict[str, list[str]]:
+    """`--pool LABEL=RUN,RUN...` entries as {label: runs}, in order."""
+    pools: dict[str, list[str]] = {}
+    for entry in entries:
+        name, sep, runs = entry.partition("=")
+        paths = [p for p in runs.split(",") if p]
+        if not sep or not name or not paths:
+            raise LangGapError(f"--pool takes LABEL=RUN,RUN...; got {entry!r}")
+        if name in pools:
+            raise LangGapError(f"--pool {name!r} is given twice: one row per label")
+        pools[name] = paths
+    return pools
 
+
+# What a pooled report leaves out: these options are about the runs of a full report.
+_NOT_POOLED = ("run", "compare", "summary", "no_published", "html", "plots", "episodes")
+
+
+def run(args) -> int:
+    from langgap.report import diagnosis_text, load_runs, pooled_text, render, summarize
+
+    if args.pool:
+        given = [name for name in _NOT_POOLED if getattr(args, name)]
+        if given:
+            shown = ", ".join("RUN" if n == "run" else "--" + n.replace("_", "-") for n in given)
+            raise LangGapError(f"--pool prints the pooled table only: name every run in a --pool, without {shown}")
+        print(pooled_text(_pools(args.pool), args.format, allow_mismatch=args.allow_mismatch), end="")
+        return 0
+    if not args.run:
+        raise LangGapError("name a run directory (or pool runs with --pool LABEL=RUN,RUN...)")
     paths = [*args.run, *args.compare]
     published = not args.no_published
     if args.summary:

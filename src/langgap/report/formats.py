@@ -8,7 +8,9 @@ import json
 from collections.abc import Callable
 from pathlib import Path
 
+from langgap.report.data import to_data
 from langgap.report.load import load_runs
+from langgap.report.pooled import PooledRow, pool, pooled_table
 from langgap.report.published import Published, load_published
 from langgap.report.sections import CSV_REPORT, DIAGNOSIS, FULL_REPORT, Layout, report_data, report_tables
 from langgap.report.summary import Summary, summarize
@@ -171,3 +173,30 @@ def diagnosis_text(
     summary = summarize(load_runs(paths), allow_mismatch=allow_mismatch)
     reference = load_published() if published else None
     return DIAGNOSIS_FORMATS[fmt](summary, reference, DIAGNOSIS)
+
+
+def _pooled_csv(rows: list[PooledRow]) -> str:
+    """Tidy CSV: one row per (pool, group, run), then the pool's own row (run `pooled`)."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer)
+    writer.writerow(["pool", "group", "run", "episodes", "successes", "rate", "ci_low", "ci_high", "gaps"])
+    for row in rows:
+        for cell in row.cells:
+            for run, rate in [*zip(row.runs, cell.replicates, strict=True), ("pooled", cell.pooled)]:
+                low, high = rate.ci
+                figures = [rate.episodes, rate.successes, f"{rate.rate:.4f}", f"{low:.4f}", f"{high:.4f}", rate.gaps]
+                writer.writerow([row.label, cell.group, str(run), *figures])
+    return buffer.getvalue()
+
+
+POOLED_FORMATS: dict[str, Callable[[list[PooledRow]], str]] = {
+    "md": lambda rows: markdown_table(pooled_table(rows)),
+    "latex": lambda rows: latex_table(pooled_table(rows)),
+    "json": lambda rows: json.dumps(to_data(rows), indent=1),
+    "csv": _pooled_csv,
+}
+
+
+def pooled_text(pools: dict[str, list[str | Path]], fmt: str = "md", *, allow_mismatch: bool = False) -> str:
+    """The pooled table of replicate runs (`langgap.report.pooled.pool`) in `fmt` (a name in `POOLED_FORMATS`)."""
+    return POOLED_FORMATS[fmt](pool(pools, allow_mismatch=allow_mismatch))
