@@ -23,19 +23,17 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int:
     from langgap.demos.hdf5 import write_hdf5
-    from langgap.demos.render import IMAGE_SIZE
-    from langgap.sim.env import EnvOptions
+    from langgap.demos.render import checked_image_size
 
     for flag, value in (("--workers", args.workers), ("--image-size", args.image_size)):
         if value is not None and not args.images:
             raise LangGapError(f"{flag} is about rendered images: it needs --images")
-    if args.image_size is not None:
-        EnvOptions(image_size=args.image_size)  # the sizes LangGap renders: anything else is refused here
+    image_size = checked_image_size(args.image_size)
     paths = write_hdf5(
         args.collection,
         out=args.out,
         images=args.images,
-        image_size=args.image_size or IMAGE_SIZE,
+        image_size=image_size,
         workers=1 if args.workers is None else args.workers,
         progress=not args.no_progress,
         force=args.force,

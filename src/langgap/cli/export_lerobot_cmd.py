@@ -16,14 +16,12 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int:
     from langgap.demos.export import write_lerobot_dataset
-    from langgap.demos.render import IMAGE_SIZE
-    from langgap.sim.env import EnvOptions
+    from langgap.demos.render import checked_image_size
 
-    if args.image_size is not None:
-        EnvOptions(image_size=args.image_size)  # the sizes LangGap renders: anything else is refused before rendering
+    image_size = checked_image_size(args.image_size)
     # No --repo-id: LeRobot keeps a dataset's repo id only to upload it, and nothing is uploaded.
     path = write_lerobot_dataset(
-        args.collection, workers=args.workers, image_size=args.image_size or IMAGE_SIZE, progress=not args.no_progress
+        args.collection, workers=args.workers, image_size=image_size, progress=not args.no_progress
     )
     print(f"wrote the LeRobot dataset to {path}")
     return 0

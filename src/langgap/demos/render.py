@@ -29,6 +29,19 @@ if TYPE_CHECKING:
     from langgap.sim.env import TaskEnv
 
 IMAGE_SIZE = 256
+
+
+def checked_image_size(size: int | None) -> int:
+    """`size` if LangGap renders it (`EnvOptions` refuses any other before anything is rendered), `IMAGE_SIZE`
+    when None."""
+    if size is None:
+        return IMAGE_SIZE
+    from langgap.sim.env import EnvOptions
+
+    EnvOptions(image_size=size)
+    return size
+
+
 # Recorded with exported images (HDF5 attributes) so a reader need not guess.
 IMAGE_ORIENTATION = (
     "upright: the raw MuJoCo render rotated 180 degrees (raw[::-1, ::-1]), as lerobot/libero and openpi; "
