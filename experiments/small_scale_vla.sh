@@ -22,8 +22,9 @@
 # steps, default 3000), BATCH (frames per step, default 64), THREADS (training threads, default 2), EPISODES (per
 # task, default 10), WORKERS (default 2), SEEDS (training seeds, default "0 1 2"; seed 0 writes <name>.safetensors
 # and runs/<name>, seed N <name>-seedN.*), CONFIGS (the policies to train, in order; default "original extended mixed
-# diluted": a subset runs one row over every seed first, and the report compares the first with the rest and
-# `blind`). Every step's wall time is appended to OUT/times.tsv; OUT/pooled.md is the results table (every finished
+# diluted": a subset runs one row over every seed first). Each seed's report (OUT/report.md, OUT/report-seedN.md)
+# compares every finished policy of that seed, in that order, those of earlier invocations too, with `blind`.
+# Every step's wall time is appended to OUT/times.tsv; OUT/pooled.md is the results table (every finished
 # run of each policy pooled over its seeds: `langgap report --pool`).
 # Needs `langgap` with the train and hdf5 extras on PATH (source .venv/bin/activate).
 set -euo pipefail
@@ -94,7 +95,6 @@ train() {  # train NAME SEED
 evaluate blind "$SCENE" blind
 for seed in $SEEDS; do
     s=$(suffix "$seed")
-    runs=()
     for name in $CONFIGS; do
         if [ "$name" = diluted ]; then
             collect "$OUT/demos-originals" "original&!$SCENE" "$ORIGINAL_DEMOS"  # the other 39 scenes' originals
@@ -102,7 +102,10 @@ for seed in $SEEDS; do
         fi
         train "$name" "$seed"
         evaluate "$name$s" "$SCENE" small-vla "checkpoint=$OUT/$name$s.safetensors"
-        runs+=("$OUT/runs/$name$s")
+    done
+    runs=()  # every finished policy of this seed, those of earlier invocations too: a CONFIGS subset loses none
+    for name in original extended mixed diluted; do
+        [ -f "$OUT/runs/$name$s/complete" ] && runs+=("$OUT/runs/$name$s")
     done
     langgap report "${runs[0]}" --compare "${runs[@]:1}" "$OUT/runs/blind" > "$OUT/report$s.md"
     echo "wrote $OUT/report$s.md"
