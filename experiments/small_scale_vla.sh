@@ -39,12 +39,13 @@ THREADS="${THREADS:-2}"
 EPISODES="${EPISODES:-10}"
 WORKERS="${WORKERS:-2}"
 SEEDS="${SEEDS:-0 1 2}"
-CONFIGS="${CONFIGS:-original extended mixed diluted}"
+POLICIES="original extended mixed diluted"  # the order of every report and of the results table
+CONFIGS="${CONFIGS:-$POLICIES}"
 SCENE="spatial/s0/*"
 declare -A TRAIN=([original]="$SCENE&original" [extended]="$SCENE&train" [mixed]="$SCENE&original,$SCENE&train"
     [diluted]="original,$SCENE&train")
 for name in $CONFIGS; do
-    [ -n "${TRAIN[$name]:-}" ] || { echo "error: CONFIGS: unknown policy '$name' (known: ${!TRAIN[*]})" >&2; exit 2; }
+    [ -n "${TRAIN[$name]:-}" ] || { echo "error: CONFIGS: unknown policy '$name' (known: $POLICIES)" >&2; exit 2; }
 done
 if [ -n "${LANGGAP_SMOKE:-}" ] && [ "$SEEDS" != "${SEEDS%% *}" ]; then  # every command shrinks itself; so do the seeds
     echo "note: LANGGAP_SMOKE is set, so this script is shrunk: SEEDS '$SEEDS' -> '${SEEDS%% *}'" >&2
@@ -104,7 +105,7 @@ for seed in $SEEDS; do
         evaluate "$name$s" "$SCENE" small-vla "checkpoint=$OUT/$name$s.safetensors"
     done
     runs=()  # every finished policy of this seed, those of earlier invocations too: a CONFIGS subset loses none
-    for name in original extended mixed diluted; do
+    for name in $POLICIES; do
         [ -f "$OUT/runs/$name$s/complete" ] && runs+=("$OUT/runs/$name$s")
     done
     langgap report "${runs[0]}" --compare "${runs[@]:1}" "$OUT/runs/blind" > "$OUT/report$s.md"
@@ -115,7 +116,7 @@ done
 # invocations too), with each seed's successes beside the pooled rate.
 shopt -s nullglob
 pools=(--pool "blind=$OUT/runs/blind")
-for name in original extended mixed diluted; do
+for name in $POLICIES; do
     finished=("$OUT/runs/$name"-seed*/complete)  # seed 0's plain name first (a literal path: nullglob keeps it)
     [ -f "$OUT/runs/$name/complete" ] && finished=("$OUT/runs/$name/complete" "${finished[@]}")
     [ ${#finished[@]} -gt 0 ] || continue
