@@ -71,8 +71,9 @@ collect() {  # collect DIR SELECTION DEMOS
 }
 images() {  # images DIR: both cameras at SIZE px, rendered by replaying the demonstrations' states
     [ -f "$1/hdf5/complete" ] && return
+    # --resume: the tasks an interrupted render finished are kept (checked to be of this collection and SIZE).
     timed "images $(basename "$1")" langgap export-hdf5 "$1" --images --image-size "$SIZE" --workers "$WORKERS" \
-        --no-progress --force
+        --no-progress --resume
     touch "$1/hdf5/complete"
 }
 collect "$OUT/demos" "$SCENE&original,$SCENE&train" "$DEMOS"

@@ -28,7 +28,7 @@ STOVE_TASK = "spatial/s0/black-bowl-1-on-stove"  # same scene as TINY_TASK, anot
 def exported(tiny_collection, tmp_path_factory):
     """The tiny collection (one task, two demonstrations) exported without images."""
     out = tmp_path_factory.mktemp("hdf5")
-    return write_hdf5(tiny_collection, out=out, progress=False)
+    return write_hdf5(tiny_collection, out=out, progress=False).written
 
 
 @pytest.fixture(scope="module")
@@ -37,7 +37,7 @@ def pair(tmp_path_factory):
     root = tmp_path_factory.mktemp("pair") / "c"
     config = CollectConfig("langgap99", (TINY_TASK, STOVE_TASK), demos=1, seed=7, noise=0.2)
     collect(config, root, ExecutionOptions(workers=0, progress=False))
-    return root, write_hdf5(root, out=root / "h5", progress=False)
+    return root, write_hdf5(root, out=root / "h5", progress=False).written
 
 
 @pytest.fixture(scope="module")
@@ -49,7 +49,7 @@ def with_images(tmp_path_factory):
         root,
         ExecutionOptions(workers=0, progress=False),
     )
-    return root, write_hdf5(root, out=root / "h5", images=True, workers=0, progress=False)[0]
+    return root, write_hdf5(root, out=root / "h5", images=True, workers=0, progress=False).written[0]
 
 
 def demo_from_hdf5(data, index: int, *, init_only: bool = False) -> Demo:
@@ -173,6 +173,7 @@ def test_cli_refuses_to_overwrite_and_rejects_what_is_not_a_collection(tiny_coll
     again = run_cli("export-hdf5", str(root), "--no-progress")
     assert again.returncode == 2 and len(again.stderr.splitlines()) == 1
     assert again.stderr.startswith(f"error: {path} exists already") and "--force" in again.stderr
+    assert "--resume" in again.stderr
     forced = run_cli("export-hdf5", str(root), "--no-progress", "--force", "--out", str(root / "hdf5"))
     assert forced.returncode == 0, forced.stderr
     (tmp_path / "empty").mkdir()
@@ -187,6 +188,55 @@ def test_cli_refuses_to_overwrite_and_rejects_what_is_not_a_collection(tiny_coll
     assert broken.stderr.startswith(f"error: cannot read {tmp_path / 'broken' / 'collection.json'}")
 
 
+def test_resume_keeps_the_finished_files_and_writes_the_rest(pair, tmp_path):
+    root = tmp_path / "c"
+    shutil.copytree(pair[0], root)
+    out = root / "h5"
+    finished, missing = hdf5_path(out, TINY_TASK), hdf5_path(out, STOVE_TASK)
+    expected = {path: first_actions(path) for path in (finished, missing)}
+    missing.unlink()  # an export killed after its first task
+    inode = finished.stat().st_ino
+    resumed = run_cli("export-hdf5", str(root), "--out", str(out), "--no-progress", "--resume")
+    assert resumed.returncode == 0, resumed.stderr
+    assert resumed.stdout.strip() == f"wrote 1 HDF5 file(s) to {out} (kept 1 written before)"
+    assert finished.stat().st_ino == inode  # kept, not written again
+    for path, actions in expected.items():
+        np.testing.assert_array_equal(first_actions(path), actions)
+    assert sorted(out.iterdir()) == [finished, missing]
+    again = run_cli("export-hdf5", str(root), "--out", str(out), "--no-progress", "--resume")
+    assert again.returncode == 0 and again.stdout.startswith("wrote 0 HDF5 file(s)"), again.stderr
+
+
+def first_actions(path) -> np.ndarray:
+    with h5py.File(path, "r") as f:
+        return f["data/demo_0/actions"][()]
+
+
+def test_resume_refuses_files_of_other_settings_or_another_collection(pair, tmp_path):
+    root = tmp_path / "c"
+    shutil.copytree(pair[0], root)
+    out = root / "h5"
+    path = hdf5_path(out, TINY_TASK)
+    before = path.read_bytes()
+
+    def refused(*args: str) -> str:
+        result = run_cli("export-hdf5", str(root), "--out", str(out), "--no-progress", *args)
+        assert result.returncode == 2 and len(result.stderr.splitlines()) == 1, result.stderr
+        assert path.read_bytes() == before  # nothing was written
+        return result.stderr
+
+    assert refused("--resume", "--images", "--image-size", "64").startswith(
+        f"error: cannot resume: {path} has no images, this export asks for 64 px images; pass --force"
+    )
+    assert refused("--resume", "--force").startswith("error: --force replaces the existing files and --resume")
+    other = hdf5_path(out, STOVE_TASK)
+    other.write_bytes(b"not hdf5")
+    assert refused("--resume").startswith(f"error: cannot resume: {other} is not a LangGap HDF5 export")
+    manifest = json.loads((root / "collection.json").read_text())
+    (root / "collection.json").write_text(json.dumps({**manifest, "noise": 0.1}))
+    assert refused("--resume").startswith(f"error: cannot resume: {path} was exported from another collection")
+
+
 def test_a_failed_export_leaves_no_file_and_keeps_the_previous_one(tiny_collection, tmp_path, capsys):
     root = tmp_path / "c"
     shutil.copytree(tiny_collection, root)
@@ -197,7 +247,7 @@ def test_a_failed_export_leaves_no_file_and_keeps_the_previous_one(tiny_collecti
     assert "cannot read demonstration" in capsys.readouterr().err
     assert list(out.iterdir()) == []
     # With --force, a failure leaves the complete previous file in place.
-    good = write_hdf5(tiny_collection, out=out, progress=False)[0]
+    good = write_hdf5(tiny_collection, out=out, progress=False).written[0]
     before = good.read_bytes()
     assert main(["export-hdf5", str(root), "--out", str(out), "--no-progress", "--force"]) == 2
     assert sorted(out.iterdir()) == [good] and good.read_bytes() == before

@@ -371,6 +371,10 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
         Refused(("export-hdf5", "{collection}", "--images", "--image-size", "8"), "image size must be in 16..1024"),
     ),
     "export-hdf5 --force": (ProvenBy(_HDF5_CLI),),
+    "export-hdf5 --resume": (
+        ProvenBy("tests/test_hdf5.py::test_resume_keeps_the_finished_files_and_writes_the_rest"),
+        Refused(("export-hdf5", "{collection}", "--resume", "--force"), "--force replaces the existing files"),
+    ),
     "export-hdf5 --no-progress": (ProvenBy(_HDF5_CLI),),
     # -- train ------------------------------------------------------------------------------------------
     "train small-bc --config": (Refused((*_SMALL_BC, "--config", "{dir}/absent.yaml"), "absent.yaml"),),

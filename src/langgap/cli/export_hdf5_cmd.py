@@ -17,6 +17,11 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument("--workers", type=int, help="with --images: rendering processes (default: 1; 0: here)")
     parser.add_argument("--force", action="store_true", help="replace existing HDF5 files")
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="keep the files an earlier export of this collection with these settings wrote; write the rest",
+    )
     parser.add_argument("--no-progress", action="store_true")
     parser.set_defaults(handler=run, smoke=("workers",))
 
@@ -29,7 +34,7 @@ def run(args) -> int:
         if value is not None and not args.images:
             raise LangGapError(f"{flag} is about rendered images: it needs --images")
     image_size = checked_image_size(args.image_size)
-    paths = write_hdf5(
+    export = write_hdf5(
         args.collection,
         out=args.out,
         images=args.images,
@@ -37,6 +42,8 @@ def run(args) -> int:
         workers=1 if args.workers is None else args.workers,
         progress=not args.no_progress,
         force=args.force,
+        resume=args.resume,
     )
-    print(f"wrote {len(paths)} HDF5 file(s) to {paths[0].parent}")
+    kept = f" (kept {len(export.kept)} written before)" if args.resume else ""
+    print(f"wrote {len(export.written)} HDF5 file(s) to {export.out}{kept}")
     return 0

@@ -21,6 +21,7 @@ settle steps, which end in `states[0]`.
 from __future__ import annotations
 
 import json
+from collections.abc import Container
 from pathlib import Path
 
 import numpy as np
@@ -112,11 +113,15 @@ def write_manifest(root: Path, manifest: dict) -> None:
     tmp.replace(path)
 
 
-def demo_files(root: Path) -> list[Path]:
-    """All demonstration files of a collection, ordered by task id then seed (a stable dataset order)."""
+def demo_files(root: Path, *, skip: Container[str] = ()) -> list[Path]:
+    """All demonstration files of a collection, ordered by task id then seed (a stable dataset order), but those
+    of the tasks in `skip`."""
     manifest = read_manifest(root)
     return [
-        demo_path(root, task_id, seed) for task_id, stats in sorted(manifest["tasks"].items()) for seed in stats["kept"]
+        demo_path(root, task_id, seed)
+        for task_id, stats in sorted(manifest["tasks"].items())
+        if task_id not in skip
+        for seed in stats["kept"]
     ]
 
 

@@ -29,6 +29,7 @@ import itertools
 import json
 import os
 from collections.abc import Iterable
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +52,15 @@ ROBOT = "Panda"
 CONTROLLER = "OSC_POSE"
 ROBOSUITE_ENV_TYPE = 1  # robomimic's EnvType.ROBOSUITE_TYPE (LIBERO's files say the same)
 GZIP_LEVEL = 4
+
+
+@dataclass(frozen=True)
+class HDF5Export:
+    """What `write_hdf5` did: the directory, the files it wrote and those it kept (`resume`), in task order."""
+
+    out: Path
+    written: list[Path]
+    kept: list[Path]
 
 
 def require_h5py():
@@ -83,32 +93,48 @@ def write_hdf5(
     workers: int = 1,
     progress: bool = True,
     force: bool = False,
-) -> list[Path]:
-    """Write the collection at `root` as one HDF5 file per task in `out` (default `root/hdf5`); returns them.
+    resume: bool = False,
+) -> HDF5Export:
+    """Write the collection at `root` as one HDF5 file per task in `out` (default `root/hdf5`).
 
     `images` renders both cameras (`image_size` square) by replaying the recorded states, in `workers` processes
     (0: here).
-    Each file is written under a temporary name and renamed when complete. Existing files are replaced only
-    with `force`; without it, any one of them stops the export before anything is written.
+    Each file is written under a temporary name and renamed when complete, so a file with its final name is
+    whole. Existing files are replaced only with `force`; with `resume`, those written from this collection
+    with these settings are kept and only the missing ones are written (an interrupted export with images
+    continues instead of rendering everything again). Without either, any existing file stops the export
+    before anything is written; so does, with `resume`, one written from elsewhere or with other settings.
     """
+    if force and resume:
+        raise LangGapError("--force replaces the existing files and --resume keeps them: pass one of them")
     h5py = require_h5py()
     root = Path(root)
     manifest = read_manifest(root)
-    paths = demo_files(root)
-    if not paths:
-        raise LangGapError(f"{root} holds no demonstrations")
     out = Path(out) if out is not None else root / HDF5_DIR
     targets = {task_id: hdf5_path(out, task_id) for task_id, stats in manifest["tasks"].items() if stats["kept"]}
-    existing = [path for path in targets.values() if path.exists()]
-    if existing and not force:
+    if not targets:
+        raise LangGapError(f"{root} holds no demonstrations")
+    settings = {key: value for key, value in manifest.items() if key != "tasks"}
+    collections = {task_id: {**settings, "task": manifest["tasks"][task_id]} for task_id in targets}
+    existing = {task_id: path for task_id, path in targets.items() if path.exists()}
+    if existing and not (force or resume):
         more = f" (and {len(existing) - 1} more)" if len(existing) > 1 else ""
-        raise LangGapError(f"{existing[0]} exists already{more}; pass --force to overwrite")
+        raise LangGapError(
+            f"{next(iter(existing.values()))} exists already{more}; pass --resume to keep what is written "
+            "and add the rest, or --force to overwrite"
+        )
+    kept = {}
+    if resume:
+        size = image_size if images else 0
+        for task_id, path in existing.items():
+            _check_resumable(h5py, path, collections[task_id], size)
+        kept = existing
     catalog = load_catalog(manifest["catalog"])
     out.mkdir(parents=True, exist_ok=True)
+    paths = demo_files(root, skip=kept)
     demos = iter_demos(
         manifest["catalog"], paths, render=images, workers=workers, progress=progress, image_size=image_size
     )
-    settings = {key: value for key, value in manifest.items() if key != "tasks"}
     written = []
     # `paths` is ordered by task, so each task's demonstrations arrive together.
     for task_id, group in itertools.groupby(demos, key=lambda item: item[0].task_id):
@@ -116,12 +142,37 @@ def write_hdf5(
             _write_task,
             task=catalog.get(task_id),
             demos=group,
-            collection={**settings, "task": manifest["tasks"][task_id]},
+            collection=collections[task_id],
             image_size=image_size if images else 0,
         )
         _write_atomically(h5py, targets[task_id], write)
         written.append(targets[task_id])
-    return written
+    return HDF5Export(out=out, written=written, kept=sorted(kept.values()))
+
+
+def _check_resumable(h5py, path: Path, collection: dict, image_size: int) -> None:
+    """Raise unless the file at `path` was exported from this task of `collection` with `image_size` (0: none)."""
+    try:
+        with h5py.File(path, "r") as f:
+            attrs = f["data"].attrs
+            written_from = json.loads(attrs["langgap_collection"])
+            env_kwargs = json.loads(attrs["env_args"])["env_kwargs"]
+    except (OSError, KeyError, ValueError) as exc:
+        raise LangGapError(
+            f"cannot resume: {path} is not a LangGap HDF5 export ({exc}); pass --force to replace it"
+        ) from None
+    written_size = env_kwargs.get("camera_heights", 0)
+    if written_from != json.loads(json.dumps(collection)):  # compared as stored: JSON has no tuples
+        raise LangGapError(f"cannot resume: {path} was exported from another collection; pass --force to replace it")
+    if written_size != image_size:
+        raise LangGapError(
+            f"cannot resume: {path} has {_images(written_size)}, this export asks for {_images(image_size)}; "
+            "pass --force to replace it"
+        )
+
+
+def _images(size: int) -> str:
+    return f"{size} px images" if size else "no images"
 
 
 def _write_atomically(h5py, path: Path, write) -> None:
