@@ -11,7 +11,7 @@ import pytest
 from langgap.cli.main import main
 from langgap.errors import LangGapError
 from langgap.report import pooled_text
-from langgap.report.pooled import pool
+from langgap.report.pooled import pool, replicate_tests
 from langgap.report.stats import wilson
 from tests.support.reports import memoriser, reader, write_run
 
@@ -56,7 +56,7 @@ def test_the_table_shows_pooled_rates_with_intervals_and_each_runs_successes(rep
 def test_json_and_csv_hold_the_same_counts(replicates):
     pools = {"vla": [replicates["memorising"], replicates["reading"]]}
     data = json.loads(pooled_text(pools, "json"))
-    train = next(c for c in data[0]["cells"] if c["group"] == "train")
+    train = next(c for c in data["pools"][0]["cells"] if c["group"] == "train")
     assert train["pooled"]["successes"] == 4 and [r["successes"] for r in train["replicates"]] == [0, 4]
     rows = [r for r in csv.DictReader(io.StringIO(pooled_text(pools, "csv"))) if r["group"] == "train"]
     assert [(r["run"], r["successes"]) for r in rows] == [
@@ -64,6 +64,36 @@ def test_json_and_csv_hold_the_same_counts(replicates):
         (str(replicates["reading"]), "4"),
         ("pooled", "4"),
     ]
+
+
+def test_pools_of_several_runs_are_compared_over_their_runs(replicates, tmp_path):
+    pools = {
+        "memorising": [replicates["memorising"], write_run(tmp_path / "m1", "my-vla", memoriser())],
+        "reading": [replicates["reading"], write_run(tmp_path / "r1", "my-vla", reader())],
+        "blind": [replicates["blind"]],  # one run: no spread to test against
+    }
+    tests = replicate_tests(pool(pools))
+    # The original task: every run of both pools at 100 %, nothing to test.
+    assert [(t.first, t.second, t.group) for t in tests] == [
+        ("memorising", "reading", "train"),
+        ("memorising", "reading", "heldout"),
+        ("memorising", "reading", "did_source_task"),
+    ]
+    train = tests[0]
+    assert (train.first_rates, train.second_rates, train.difference) == ((0.0, 0.0), (1.0, 1.0), 1.0)
+    # 2 of the C(4, 2) = 6 ways to split four runs in two are as far apart: two runs a side can give no less.
+    assert train.p == pytest.approx(1 / 3) and train.floor == pytest.approx(1 / 3)
+    text = pooled_text(pools)
+    assert "### Between pools over their runs" in text
+    assert (
+        "| memorising vs reading | Extended, training split | 0.0, 0.0 | 100.0, 100.0 | +100.0 | 0.333 | 0.333 |"
+        in text
+    )
+    data = json.loads(pooled_text(pools, "json"))
+    assert [row["label"] for row in data["pools"]] == ["memorising", "reading", "blind"]
+    assert [t["group"] for t in data["tests"]] == ["train", "heldout", "did_source_task"]
+    alone = pooled_text({"memorising": pools["memorising"], "blind": pools["blind"]})
+    assert "Between pools" not in alone  # one pool with several runs: nothing to compare
 
 
 def test_a_pool_is_one_configuration_on_one_protocol(replicates, tmp_path):

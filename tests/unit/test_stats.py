@@ -8,7 +8,16 @@ import math
 import pytest
 
 from langgap.report.data import to_data
-from langgap.report.stats import PairedTest, Rate, cohen_kappa, mcnemar_exact, minimum_detectable_effect, wilson
+from langgap.report.stats import (
+    PairedTest,
+    Rate,
+    cohen_kappa,
+    mcnemar_exact,
+    minimum_detectable_effect,
+    permutation_floor,
+    permutation_p,
+    wilson,
+)
 
 
 @pytest.mark.parametrize(
@@ -85,3 +94,26 @@ def test_paired_agreement_and_kappa_come_from_the_pairs_and_are_reported_for_a_r
     assert to_data(test)["agreement"] == pytest.approx(0.7) and to_data(test)["kappa"] == pytest.approx(0.4)
     other = dataclasses.replace(test, retest=False)  # two different runs: agreement is no test-retest figure
     assert to_data(other)["agreement"] is None and to_data(other)["kappa"] is None
+
+
+@pytest.mark.parametrize(
+    ("a", "b", "p"),
+    [
+        ([1, 2, 3], [4, 5, 6], 0.1),  # the two most extreme of C(6, 3) = 20 splits
+        ([0, 0, 1], [1, 1, 1], 0.4),  # ties: 8 of 20 splits (both zeros on one side) are as far apart
+        ([0.9, 0.4, 0.9], [0.8, 1.0, 1.0], 0.5),
+        ([0, 0], [0, 0], 1.0),
+        ([0.2, 0.4, 0.6], [0.5], 0.75),  # 3 of the 4 splits: all but the one that sets 0.4 apart
+    ],
+)
+def test_the_permutation_test_counts_the_splits_at_least_as_extreme(a, b, p):
+    assert permutation_p(a, b) == pytest.approx(p)
+    assert permutation_p(b, a) == pytest.approx(p)  # two-sided: the order of the samples does not matter
+
+
+def test_the_permutation_test_has_a_floor_and_a_limit():
+    assert permutation_floor(3, 3) == pytest.approx(0.1) and permutation_floor(3, 2) == pytest.approx(0.1)
+    assert permutation_floor(5, 5) == pytest.approx(2 / 252)
+    assert permutation_p([0.1, 0.2, 0.3, 0.4, 0.5], [0.6, 0.7, 0.8, 0.9, 1.0]) == pytest.approx(2 / 252)
+    assert permutation_p([0.0] * 13, [1.0] * 13) is None  # C(26, 13) splits: more than it enumerates
+    assert permutation_p([], [1.0]) is None

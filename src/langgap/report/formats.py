@@ -10,7 +10,7 @@ from pathlib import Path
 
 from langgap.report.data import to_data
 from langgap.report.load import load_runs
-from langgap.report.pooled import PooledRow, pool, pooled_table
+from langgap.report.pooled import PooledRow, pool, pooled_table, replicate_tests, replicate_tests_table
 from langgap.report.published import Published, load_published
 from langgap.report.sections import CSV_REPORT, DIAGNOSIS, FULL_REPORT, Layout, report_data, report_tables
 from langgap.report.summary import Summary, summarize
@@ -189,10 +189,17 @@ def _pooled_csv(rows: list[PooledRow]) -> str:
     return buffer.getvalue()
 
 
+def _pooled_tables(rows: list[PooledRow], render: Callable[[Table], str]) -> str:
+    """The pooled table, then the tests between pools over their runs (when two pools have several runs)."""
+    tests = replicate_tests(rows)
+    tables = [pooled_table(rows), *([replicate_tests_table(tests)] if tests else [])]
+    return "\n".join(render(table) for table in tables)
+
+
 POOLED_FORMATS: dict[str, Callable[[list[PooledRow]], str]] = {
-    "md": lambda rows: markdown_table(pooled_table(rows)),
-    "latex": lambda rows: latex_table(pooled_table(rows)),
-    "json": lambda rows: json.dumps(to_data(rows), indent=1),
+    "md": lambda rows: _pooled_tables(rows, markdown_table),
+    "latex": lambda rows: _pooled_tables(rows, latex_table),
+    "json": lambda rows: json.dumps(to_data({"pools": rows, "tests": replicate_tests(rows)}), indent=1),
     "csv": _pooled_csv,
 }
 

@@ -2,11 +2,14 @@
 episodes counted together, beside each replicate's own count.
 
 A pool's rate has a Wilson interval over its pooled episodes; that interval is about episodes only and does not
-cover the spread between replicates, which is why each replicate's successes are shown beside it.
+cover the spread between replicates, which is why each replicate's successes are shown beside it, and why two
+pools are also compared over their replicates (an exact permutation test on the replicates' rates: the
+replicates, not the episodes, are the samples).
 """
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 from pathlib import Path
 from typing import ClassVar
@@ -15,7 +18,7 @@ from langgap.catalog.labels import SPLIT_LABEL, SPLIT_ORDER, label
 from langgap.errors import LangGapError
 from langgap.report.data import Spec
 from langgap.report.load import load_runs
-from langgap.report.stats import Rate
+from langgap.report.stats import Rate, permutation_floor, permutation_p
 from langgap.report.summary import RunResults, protocol_differences, results
 from langgap.report.tables import Table, rate_cell
 from langgap.vocabulary import Outcome
@@ -116,6 +119,71 @@ def pool(pools: dict[str, list[str | Path]], *, allow_mismatch: bool = False) ->
             cells.append(PooledCell(group, pooled_rate(rates), tuple(rates)))
         rows.append(PooledRow(name, tuple(Path(p) for p in paths), tuple(cells)))
     return rows
+
+
+@dataclass(frozen=True)
+class ReplicateTest:
+    """Two pools compared on one group over their replicates: each replicate's rate, the difference of the
+    means (second minus first), the exact permutation p-value (None: too many splits to enumerate) and the
+    smallest p-value these numbers of replicates can give."""
+
+    first: str
+    second: str
+    group: str
+    first_rates: tuple[float, ...]
+    second_rates: tuple[float, ...]
+    difference: float
+    p: float | None
+    floor: float
+
+
+def replicate_tests(rows: list[PooledRow]) -> list[ReplicateTest]:
+    """Every pair of pools with at least two replicates each, on every group both have episodes in, but the
+    groups where every replicate of both pools has the same rate (nothing to test)."""
+    tests = []
+    for first, second in itertools.combinations([row for row in rows if len(row.runs) >= 2], 2):
+        for group in _order({c.group for c in first.cells} & {c.group for c in second.cells}):
+            a = tuple(r.rate for r in first.cell(group).replicates if r.episodes)
+            b = tuple(r.rate for r in second.cell(group).replicates if r.episodes)
+            if len(a) < 2 or len(b) < 2 or len({*a, *b}) == 1:
+                continue
+            difference = sum(b) / len(b) - sum(a) / len(a)
+            tests.append(
+                ReplicateTest(
+                    first.label,
+                    second.label,
+                    group,
+                    a,
+                    b,
+                    difference,
+                    permutation_p(a, b),
+                    permutation_floor(len(a), len(b)),
+                )
+            )
+    return tests
+
+
+def replicate_tests_table(tests: list[ReplicateTest]) -> Table:
+    """A row per pair of pools and group: each replicate's rate, the difference of means, p and its floor."""
+
+    def rates(values: tuple[float, ...]) -> str:
+        return ", ".join(f"{100 * v:.1f}" for v in values)
+
+    rows = [
+        [
+            f"{t.first} vs {t.second}",
+            label(GROUP_LABEL, t.group),
+            rates(t.first_rates),
+            rates(t.second_rates),
+            f"{100 * t.difference:+.1f}",
+            "–" if t.p is None else f"{t.p:.3g}",
+            f"{t.floor:.3g}",
+        ]
+        for t in tests
+    ]
+    headers = ["Pools", "Group", "First pool's runs %", "Second pool's runs %", "Difference of means (points)",
+               "p (exact permutation over runs)", "Smallest p possible"]  # fmt: skip
+    return Table("Between pools over their runs (each run one sample; two-sided exact permutation test)", headers, rows)
 
 
 def pooled_table(rows: list[PooledRow]) -> Table:

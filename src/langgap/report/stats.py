@@ -1,8 +1,11 @@
-"""The statistics of reports: Wilson intervals for rates, exact McNemar tests for paired episodes."""
+"""The statistics of reports: Wilson intervals for rates, exact McNemar tests for paired episodes, exact
+permutation tests between replicate runs."""
 
 from __future__ import annotations
 
+import itertools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -30,6 +33,38 @@ def mcnemar_exact(only_a: int, only_b: int) -> float:
     k = min(only_a, only_b)
     tail = sum(math.comb(n, i) for i in range(k + 1)) / 2**n
     return min(1.0, 2 * tail)
+
+
+# Above this many ways to split the runs, `permutation_p` is not computed (it enumerates them all).
+PERMUTATION_LIMIT = 1_000_000
+
+
+def permutation_p(a: Sequence[float], b: Sequence[float]) -> float | None:
+    """Two-sided exact permutation test of two samples' means: the share of all ways to split the pooled
+    values into groups of `len(a)` and `len(b)` whose difference of means is at least the observed one.
+    None when either sample is empty or there are more than `PERMUTATION_LIMIT` splits."""
+    values = [*a, *b]
+    splits = math.comb(len(values), len(a))
+    if not a or not b or splits > PERMUTATION_LIMIT:
+        return None
+    total = sum(values)
+
+    def difference(first_sum: float) -> float:
+        return abs(first_sum / len(a) - (total - first_sum) / len(b))
+
+    observed = difference(sum(a))
+    # A relative tolerance: the same split reached in another order must count as at least as extreme.
+    extreme = sum(
+        difference(sum(values[i] for i in chosen)) >= observed * (1 - 1e-9)
+        for chosen in itertools.combinations(range(len(values)), len(a))
+    )
+    return extreme / splits
+
+
+def permutation_floor(n_a: int, n_b: int) -> float:
+    """The smallest p-value `permutation_p` can give for samples of these sizes (distinct values): the most
+    extreme split alone, and its mirror image too when the sizes are equal."""
+    return (2 if n_a == n_b else 1) / math.comb(n_a + n_b, n_a)
 
 
 def cohen_kappa(both: int, only_a: int, only_b: int, neither: int) -> float | None:
