@@ -163,7 +163,10 @@ def _check_resumable(h5py, path: Path, collection: dict, image_size: int) -> Non
         ) from None
     written_size = env_kwargs.get("camera_heights", 0)
     if written_from != json.loads(json.dumps(collection)):  # compared as stored: JSON has no tuples
-        raise LangGapError(f"cannot resume: {path} was exported from another collection; pass --force to replace it")
+        raise LangGapError(
+            f"cannot resume: {path} was exported from another collection, or from this one before it changed; "
+            "pass --force to replace it"
+        )
     if written_size != image_size:
         raise LangGapError(
             f"cannot resume: {path} has {_images(written_size)}, this export asks for {_images(image_size)}; "
