@@ -123,11 +123,11 @@ def write_hdf5(
             f"{next(iter(existing.values()))} exists already{more}; pass --resume to keep what is written "
             "and add the rest, or --force to overwrite"
         )
+    stored_size = image_size if images else 0  # what a file records: 0 for one without images
     kept = {}
     if resume:
-        size = image_size if images else 0
         for task_id, path in existing.items():
-            _check_resumable(h5py, path, collections[task_id], size)
+            _check_resumable(h5py, path, collections[task_id], stored_size)
         kept = existing
     catalog = load_catalog(manifest["catalog"])
     out.mkdir(parents=True, exist_ok=True)
@@ -143,7 +143,7 @@ def write_hdf5(
             task=catalog.get(task_id),
             demos=group,
             collection=collections[task_id],
-            image_size=image_size if images else 0,
+            image_size=stored_size,
         )
         _write_atomically(h5py, targets[task_id], write)
         written.append(targets[task_id])
