@@ -20,7 +20,7 @@ from langgap.report.data import Spec
 from langgap.report.load import load_runs
 from langgap.report.stats import Rate, permutation_floor, permutation_p
 from langgap.report.summary import RunResults, protocol_differences, results
-from langgap.report.tables import Table, rate_cell
+from langgap.report.tables import Table, pct, rate_cell
 from langgap.vocabulary import Outcome
 
 # The pooled table's last column: the extended episodes that did the scene's original task instead.
@@ -165,16 +165,12 @@ def replicate_tests(rows: list[PooledRow]) -> list[ReplicateTest]:
 
 def replicate_tests_table(tests: list[ReplicateTest]) -> Table:
     """A row per pair of pools and group: each replicate's rate, the difference of means, p and its floor."""
-
-    def rates(values: tuple[float, ...]) -> str:
-        return ", ".join(f"{100 * v:.1f}" for v in values)
-
     rows = [
         [
             f"{t.first} vs {t.second}",
             label(GROUP_LABEL, t.group),
-            rates(t.first_rates),
-            rates(t.second_rates),
+            ", ".join(map(pct, t.first_rates)),
+            ", ".join(map(pct, t.second_rates)),
             f"{100 * t.difference:+.1f}",
             "–" if t.p is None else f"{t.p:.3g}",
             f"{t.floor:.3g}",

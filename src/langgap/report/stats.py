@@ -62,8 +62,9 @@ def permutation_p(a: Sequence[float], b: Sequence[float]) -> float | None:
 
 
 def permutation_floor(n_a: int, n_b: int) -> float:
-    """The smallest p-value `permutation_p` can give for samples of these sizes (distinct values): the most
-    extreme split alone, and its mirror image too when the sizes are equal."""
+    """The smallest p-value `permutation_p` can give for samples of these sizes, whatever their values: the
+    observed split always counts itself, and its mirror image too when the sizes are equal (reached when the
+    values are distinct and the observed split is the most extreme)."""
     return (2 if n_a == n_b else 1) / math.comb(n_a + n_b, n_a)
 
 
