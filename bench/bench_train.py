@@ -2,7 +2,8 @@
 
 Trains `small-bc` (or `small-vla`) on a collection for `--steps` steps (default 100) and extrapolates to the step
 count of the small-scale reproduction (`experiments/small_scale.sh`, `experiments/small_scale_vla.sh`), whose every
-configuration must stay under its budget on 2 cores: 30 minutes for small-bc, 45 for small-vla.
+configuration must stay under its budget on 2 cores: 30 minutes for small-bc, 45 for small-vla. For small-vla it
+also prints the process's peak memory beside the size of the training images, which it holds in memory once.
 
     .venv/bin/python bench/bench_train.py --data DIR [--policy small-vla] [--steps N] [--threads T] [--batch-size B]
         [--target-steps N]
@@ -11,6 +12,7 @@ configuration must stay under its budget on 2 cores: 30 minutes for small-bc, 45
 from __future__ import annotations
 
 import argparse
+import resource
 import tempfile
 import time
 from pathlib import Path
@@ -50,6 +52,10 @@ def main() -> None:
         f"{args.target_steps} steps: {projected / 60:.1f} min on {args.threads} thread(s) "
         f"({'within' if projected <= budget * 60 else 'over'} the {budget}-min budget)"
     )
+    if args.policy == "small-vla":
+        images = facts["frames"] * 2 * facts["image_size"] ** 2 * 3  # uint8, both cameras
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024  # Linux reports KiB
+        print(f"peak memory {peak / 2**30:.2f} GiB; the images {images / 2**30:.2f} GiB ({peak / images:.2f}x)")
 
 
 if __name__ == "__main__":

@@ -30,6 +30,21 @@ class ImageDemo:
         return self.images.shape[2]
 
 
+def pack_images(demos: list[ImageDemo]) -> np.ndarray:
+    """Every demonstration's images, in order, as one (frames, 2, S, S, 3) array; each demonstration's `images`
+    becomes its view into that array. Training samples across demonstrations, so it needs one array; re-pointing
+    each demonstration as it is copied holds the frames in memory once, not twice (peak: the array plus one
+    demonstration's images)."""
+    packed = np.empty((sum(len(d.images) for d in demos), *demos[0].images.shape[1:]), np.uint8)
+    start = 0
+    for demo in demos:
+        end = start + len(demo.images)
+        packed[start:end] = demo.images
+        demo.images = packed[start:end]
+        start = end
+    return packed
+
+
 def _missing_images(root: Path) -> LangGapError:
     return LangGapError(
         f"{root} has no demonstrations with images: run `langgap export-hdf5 {root} --images --image-size N` first"
