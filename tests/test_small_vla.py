@@ -1,5 +1,6 @@
-"""small-vla: images exported at the policy's size, a tiny training run, determinism, the checkpoint round trip,
-what the policy declares it sees (a VLA's inputs, nothing privileged), and `langgap eval` in a worker."""
+"""small-vla: images exported at the policy's size and read into one array, a tiny training run, determinism, the
+checkpoint round trip, what the policy declares it sees (a VLA's inputs, nothing privileged), and `langgap eval` in a
+worker."""
 
 from __future__ import annotations
 
@@ -53,6 +54,22 @@ def test_images_are_exported_at_the_asked_size(collection):
                 images = group["obs"][key]
                 assert images.shape == (group.attrs["num_samples"], SIZE, SIZE, 3) and images.dtype == np.uint8
                 assert images[()].std() > 10  # a picture, not a blank
+
+
+def test_training_reads_the_images_into_one_array_held_once(collection):
+    from langgap.training.image_demos import load_image_demos
+
+    loaded = load_image_demos([collection])
+    (path,) = (collection / "hdf5").glob("*_demo.hdf5")
+    with h5py.File(path, "r") as f:
+        expected = [
+            np.stack([f["data"][name]["obs"][key][()] for key in ("agentview_rgb", "eye_in_hand_rgb")], axis=1)
+            for name in sorted(f["data"], key=lambda n: int(n.split("_")[1]))
+        ]
+    np.testing.assert_array_equal(loaded.frames, np.concatenate(expected))  # in order, agentview first
+    for demo, images in zip(loaded.demos, expected, strict=True):
+        np.testing.assert_array_equal(demo.images, images)
+        assert np.shares_memory(demo.images, loaded.frames)  # a view: every frame is in memory once
 
 
 def test_training_is_deterministic_and_checkpoint_round_trips(collection, checkpoint, tmp_path):

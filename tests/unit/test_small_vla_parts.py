@@ -1,5 +1,4 @@
-"""small-vla's training parts that need no simulator: chunk targets, the random image shift, the images packed
-once for training, the model's shapes."""
+"""small-vla's training parts that need no simulator: chunk targets, the random image shift, the model's shapes."""
 
 from __future__ import annotations
 
@@ -32,22 +31,6 @@ def test_random_shift_moves_each_image_within_its_padding():
     assert len(set(moved)) > 1  # not one shift for all
     again = random_shift(images, 2, torch.Generator().manual_seed(0))
     assert torch.equal(shifted, again)  # the generator decides: training is deterministic
-
-
-def test_packed_images_keep_the_order_and_are_held_once():
-    from langgap.training.image_demos import ImageDemo, pack_images
-
-    rng = np.random.default_rng(0)
-    demos = [
-        ImageDemo(f"t{i}", "do it", rng.integers(0, 256, (n, 2, 4, 4, 3), dtype=np.uint8), np.zeros((n, 8)), None)
-        for i, n in enumerate((3, 5, 2))
-    ]
-    originals = [d.images.copy() for d in demos]
-    packed = pack_images(demos)
-    np.testing.assert_array_equal(packed, np.concatenate(originals))
-    for demo, original in zip(demos, originals, strict=True):
-        np.testing.assert_array_equal(demo.images, original)
-        assert np.shares_memory(demo.images, packed)  # a view: the frames are in memory once, not twice
 
 
 def test_model_maps_images_state_and_sentence_to_a_chunk():

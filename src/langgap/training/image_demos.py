@@ -30,33 +30,32 @@ class ImageDemo:
         return self.images.shape[2]
 
 
-def pack_images(demos: list[ImageDemo]) -> np.ndarray:
-    """Every demonstration's images, in order, as one (frames, 2, S, S, 3) array; each demonstration's `images`
-    becomes its view into that array. Training samples across demonstrations, so it needs one array; re-pointing
-    each demonstration as it is copied holds the frames in memory once, not twice (peak: the array plus one
-    demonstration's images)."""
-    packed = np.empty((sum(len(d.images) for d in demos), *demos[0].images.shape[1:]), np.uint8)
-    start = 0
-    for demo in demos:
-        end = start + len(demo.images)
-        packed[start:end] = demo.images
-        demo.images = packed[start:end]
-        start = end
-    return packed
-
-
 def _missing_images(root: Path) -> LangGapError:
     return LangGapError(
         f"{root} has no demonstrations with images: run `langgap export-hdf5 {root} --images --image-size N` first"
     )
 
 
-def load_image_demos(roots: Iterable[str | Path], tasks: Iterable[str] | None = None) -> list[ImageDemo]:
+@dataclass
+class ImageDemos:
+    """Demonstrations with images and their frames in one array, the array training samples from; each
+    demonstration's `images` is its view into it, so every frame is in memory once."""
+
+    demos: list[ImageDemo]
+    frames: np.ndarray  # (all frames, 2, S, S, 3) uint8, the demonstrations' images in order
+
+
+def load_image_demos(roots: Iterable[str | Path], tasks: Iterable[str] | None = None) -> ImageDemos:
     """The demonstrations (with images) of every collection in `roots`, from its HDF5 form (`<root>/hdf5`), in
-    file and demonstration order; only `tasks`' files are read when given. Every image has one size."""
+    file and demonstration order; only `tasks`' files are read when given. Every image has one size.
+
+    A first pass reads the files' shapes, a second reads the images straight into one array: building it from
+    per-demonstration arrays would hold the frames twice while it is built, and the allocator keeps much of
+    that memory after they are freed."""
     h5py = require_h5py()
     wanted = None if tasks is None else set(tasks)
-    demos: list[ImageDemo] = []
+    found: list[tuple[Path, list[tuple[str, int]]]] = []  # each file to read, with its demonstrations' lengths
+    sizes: set[int] = set()
     for root in map(Path, roots):
         paths = sorted((root / HDF5_DIR).glob("*_demo.hdf5"))
         if not paths:
@@ -64,18 +63,33 @@ def load_image_demos(roots: Iterable[str | Path], tasks: Iterable[str] | None = 
         for path in paths:
             with h5py.File(path, "r") as f:
                 data = f["data"]
-                task_id = str(data.attrs["langgap_task_id"])
-                if wanted is not None and task_id not in wanted:
+                if wanted is not None and str(data.attrs["langgap_task_id"]) not in wanted:
                     continue
-                instruction = json.loads(data.attrs["problem_info"])["language_instruction"]
+                lengths = []
                 for name in sorted(data, key=lambda n: int(n.split("_")[1])):
-                    group = data[name]
-                    if any(key not in group["obs"] for key in IMAGE_KEYS.values()):
+                    obs = data[name]["obs"]
+                    if any(key not in obs for key in IMAGE_KEYS.values()):
                         raise _missing_images(root)
-                    images = np.stack([group["obs"][key][()] for key in IMAGE_KEYS.values()], axis=1)
-                    states = group["robot_states"][()].astype(np.float32)
-                    demos.append(ImageDemo(task_id, instruction, images, states, group["labels"][()]))
-    sizes = {demo.image_size for demo in demos}
+                    sizes.update(obs[key].shape[1] for key in IMAGE_KEYS.values())
+                    lengths.append((name, len(data[name]["labels"])))
+                found.append((path, lengths))
     if len(sizes) > 1:
         raise LangGapError(f"the collections' images differ in size ({sorted(sizes)}): export them at one size")
-    return demos
+    total = sum(length for _, lengths in found for _, length in lengths)
+    size = sizes.pop() if sizes else 0
+    frames = np.empty((total, len(IMAGE_KEYS), size, size, 3), np.uint8)
+    demos: list[ImageDemo] = []
+    start = 0
+    for path, lengths in found:
+        with h5py.File(path, "r") as f:
+            data = f["data"]
+            task_id = str(data.attrs["langgap_task_id"])
+            instruction = json.loads(data.attrs["problem_info"])["language_instruction"]
+            for name, length in lengths:
+                group, images = data[name], frames[start : start + length]
+                for camera, key in enumerate(IMAGE_KEYS.values()):
+                    group["obs"][key].read_direct(images, dest_sel=np.s_[:, camera])
+                states = group["robot_states"][()].astype(np.float32)
+                demos.append(ImageDemo(task_id, instruction, images, states, group["labels"][()]))
+                start += length
+    return ImageDemos(demos, frames)

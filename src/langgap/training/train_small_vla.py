@@ -17,7 +17,7 @@ import torch
 from langgap.errors import LangGapError
 from langgap.policies.small_vla.model import SmallVLA, StateNormalizer, VisionConfig, save_checkpoint
 from langgap.policies.text import Vocabulary
-from langgap.training.image_demos import ImageDemo, load_image_demos, pack_images
+from langgap.training.image_demos import ImageDemo, load_image_demos
 from langgap.training.loop import TrainConfig, chunk_loss, chunk_targets, optimise, selected, training_facts
 
 SHIFT = 4  # pixels, at 96 px (scaled with the image size)
@@ -40,7 +40,9 @@ def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=pri
     device = config.torch_device()
     torch.set_num_threads(config.threads)
     torch.manual_seed(config.seed)
-    demos: list[ImageDemo] = selected(config, load_image_demos(config.data, config.tasks), log)
+    loaded = load_image_demos(config.data, config.tasks)
+    # The loader read only the selected tasks, so the selection checks and notes; it drops nothing.
+    demos: list[ImageDemo] = selected(config, loaded.demos, log)
     size = demos[0].image_size
     model_config = config.model or VisionConfig(image_size=size)
     if model_config.image_size != size:
@@ -50,7 +52,7 @@ def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=pri
         )
     vocab = Vocabulary.from_texts(d.instruction for d in demos)
     targets = [chunk_targets(d.labels, model_config.chunk) for d in demos]
-    images = torch.from_numpy(pack_images(demos))
+    images = torch.from_numpy(loaded.frames)
     states = torch.from_numpy(np.concatenate([d.states for d in demos]))
     words = [vocab.encode(d.instruction, model_config.max_words) for d in demos]
     instruction = torch.tensor(
