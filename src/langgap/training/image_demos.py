@@ -49,9 +49,9 @@ def load_image_demos(roots: Iterable[str | Path], tasks: Iterable[str] | None = 
     """The demonstrations (with images) of every collection in `roots`, from its HDF5 form (`<root>/hdf5`), in
     file and demonstration order; only `tasks`' files are read when given. Every image has one size.
 
-    A first pass reads the files' shapes, a second reads the images straight into one array: building it from
-    per-demonstration arrays would hold the frames twice while it is built, and the allocator keeps much of
-    that memory after they are freed."""
+    A first pass reads the files' shapes, a second copies each camera's images into their place in one array:
+    building it from per-demonstration arrays would hold the frames twice while it is built, and the allocator
+    keeps much of that memory after they are freed."""
     h5py = require_h5py()
     wanted = None if tasks is None else set(tasks)
     found: list[tuple[Path, list[tuple[str, int]]]] = []  # each file to read, with its demonstrations' lengths
@@ -88,7 +88,8 @@ def load_image_demos(roots: Iterable[str | Path], tasks: Iterable[str] | None = 
             for name, length in lengths:
                 group, images = data[name], frames[start : start + length]
                 for camera, key in enumerate(IMAGE_KEYS.values()):
-                    group["obs"][key].read_direct(images, dest_sel=np.s_[:, camera])
+                    # Read whole, then copied: HDF5 scattering into the strided slice directly is ~10x slower.
+                    images[:, camera] = group["obs"][key][()]
                 states = group["robot_states"][()].astype(np.float32)
                 demos.append(ImageDemo(task_id, instruction, images, states, group["labels"][()]))
                 start += length
