@@ -254,6 +254,28 @@ class InstructionLogPolicy(NoopPolicy):
         return super().act(observation)
 
 
+class SentInstructionRecorder(NoopPolicy):
+    """Holds still and appends one JSON line to `path` at each query: the episode's key (read from the goal it
+    declares it sees), the instruction its context gave at reset and the one in force (`current_instruction`),
+    so a test compares what reached the policy with what the run stored."""
+
+    spec = PolicySpec(sees_goal=True)  # reads its instruction; the goal names the episode's task and condition
+
+    def __init__(self, path: str = ""):
+        self.path = Path(path)
+
+    def reset(self, context):
+        self._context = context
+
+    def act(self, observation):
+        context = self._context
+        key = [context.privileged.task_id, context.init_index, context.seed, context.privileged.condition]
+        line = {"key": key, "reset": context.instruction, "sent": current_instruction(observation, context)}
+        with self.path.open("a") as handle:
+            handle.write(json.dumps(line) + "\n")
+        return super().act(observation)
+
+
 class Reach:
     """Looks through both cameras every `replan` steps and plays a fixed reach; keeps what it was shown."""
 
