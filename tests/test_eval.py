@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import random
+import re
 import signal
 import subprocess
 import sys
@@ -376,10 +377,14 @@ def test_a_dead_policy_server_stops_the_run_and_resume_continues(short_catalog, 
         .startswith("error: stopped after 3 episodes in a row failed with: ConnectionError: policy server unreachable")
     )
     assert store_rows(run) == before  # nothing stored was touched, no gap charged to the policy
+    # The run records its plan and why it stopped, and its report says both.
+    incomplete = "the run is incomplete: 3 of 9 planned episodes stored; it stopped early: stopped after 3 episodes"
+    assert incomplete in run_cli("report", str(run), "--summary").stdout.split("\n\n")[1]
     switch.unlink()
     resumed = _cli_eval(short_catalog, run, *outage, "--episodes", "3", "--resume", "--extend")
     assert resumed.returncode == 0 and "3 already stored, 6 run" in resumed.stdout
     assert len(store_rows(run)) == 9 and all(r["status"] == "done" for r in store_rows(run))
+    assert "planned episodes" not in run_cli("report", str(run)).stdout
 
 
 def test_no_openpi_server_stops_the_run_with_its_address(short_catalog, tmp_path):
@@ -399,6 +404,13 @@ def test_no_openpi_server_stops_the_run_with_its_address(short_catalog, tmp_path
     assert "no policy server at 127.0.0.1:1" in result.stderr.strip().splitlines()[-1]
     assert time.monotonic() - start < 60
     assert store_rows(tmp_path / "run") == []
+    report = run_cli("report", str(tmp_path / "run"))
+    assert report.returncode == 2 and report.stdout == ""
+    assert re.match(
+        r"error: nothing to report for .*: the run is empty: 0 of 6 planned episodes stored; it stopped early: "
+        r"stopped after 3 episodes in a row failed with: .*no policy server at 127\.0\.0\.1:1",
+        report.stderr,
+    )
 
 
 def test_a_run_that_ends_with_gaps_exits_3(short_catalog, tmp_path):

@@ -39,6 +39,9 @@ SCHEMA_VERSION = 4
 READABLE_SCHEMAS = (1, 2, 3, 4)
 DB_NAME = "episodes.sqlite"
 LOCK_NAME = ".writer.lock"
+# Meta key of where the run stands: `{"planned": N, "stopped": None or why its last call ended early}`,
+# written by each `evaluate` call (a report says how many planned episodes are stored, and why the rest are not).
+PROGRESS = "progress"
 
 
 def _schema() -> str:

@@ -17,8 +17,9 @@ from langgap.engine.pools import WorkerPool, make_pool
 from langgap.engine.runner import RunnerSetup
 from langgap.engine.sharing import SharedRollout, policy_spec, share_rollouts
 from langgap.engine.spec import PLAN_FIELDS, ExecutionOptions, RunSpec, SpecError
+from langgap.errors import LangGapError, one_line
 from langgap.records import EpisodeRecord, Status
-from langgap.store import RunStore
+from langgap.store import PROGRESS, RunStore
 from langgap.version import code_version
 from langgap.vocabulary import Outcome
 
@@ -204,9 +205,20 @@ def evaluate(
         items = todo if sharing is None else share_rollouts(todo, catalog, sharing, spec.style)
         shared = [item for item in items if isinstance(item, SharedRollout)]
         summary.shared, summary.rollouts = sum(len(item.members) for item in shared), len(shared)
-        counted = _counted(run_episodes(items, pool), summary)
-        for record in with_progress(counted, len(todo), unit="ep", enabled=options.progress, describe=summary.rates):
-            store.write(record)
+        records = with_progress(
+            _counted(run_episodes(items, pool), summary),
+            len(todo),
+            unit="ep",
+            enabled=options.progress,
+            describe=summary.rates,
+        )
+        store.set_meta(PROGRESS, {"planned": len(plan), "stopped": None})
+        try:
+            for record in records:
+                store.write(record)
+        except BaseException as exc:  # whatever ends the call early, a report of the run says it
+            store.set_meta(PROGRESS, {"planned": len(plan), "stopped": _stop_reason(exc)})
+            raise
     summary.policy_server = dict(getattr(pool, "server_stats", {}))  # set by closing a shared-policy pool
     if videos:
 
@@ -251,6 +263,13 @@ def _film(
                     summary.film_mismatches += 1
         finally:
             replays.close()
+
+
+def _stop_reason(exc: BaseException) -> str:
+    """Why a call ended before its plan did, as the run's report states it."""
+    if isinstance(exc, KeyboardInterrupt):
+        return "interrupted"
+    return str(exc) if isinstance(exc, LangGapError) else one_line(exc)
 
 
 def _episodes(results: Iterable[EpisodeRecord | list[EpisodeRecord]]) -> Iterator[EpisodeRecord]:

@@ -80,8 +80,14 @@ def latex_table(table: Table) -> str:
 
 
 def answers(summary: Summary) -> list[str]:
-    """The sentences a report opens with, one per run (`langgap.report.answer`)."""
-    return [run.answer.text for run in summary.runs]
+    """The sentences a report opens with: one per run (`langgap.report.answer`), each followed by how much of its
+    plan the run holds when it is not all of it."""
+    sentences = []
+    for run in summary.runs:
+        sentences.append(run.answer.text)
+        if run.progress:
+            sentences.append(f"{run.label}: {run.progress}")
+    return sentences
 
 
 def _header(summary: Summary, published: Published | None) -> str:

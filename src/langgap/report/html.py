@@ -16,6 +16,7 @@ from pathlib import Path
 
 from langgap.catalog.labels import DIMENSION_LABEL, label
 from langgap.page_style import PAGE_STYLE
+from langgap.report.formats import answers
 from langgap.report.published import Published
 from langgap.report.sections import FULL_REPORT, report_data, report_tables
 from langgap.report.summary import Summary, shown_dimensions
@@ -225,8 +226,8 @@ def outcome_chart(summary: Summary) -> str:
 
 
 def answer_block(summary: Summary) -> str:
-    """The sentences the page opens with, one per run."""
-    sentences = "".join(f'<p class="answer">{html.escape(run.answer.text)}</p>' for run in summary.runs)
+    """The sentences the page opens with, one per run (and how much of its plan each incomplete run holds)."""
+    sentences = "".join(f'<p class="answer">{html.escape(sentence)}</p>' for sentence in answers(summary))
     return f'<div id="answer">{sentences}</div>'
 
 

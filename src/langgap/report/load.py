@@ -15,7 +15,7 @@ from langgap.catalog.task import GateResult
 from langgap.catalog.verdicts import snapshot_gates
 from langgap.errors import LangGapError
 from langgap.records import EpisodeRecord, Privilege, privilege
-from langgap.store import RunStore
+from langgap.store import PROGRESS, RunStore
 
 
 @dataclass
@@ -29,12 +29,31 @@ class Run:
     gates: dict[str, GateResult] = field(default_factory=dict)  # the feasibility verdicts of its tasks
     gate_hashes: list[str] | None = None  # SHA-256 of the verdict files of its snapshot (None: no snapshot)
     switch_gates: SwitchVerdicts = field(default_factory=dict)  # the switch gate's verdicts of its tasks, per K
+    planned: int | None = None  # the episodes its spec plans (None: stored before runs recorded it)
+    stopped: str | None = None  # why its last `evaluate` call ended before its plan did (None: it did not)
 
     @property
     def privilege(self) -> Privilege:
         """What the policy was given beyond a policy under test (`goal`: a scripted reference; `state`:
         it read simulator state)."""
         return privilege(self.records)
+
+    @property
+    def progress(self) -> str | None:
+        """How much of its plan the run holds, and why not all of it (None: it holds every planned episode, or
+        was stored before runs recorded their plan and holds some)."""
+        stored = len(self.records)
+        if self.planned is None:
+            return None if stored else "the run is empty: it holds no episode"
+        if stored >= self.planned:
+            return None
+        why = (
+            f"it stopped early: {self.stopped}"
+            if self.stopped
+            else "no stop was recorded (it is still running, or it was killed)"
+        )
+        state = "incomplete" if stored else "empty"
+        return f"the run is {state}: {stored} of {self.planned} planned episodes stored; {why}"
 
     @property
     def gate_source(self) -> str:
@@ -98,11 +117,13 @@ def load_runs(paths: list[str | Path]) -> list[Run]:
             spec = store.meta("spec") or store.meta("config") or {}
             snapshot = store.meta("gate")
             records = store.records()
+            progress = store.meta(PROGRESS) or {}
         gates = live_gates(spec) if snapshot is None else snapshot_gates(snapshot)
         hashes = None if snapshot is None else list(snapshot["sha256"])
         # Runs stored before the snapshot kept switch verdicts read the live file, as for the plain ones.
         switch = (snapshot or {}).get("switch")
         switch_gates = live_switch_gates(spec) if switch is None else snapshot_switch_gates(switch)
         name = run_name(str(spec.get("policy", "?")), Path(path).name)
-        runs.append(Run(name, Path(path), spec, records, gates, hashes, switch_gates))
+        planned, stopped = progress.get("planned"), progress.get("stopped")
+        runs.append(Run(name, Path(path), spec, records, gates, hashes, switch_gates, planned, stopped))
     return runs

@@ -25,6 +25,7 @@ from langgap.catalog.switch_verdicts import SwitchVerdicts, accepted
 from langgap.catalog.task import SAME_GOAL_DIMENSIONS, GateResult
 from langgap.engine.plan import repeat_of
 from langgap.engine.spec import spec_differences
+from langgap.errors import LangGapError
 from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Privilege, achieved
 from langgap.report.answer import Answer, Switched
 from langgap.report.card import PROTOCOL_ITEMS, protocol_card
@@ -416,6 +417,7 @@ class RunResults:
     # source's goal (a policy that ignores its instruction does those as well as their sources).
     answered: Rate | None = None
     reworded: int = 0
+    progress: str | None = None  # how much of its plan the run holds, when not all of it (`Run.progress`)
 
     @property
     def same_goal_only(self) -> bool:
@@ -515,6 +517,7 @@ def results(run: Run) -> RunResults:
         switches=switch_rows(run.records, run.switch_gates),
         answered=rate(TaskKind.EXTENDED, answered, gates) if mixed else None,
         reworded=len(reworded),
+        progress=run.progress,
     )
 
 
@@ -630,6 +633,9 @@ def summarize(runs: list[Run], *, allow_mismatch: bool = False) -> Summary:
     run's are not paired episode by episode unless `allow_mismatch` is given. Each run is paired with the
     first compared `blind` run whose protocol (its catalog included) equals its own, or with `allow_mismatch`
     the first `blind` run. Runs of one policy on several catalogs are also put side by side (`side_by_side`)."""
+    for run in runs:
+        if not run.records:
+            raise LangGapError(f"nothing to report for {run.path}: {run.progress}")
     results_ = [results(run) for run in runs]
     first = results_[0]
     mismatches = {other.name: protocol_differences(first, other) for other in results_[1:]}
