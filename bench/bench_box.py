@@ -350,8 +350,6 @@ def timed_eval(actions: Path, tasks: str, episodes: int, replan: int, size: int,
                 counts[label] += count
     steps = sum(r.steps for r in records)
     totals["store (driver)"] = store_time[0]
-    identity = {(r.task_id, r.init_index): (r.steps, r.t0_hash, r.outcome, r.success, sorted(r.reached.items()))
-                for r in records}  # fmt: skip
     return {
         "wall": wall,
         "steps": steps,
@@ -359,9 +357,23 @@ def timed_eval(actions: Path, tasks: str, episodes: int, replan: int, size: int,
         "in_episodes": sum(r.wall_time_s for r in records),
         "totals": dict(totals),
         "calls": sum(counts.values()),
-        "identity": identity,
-        "gaps": sum(r.status != "done" for r in records),
+        **compared(records),
     }
+
+
+def compared(records: list) -> dict:
+    """What `same_records` compares of a run's records: their identity, what every run of one plan must store
+    alike whatever its worker count or `replan` (each episode's (task, init state) -> its steps, start state,
+    outcome, success and the scene goals it reached, with when), and how many are gaps."""
+    identity = {(r.task_id, r.init_index): (r.steps, r.t0_hash, r.outcome, r.success, sorted(r.reached.items()))
+                for r in records}  # fmt: skip
+    return {"identity": identity, "gaps": sum(r.status != "done" for r in records)}
+
+
+def same_records(run: dict, reference: dict) -> bool:
+    """Whether a timed run (`timed_eval`) stored the records whose identity (`compared`) is `reference`, and no
+    gap."""
+    return run["identity"] == reference and run["gaps"] == 0
 
 
 def _probe_cost_per_call() -> float:
@@ -416,7 +428,7 @@ def _print_runs(runs: dict[tuple[int, int], dict], ceiling: dict[int, dict[str, 
     print("|---|---|---|---|---|---|---|---|")
     identical = True
     for (r, n), run in runs.items():
-        same = run["identity"] == reference and run["gaps"] == 0
+        same = same_records(run, reference)
         identical &= same
         rate = run["steps"] / run["wall"]
         in_step = run["in_episodes"] / run["steps"] * 1e3
