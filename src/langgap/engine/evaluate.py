@@ -18,7 +18,7 @@ from langgap.engine.runner import RunnerSetup
 from langgap.engine.sharing import SharedRollout, policy_spec, share_rollouts
 from langgap.engine.spec import PLAN_FIELDS, ExecutionOptions, RunSpec, SpecError
 from langgap.errors import LangGapError, one_line
-from langgap.records import EpisodeRecord, Status
+from langgap.records import EpisodeKey, EpisodeRecord, Status
 from langgap.store import PROGRESS, RunStore
 from langgap.version import code_version
 from langgap.vocabulary import Outcome
@@ -79,6 +79,12 @@ def plan_of(spec: RunSpec) -> list[PlannedEpisode]:
         conditions=spec.conditions,
         style=spec.style,
     )
+
+
+def still_to_run(plan: list[PlannedEpisode], done: set[EpisodeKey]) -> list[PlannedEpisode]:
+    """The episodes of `plan` whose whole key (task, init state, seed, condition) is not among the judged ones
+    stored (`done`): a resume runs them, gaps included, and a run grown by `--repeats` runs its new seeds."""
+    return [p for p in plan if p.key not in done]
 
 
 def _open_store(spec: RunSpec, options: ExecutionOptions, run: Path, *, resume: bool, extend: bool) -> RunStore:
@@ -199,8 +205,7 @@ def evaluate(
     with contextlib.ExitStack() as stack:
         stack.callback(pool.close)
         store = stack.enter_context(_open_store(spec, options, run, resume=resume, extend=extend))
-        done = store.done_keys()
-        todo = [p for p in plan if p.key not in done]
+        todo = still_to_run(plan, store.done_keys())
         summary = RunSummary(run, planned=len(plan), skipped=len(plan) - len(todo))
         items = todo if sharing is None else share_rollouts(todo, catalog, sharing, spec.style)
         shared = [item for item in items if isinstance(item, SharedRollout)]
