@@ -94,6 +94,16 @@ def test_the_html_report_in_a_real_browser(tmp_path):
           header.click(); const up = read(); header.click(); return [up, read()];
         })()""")  # fmt: skip
         assert column[0] == sorted(column[0]) and column[1] == sorted(column[0], reverse=True)
+        # A table with group headings sorts the rows under each heading, the heading staying above them.
+        grouped = page.evaluate("""(() => {
+""" + _SECTION + """
+          const sources = section("Success by data source, suite and dimension — vla");
+          const header = [...sources.querySelectorAll("th")].find(th => th.textContent === "Rate %");
+          header.click(); header.click();
+          return [...sources.querySelectorAll("tbody tr")].map(r => r.cells[0].textContent);
+        })()""")  # fmt: skip
+        assert grouped[:4] == ["By data source", "Original (LIBERO)", "Total", "Extended (LangGap)"]
+        assert grouped[4] == "By suite" and "By perturbation dimension" in grouped
         # Filtering: typing in a table's filter box hides the rows that do not match.
         page.evaluate("""(() => {
 """ + _SECTION + """

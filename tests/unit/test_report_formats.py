@@ -84,7 +84,7 @@ def test_the_papers_published_rows_are_shown_beside_the_runs_and_can_be_left_out
         "| SmolVLA (published: LangGap paper, Table VI) | 17.0 | 3.2 | 44.0 | 0.0 | 50.0 | 13.2 | 41.0 | 38.0 | 6.4 |"
         in markdown
     )
-    assert "| Original (LIBERO) | 40 | 800 | 750 | 93.8 | [91.9, 95.2] | 0 |" in markdown  # Table II, published counts
+    assert "| Original (LIBERO) | 40 | 800 | 750 | 93.8 | [91.9, 95.2] | – |" in markdown  # Table II, published counts
     assert "not re-run" in markdown and "(published: LangGap paper" in render(runs, "latex")
     assert "(published:" not in render(runs, "md", published=False)
     assert "(published:" not in render(runs, "json")  # the JSON holds this report's numbers only
@@ -104,7 +104,7 @@ def test_the_published_appendix_adds_up_to_table_ii_and_sits_beside_the_runs(run
         assert (
             sum(len(g.task_ids) for g in published.appendix if g.dimension == dimension) * 20 == table_ii[dimension][1]
         )
-    assert "| Drawer Action | open the middle drawer | 13/20 (65.0%) | – | – |" in render(runs, "md")
+    assert "| Drawer Action | open the middle drawer | 13/20 (65.0%) on 1 task | – | – |" in render(runs, "md")
 
 
 def test_allow_mismatch_on_the_command_line_pairs_runs_whose_protocols_differ(tmp_path):

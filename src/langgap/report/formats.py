@@ -24,7 +24,11 @@ def markdown_table(table: Table) -> str:
         "| " + " | ".join(table.headers) + " |",
         "|" + "|".join("---" for _ in table.headers) + "|",
     ]
-    lines += ["| " + " | ".join(cell.replace("|", "\\|") for cell in row) + " |" for row in table.rows]
+    for i, row in enumerate(table.rows):
+        cells = [cell.replace("|", "\\|") for cell in row]
+        if i in table.headings:
+            cells[0] = f"*{cells[0]}*"
+        lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 

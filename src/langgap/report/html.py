@@ -35,6 +35,7 @@ svg text { font: 11px system-ui, sans-serif; }
 select.column-filter { margin: .25em 0 .25em .5em; }
 table.heatmap td { text-align: center; min-width: 2em; }
 tr.column-groups td { text-align: center; font-weight: bold; background: #f3f3f3; }
+tr.heading th { text-align: left; font-style: italic; background: #fafafa; cursor: default; }
 .clips { display: flex; flex-wrap: wrap; gap: 1em; }
 figure { margin: 0; width: 370px; } figure video { width: 100%; background: #000; }
 figcaption { font-size: .9em; }
@@ -47,18 +48,25 @@ function cellValue(cell) {
   return isNaN(number) ? cell.textContent.trim().toLowerCase() : number;
 }
 document.querySelectorAll("table.report").forEach(table => {
-  table.querySelectorAll("th").forEach((th, column) => th.addEventListener("click", () => {
+  const headers = table.tHead.querySelectorAll("th");
+  headers.forEach((th, column) => th.addEventListener("click", () => {
     const ascending = th.getAttribute("aria-sort") !== "ascending";
-    table.querySelectorAll("th").forEach(other => other.removeAttribute("aria-sort"));
+    headers.forEach(other => other.removeAttribute("aria-sort"));
     th.setAttribute("aria-sort", ascending ? "ascending" : "descending");
     const body = table.tBodies[0];
-    const rows = Array.from(body.rows);
-    rows.sort((a, b) => {
-      const x = cellValue(a.cells[column]), y = cellValue(b.cells[column]);
-      const order = typeof x === typeof y ? (x < y ? -1 : x > y ? 1 : 0) : (typeof x === "number" ? -1 : 1);
-      return ascending ? order : -order;
+    // Rows are sorted within their group: a heading row stays above the rows it heads.
+    const groups = [[]];
+    Array.from(body.rows).forEach(row =>
+      row.classList.contains("heading") ? groups.push([row]) : groups[groups.length - 1].push(row));
+    groups.forEach(group => {
+      const heading = group.length && group[0].classList.contains("heading") ? group.splice(0, 1) : [];
+      group.sort((a, b) => {
+        const x = cellValue(a.cells[column]), y = cellValue(b.cells[column]);
+        const order = typeof x === typeof y ? (x < y ? -1 : x > y ? 1 : 0) : (typeof x === "number" ? -1 : 1);
+        return ascending ? order : -order;
+      });
+      [...heading, ...group].forEach(row => body.appendChild(row));
     });
-    rows.forEach(row => body.appendChild(row));
   }));
 });
 function applyFilters(ident) {
@@ -103,7 +111,12 @@ def _heat_cell(text: str, total: int, diagonal: bool) -> str:
 
 def _rows(table: Table) -> str:
     if table.kind != "heatmap":
-        return "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>" for row in table.rows)
+        return "".join(
+            f'<tr class="heading"><th scope="rowgroup" colspan="{len(row)}">{html.escape(row[0])}</th></tr>'
+            if i in table.headings
+            else "<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>"
+            for i, row in enumerate(table.rows)
+        )
     rows = []
     for row in table.rows:
         total = sum(int(c) for c in row[1:] if c.isdigit()) or 1
@@ -172,9 +185,19 @@ OUTCOME_COLOURS = {
 }
 
 
+_CHAR_WIDTH = 6.5  # pixels of one character of the chart's 11 px labels, a generous average
+
+
+def fitted(name: str, width: float) -> str:
+    """`name` as it fits under a bar `width` pixels wide: whole, or cut with an ellipsis (its <title> holds it
+    whole)."""
+    room = max(1, int(width / _CHAR_WIDTH))
+    return name if len(name) <= room else name[: room - 1].rstrip() + "…"
+
+
 def outcome_chart(summary: Summary) -> str:
-    """Per dimension (and the originals), one stacked bar per run: the share of each outcome (success, did
-    source task, other task, no goal, ...), with the success rate's 95 % interval, as inline SVG."""
+    """Per dimension (and the originals), one stacked bar per run, named under it: the share of each outcome
+    (success, did source task, other task, no goal, ...), with the success rate's 95 % interval, as inline SVG."""
     groups = [TaskKind.ORIGINAL, *shown_dimensions(summary.runs)]
     width, height, left, bottom = 760, 280, 40, 56
     slot = (width - left) / len(groups)
@@ -183,7 +206,7 @@ def outcome_chart(summary: Summary) -> str:
     def y(value: float) -> float:
         return height - bottom - value * (height - bottom - 10)
 
-    parts = [f'<svg id="outcome-chart" width="{width}" height="{height + 20}" role="img">']
+    parts = [f'<svg id="outcome-chart" width="{width}" height="{height}" role="img">']
     for tick in (0.0, 0.25, 0.5, 0.75, 1.0):
         parts.append(f'<line x1="{left}" x2="{width}" y1="{y(tick):.1f}" y2="{y(tick):.1f}" stroke="#eee"/>')
         parts.append(f'<text x="{left - 6}" y="{y(tick) + 4:.1f}" text-anchor="end">{100 * tick:.0f}</text>')
@@ -214,14 +237,15 @@ def outcome_chart(summary: Summary) -> str:
             parts.append(
                 f'<line x1="{middle:.1f}" x2="{middle:.1f}" y1="{y(low):.1f}" y2="{y(high):.1f}" stroke="#000"/>'
             )
-            parts.append(f'<text x="{middle:.1f}" y="{y(0) + 13}" text-anchor="middle">{i + 1}</text></g>')
-    runs = "".join(f"<tspan>{i + 1}: {html.escape(run.label)}   </tspan>" for i, run in enumerate(summary.runs))
+            parts.append(
+                f'<text class="run-name" x="{middle:.1f}" y="{y(0) + 13}" text-anchor="middle">'
+                f"<title>{html.escape(run.label)}</title>{html.escape(fitted(run.label, bar))}</text></g>"
+            )
     outcomes = "".join(
         f'<tspan fill="{colour}">■ </tspan><tspan>{OUTCOME_NAME[outcome]}   </tspan>'
         for outcome, colour in OUTCOME_COLOURS.items()
     )
-    parts.append(f'<text x="{left}" y="{height - 4}">{outcomes}</text>')
-    parts.append(f'<text x="{left}" y="{height + 14}">{runs}</text></svg>')
+    parts.append(f'<text x="{left}" y="{height - 4}">{outcomes}</text></svg>')
     return "".join(parts)
 
 

@@ -221,7 +221,7 @@ SECTIONS: dict[str, Section] = {
         ),
         Section(
             "published-appendix",
-            "Success per group of tasks — {method} as published, beside your runs on the same tasks",
+            "Success per group of tasks — {method} as published, beside your runs on the group's tasks they ran",
             "appendix",
             tables=published_appendix_table,
         ),

@@ -102,7 +102,9 @@ class Table:
     is: a `table`, a `heatmap` (counts, shaded by their share of the row) or a `gallery` (filmed
     episodes, the last column the clip's file). `column_groups` spans the headers from left to right
     ((name, number of columns); an empty name: no group); a grouped header reads `name: column`, which
-    formats that can span a group over its columns (LaTeX) shorten to `column`.
+    formats that can span a group over its columns (LaTeX) shorten to `column`. `headings` are the indices
+    of the rows that head the rows below them: their first cell names the group, the others are empty; each
+    format marks them its own way (Markdown in italics, a page as a heading cell across the table).
     """
 
     title: str
@@ -111,6 +113,7 @@ class Table:
     filters: tuple[str, ...] = ()
     kind: str = "table"
     column_groups: tuple[tuple[str, int], ...] = ()
+    headings: frozenset[int] = frozenset()
 
 
 def pct(x: float) -> str:
@@ -137,7 +140,8 @@ def ceiling_cells(r: Rate) -> list[str]:
     return ["–" if oracle is None else pct(oracle), "–" if relative is None else pct(relative)]
 
 
-def _rate_rows(rates: list[Rate], names: dict[str, str]) -> list[list[str]]:
+def _rate_rows(rates: list[Rate], names: dict[str, str], *, counted_gaps: bool = True) -> list[list[str]]:
+    """One row per rate (`counted_gaps` False: figures that never counted gaps, whose Gaps cell is `–`)."""
     return [
         [
             label(names, r.group),
@@ -146,15 +150,11 @@ def _rate_rows(rates: list[Rate], names: dict[str, str]) -> list[list[str]]:
             str(r.successes),
             pct(r.rate),
             ci(r),
-            str(r.gaps),
+            str(r.gaps) if counted_gaps else "–",
             *ceiling_cells(r),
         ]
         for r in rates
     ]
-
-
-def _heading(text: str) -> list[str]:
-    return [f"*{text}*", *[""] * (len(_RATE_HEADERS) - 1)]
 
 
 SUITE_KIND_LABEL = {f"{suite}/{kind}": f"{SUITE_LABEL[suite]}, {kind}" for suite in SUITE_ORDER for kind in TaskKind}
@@ -163,10 +163,17 @@ SUITE_KIND_LABEL = {f"{suite}/{kind}": f"{SUITE_LABEL[suite]}, {kind}" for suite
 def source_table(run: RunResults, title: Title) -> Table:
     """Success by data source, by suite and by perturbation dimension, each beside the oracle's ceiling (the
     paper's Table II)."""
-    rows = [_heading("By data source"), *_rate_rows(run.by_source, SOURCE_LABEL)]
-    rows += [_heading("By suite"), *_rate_rows(run.by_suite, SUITE_KIND_LABEL)]
-    rows += [_heading("By perturbation dimension"), *_rate_rows(run.by_dimension, DIMENSION_LABEL)]
-    return Table(title(run=run.label), _RATE_HEADERS, rows)
+    groups = [
+        ("By data source", _rate_rows(run.by_source, SOURCE_LABEL)),
+        ("By suite", _rate_rows(run.by_suite, SUITE_KIND_LABEL)),
+        ("By perturbation dimension", _rate_rows(run.by_dimension, DIMENSION_LABEL)),
+    ]
+    rows: list[list[str]] = []
+    headings = set()
+    for heading, group in groups:
+        headings.add(len(rows))
+        rows += [[heading, *[""] * (len(_RATE_HEADERS) - 1)], *group]
+    return Table(title(run=run.label), _RATE_HEADERS, rows, headings=frozenset(headings))
 
 
 def _published_cells(values: dict[str, float], keys: list[str]) -> list[str]:
@@ -250,18 +257,33 @@ def _count_cell(successes: int, episodes: int) -> str:
     return f"{successes}/{episodes} ({pct(successes / episodes)}%)" if episodes else "–"
 
 
+def _tasks_text(count: int) -> str:
+    return "1 task" if count == 1 else f"{count} tasks"
+
+
+def _covered_cell(mine: list[Rate], group_tasks: int) -> str:
+    """A run's count on the tasks of a published group it ran, and how many of the group's tasks those are."""
+    episodes = sum(r.episodes for r in mine)
+    if not episodes:
+        return "–"
+    ran = len({r.group for r in mine if r.episodes})
+    covered = f"the same {_tasks_text(group_tasks)}" if ran == group_tasks else f"{ran} of the {group_tasks} tasks"
+    return f"{_count_cell(sum(r.successes for r in mine), episodes)} on {covered}"
+
+
 def published_appendix_table(summary: Summary, published: Published | None, title: Title) -> Table | None:
-    """The paper's per-task appendix for π0.5, beside each run's result on the same tasks (None: the published
+    """The paper's per-task appendix for π0.5, beside each run's result on the group's tasks it ran; each cell
+    says how many of the group's tasks it counts, since a run may cover a group in part (None: the published
     figures are left out)."""
     if published is None:
         return None
     rows = []
     for group in published.appendix:
         row = [label(DIMENSION_LABEL, group.dimension), group.label]
-        row.append(_count_cell(group.published.successes, group.published.episodes))
+        counted = group.published
+        row.append(f"{_count_cell(counted.successes, counted.episodes)} on {_tasks_text(counted.tasks)}")
         for run in summary.runs:
-            mine = [t.rate for t in run.tasks if t.rate.group in group.task_ids]
-            row.append(_count_cell(sum(r.successes for r in mine), sum(r.episodes for r in mine)))
+            row.append(_covered_cell([t.rate for t in run.tasks if t.rate.group in group.task_ids], counted.tasks))
         rows.append(row)
     method = published.label(published.appendix_method, "appendix")
     headers = ["Dimension", "Tasks", method, *(run.label for run in summary.runs)]
@@ -274,7 +296,8 @@ def published_diagnostic_table(summary: Summary, published: Published | None, ti
     if published is None:
         return None
     names = {**DIMENSION_LABEL, **SOURCE_LABEL}
-    return Table(title(method=published.diagnostic_method), _RATE_HEADERS, _rate_rows(published.diagnostic, names))
+    rows = _rate_rows(published.diagnostic, names, counted_gaps=False)  # the paper reports no gaps
+    return Table(title(method=published.diagnostic_method), _RATE_HEADERS, rows)
 
 
 def split_table(run: RunResults, title: Title) -> Table:
