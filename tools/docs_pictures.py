@@ -9,8 +9,9 @@ report: the quick start's runs as setup.sh's main job makes them (oracle and bli
 spatial/s0 tasks, 3 episodes, blind filmed once per task and outcome), `langgap report --compare
 --summary --html`, opened in Debian's headless Chromium (tests/support/browser.py) at a fixed viewport:
 docs/report.png is the page's top (the answer sentences, the stacked outcome bars), docs/report-gallery.png
-its gallery of filmed episodes. reflection: docs/reflection.png, bench/bench_render.py's agentview with
-the reflection pass on | off | difference.
+its gallery of filmed episodes; the summary the command prints is stored, with the same stamp, in
+tests/unit/report_outputs/quickstart.summary.md (the README quotes it). reflection: docs/reflection.png,
+bench/bench_render.py's agentview with the reflection pass on | off | difference.
 
 The code runs from a temporary `git worktree` of HEAD (PYTHONPATH at its src), so the report's code
 version is a commit, never `-dirty`, whatever else the checkout holds; the script refuses to run when
@@ -33,7 +34,17 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from tests.support.browser import CHROMIUM, Page, chromium
-from tools.picture_stamps import PICTURES, REPO, Picture, PictureError, fingerprint, source_digests, stamp_file
+from tools.picture_stamps import (
+    PICTURES,
+    QUICK_START_SUMMARY,
+    REPO,
+    Picture,
+    PictureError,
+    fingerprint,
+    source_digests,
+    stamp_file,
+    stamped_text,
+)
 
 RUNS = REPO / "runs" / "docs-pictures"
 VIEWPORT = {"width": 1280, "height": 1000}
@@ -124,8 +135,12 @@ def quick_start_report(tree: Path) -> Path:
         _checked(result)
     page = RUNS / "report"
     shutil.rmtree(page, ignore_errors=True)  # clips of an earlier run must not linger in media/
-    _checked(_in_tree(tree, ["-m", "langgap.cli.main", "report", str(RUNS / "oracle"), "--compare"]
-                      + [str(RUNS / "blind"), "--summary", "--html", str(page)]))  # fmt: skip
+    report = _checked(_in_tree(tree, ["-m", "langgap.cli.main", "report", str(RUNS / "oracle"), "--compare"]
+                               + [str(RUNS / "blind"), "--summary", "--html", str(page)]))  # fmt: skip
+    summary = report.stdout.removesuffix(f"wrote {page / 'index.html'}\n")  # the summary, as the quick start prints it
+    stamp = fingerprint(next(p for p in PICTURES if p.group == "report"), tree)
+    (REPO / QUICK_START_SUMMARY).write_text(stamped_text(summary, stamp), encoding="utf-8")
+    print(f"wrote {QUICK_START_SUMMARY}", flush=True)
     return page / "index.html"
 
 

@@ -11,6 +11,7 @@ Standard library only: the guard test runs in the fast layer.
 from __future__ import annotations
 
 import hashlib
+import re
 import struct
 import zlib
 from dataclasses import dataclass
@@ -45,6 +46,25 @@ PICTURES = (
     Picture("docs/report-gallery.png", "report", _REPORT),
     Picture("docs/reflection.png", "reflection", ("src/langgap/sim/env.py", "bench/bench_render.py", MAKER)),
 )
+
+
+# The quick start's `langgap report --summary`, printed by the command that makes the report's pictures (so it is
+# as new as they are: it carries their stamp, its first line). The README quotes it, and a test checks that what
+# the README shows is in it (tests/unit/test_readme_outputs.py).
+QUICK_START_SUMMARY = "tests/unit/report_outputs/quickstart.summary.md"
+_TEXT_STAMP = re.compile(f"<!-- {STAMP_KEY.decode()}: ([0-9a-f]+) -->\n")
+
+
+def stamped_text(text: str, stamp: str) -> str:
+    """A stored output with `stamp` as its first line."""
+    return f"<!-- {STAMP_KEY.decode()}: {stamp} -->\n{text}"
+
+
+def read_text_stamp(text: str) -> tuple[str | None, str]:
+    """The stamp of a stored output (None when it carries none) and the output after it."""
+    if match := _TEXT_STAMP.match(text):
+        return match[1], text[match.end() :]
+    return None, text
 
 
 class PictureError(Exception):
