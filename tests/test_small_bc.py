@@ -14,6 +14,7 @@ torch = pytest.importorskip("torch", reason="small-bc needs PyTorch (pip install
 
 FAILED = "goal/s0/open-cabinet-bottom-drawer"  # collected once with heavy execution noise: the attempt fails
 NEVER = "spatial/s0/black-bowl-2-on-plate"  # in the catalog, never collected in these tests
+TINY_SCENE = "pick_up_the_black_bowl_between_the_plate_and_the_ramekin_and_place_it_on_the_plate"  # TINY_TASK's
 
 
 def test_words_and_vocabulary():
@@ -62,6 +63,31 @@ def test_training_is_deterministic_and_checkpoint_round_trips(tiny_collection, c
         assert torch.equal(a, b), name
     assert info["final_loss"] == facts["final_loss"] and info["tasks"] == [TINY_TASK]
     assert "plate" in vocab.tokens and "ramekin" in vocab.tokens  # from the sentence and the entity names
+
+
+def test_the_vocabulary_is_fixed_before_training(tiny_collection, checkpoint, tmp_path):
+    """Trained on one task, the model still has an id of its own for every word of every catalog, so no two
+    sentences of its scene read the same; `--vocabulary training` (`vocabulary:` in a config file) gives the
+    earlier vocabulary of the training data alone back."""
+    from langgap.catalog.catalog import available_catalogs, load_catalog
+    from langgap.policies.small_bc.model import load_checkpoint
+    from langgap.policies.text import catalog_vocabulary
+
+    model, vocab, info = load_checkpoint(checkpoint)
+    assert info["tasks"] == [TINY_TASK] and info["vocabulary"] == "catalogs"
+    assert vocab.tokens == catalog_vocabulary().tokens and model.words.num_embeddings == len(vocab)
+    # every sentence, in every style, any shipped catalog asks on its scene
+    scene = [t for name in available_catalogs() for t in load_catalog(name) if t.scene_task == TINY_SCENE]
+    sentences = {" ".join(words(s)) for t in scene for s in t.instructions.values()}
+    assert len({tuple(vocab.encode(s, model.config.max_words)) for s in sentences}) == len(sentences) > 100
+    config = tmp_path / "earlier.yaml"
+    config.write_text(f"data: [{tiny_collection}]\nsteps: 1\nthreads: 1\n")
+    earlier_run = ("--config", str(config), "--vocabulary", "training", "--out", str(tmp_path / "earlier.safetensors"))
+    result = run_cli("train", "small-bc", *earlier_run)
+    assert result.returncode == 0, result.stderr
+    _, earlier, earlier_info = load_checkpoint(tmp_path / "earlier.safetensors")
+    assert earlier_info["vocabulary"] == "training" and "ramekin" in earlier.tokens and "not" not in earlier.tokens
+    assert len({tuple(earlier.encode(s, model.config.max_words)) for s in sentences}) < len(sentences)
 
 
 def test_policy_reads_the_instruction_and_is_deterministic(checkpoint, catalog):

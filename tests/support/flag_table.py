@@ -391,6 +391,7 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "train small-bc --seed": (ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),),
     "train small-bc --threads": (ProvenBy(_SMALL_BC_CLI),),
     "train small-bc --loss": (ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),),
+    "train small-bc --vocabulary": (ProvenBy("tests/test_small_bc.py::test_the_vocabulary_is_fixed_before_training"),),
     "train small-bc --device": (
         ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),
         Refused((*_SMALL_BC, "--device", "meta"), "--device meta: only cpu and cuda are supported"),
@@ -408,6 +409,7 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "train small-vla --seed": (ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),),
     "train small-vla --threads": (ProvenBy(_SMALL_VLA_CLI),),
     "train small-vla --loss": (ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),),
+    "train small-vla --vocabulary": (ProvenBy("tests/test_small_bc.py::test_the_vocabulary_is_fixed_before_training"),),
     "train small-vla --device": (
         ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),
         Refused((*_SMALL_VLA, "--device", "meta"), "--device meta: only cpu and cuda are supported"),

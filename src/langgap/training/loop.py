@@ -15,13 +15,15 @@ import torch
 
 from langgap.demos.compact import read_manifest
 from langgap.errors import LangGapError
+from langgap.policies.text import VOCABULARIES, Vocabulary, catalog_vocabulary
 from langgap.training import LOSSES
 
 
 @dataclass(frozen=True)
 class TrainConfig:
     """What to train on and how long. `tasks` selects demonstrations by task id (None: all); `model`: the
-    model's own config (None: its defaults)."""
+    model's own config (None: its defaults); `vocabulary`: where the model's words come from (one of
+    `VOCABULARIES`: every shipped catalog's sentences, or only the training data's, as before)."""
 
     data: tuple[str, ...]
     tasks: tuple[str, ...] | None = None
@@ -33,10 +35,18 @@ class TrainConfig:
     device: str = "cpu"  # where the model trains: "cpu", or a PyTorch device such as "cuda" (same code, same steps)
     loss: str = "l1"  # on the action chunk: one of LOSSES
     model: Any = None
+    vocabulary: str = "catalogs"
 
     def __post_init__(self) -> None:
         if self.loss not in LOSSES:
             raise LangGapError(f"unknown loss {self.loss!r} ({' or '.join(LOSSES)})")
+        if self.vocabulary not in VOCABULARIES:
+            raise LangGapError(f"unknown vocabulary {self.vocabulary!r} ({' or '.join(VOCABULARIES)})")
+
+    def words(self, training_texts: Sequence[str]) -> Vocabulary:
+        """The model's vocabulary: the shipped catalogs' (fixed before training), or that of `training_texts`
+        (the training data's sentences and entity names) under `vocabulary: training`."""
+        return Vocabulary.from_texts(training_texts) if self.vocabulary == "training" else catalog_vocabulary()
 
     def torch_device(self) -> torch.device:
         """The training device, checked: one this machine's PyTorch can use, or a LangGapError that says why not."""
@@ -95,6 +105,7 @@ def training_facts(
         "batch_size": config.batch_size,
         "lr": config.lr,
         "loss": config.loss,
+        "vocabulary": config.vocabulary,
         "seed": config.seed,
         "device": config.device,
         "final_loss": final_loss,

@@ -36,9 +36,10 @@ class Samples:
     action_mask: np.ndarray  # (N, chunk)
 
 
-def build_vocabulary(demos: list[Demo]) -> Vocabulary:
+def training_texts(demos: list[Demo]) -> list[str]:
+    """The sentences and entity names of `demos`: the vocabulary of a `vocabulary: training` run."""
     names = {features.name_words(n) for d in demos for n in features.entity_names(d.privileged)}
-    return Vocabulary.from_texts([d.instruction for d in demos] + sorted(names))
+    return [d.instruction for d in demos] + sorted(names)
 
 
 def build_samples(demos: list[Demo], vocab: Vocabulary, config: ModelConfig) -> Samples:
@@ -76,7 +77,7 @@ def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=pri
     torch.manual_seed(config.seed)
     model_config = config.model or ModelConfig()
     demos = select_demos(config, log)
-    vocab = build_vocabulary(demos)
+    vocab = config.words(training_texts(demos))
     samples = build_samples(demos, vocab, model_config)
     tensors = {k: torch.from_numpy(np.ascontiguousarray(v)).to(device) for k, v in asdict(samples).items()}
     normalizer = Normalizer.fit(samples.proprio, samples.entities, samples.names[..., 0] > 0)

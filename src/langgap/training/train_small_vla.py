@@ -16,7 +16,6 @@ import torch
 
 from langgap.errors import LangGapError
 from langgap.policies.small_vla.model import SmallVLA, StateNormalizer, VisionConfig, save_checkpoint
-from langgap.policies.text import Vocabulary
 from langgap.training.image_demos import ImageDemo, load_image_demos
 from langgap.training.loop import TrainConfig, chunk_loss, chunk_targets, optimise, selected, training_facts
 
@@ -50,7 +49,7 @@ def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=pri
             f"the model takes {model_config.image_size} px images and the demonstrations hold {size} px: "
             f"export them with --image-size {model_config.image_size}, or set model.image_size to {size}"
         )
-    vocab = Vocabulary.from_texts(d.instruction for d in demos)
+    vocab = config.words([d.instruction for d in demos])
     targets = [chunk_targets(d.labels, model_config.chunk) for d in demos]
     images = torch.from_numpy(loaded.frames)
     states = torch.from_numpy(np.concatenate([d.states for d in demos]))
