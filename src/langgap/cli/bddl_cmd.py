@@ -5,7 +5,9 @@ from __future__ import annotations
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser("bddl", help="check BDDL files (syntax, predicates, goal names in the scene)")
-    parser.add_argument("files", nargs="+", metavar="FILE")
+    parser.add_argument(
+        "files", nargs="+", metavar="FILE", help="BDDL files to check (a task's: langgap tasks show ID --bddl)"
+    )
     parser.set_defaults(handler=run)
 
 

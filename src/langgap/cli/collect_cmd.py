@@ -33,7 +33,12 @@ def add_parser(subparsers) -> None:
         help="compact: NPZ only; lerobot: also the LeRobot v3 dataset (needs LeRobot); auto: lerobot if installed",
     )
     # A task's collection is one work item: its infrastructure retries have their own flag.
-    add_execution_options(parser, attempts_flag="--max-task-attempts")
+    add_execution_options(
+        parser,
+        attempts_flag="--max-task-attempts",
+        attempts_help="tries at collecting a task when the machinery fails (a worker crash, a timeout; not a failed "
+        "demonstration, which --max-attempts counts) before the command stops with an error (default: %(default)s)",
+    )
     parser.set_defaults(handler=run, smoke=("tasks", "demos", "workers"))
 
 

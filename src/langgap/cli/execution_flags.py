@@ -14,9 +14,12 @@ from langgap.engine.spec import (
 )
 
 
-def add_execution_options(parser: argparse.ArgumentParser, *, attempts_flag: str = "--max-attempts") -> None:
+def add_execution_options(
+    parser: argparse.ArgumentParser, *, attempts_flag: str = "--max-attempts", attempts_help: str | None = None
+) -> None:
     """Add the execution flags: backend, workers, timeout, retries, fail-fast, Ray's address, progress.
-    `attempts_flag` names the retries' flag where the command's own `--max-attempts` means something else."""
+    `attempts_flag` names the retries' flag where the command's own `--max-attempts` means something else, and
+    `attempts_help` says what its retries are where the work is not episodes."""
     parser.add_argument(
         "--backend",
         choices=sorted(BACKENDS),
@@ -42,8 +45,10 @@ def add_execution_options(parser: argparse.ArgumentParser, *, attempts_flag: str
         metavar="N",
         type=int,
         default=DEFAULT_MAX_ATTEMPTS,
-        help="attempts at a work item before it is given up (an episode becomes a gap; other work fails the "
-        "command; default: %(default)s)",
+        help=attempts_help
+        or "tries at each episode (or other work item) when the machinery fails (a crash, a timeout; not the "
+        "policy's failure) before it is given up: an episode is then stored as a gap, with no verdict on the policy, "
+        "which --resume runs again; other work stops the command with an error (default: %(default)s)",
     )
     parser.add_argument(
         "--max-failure-streak",

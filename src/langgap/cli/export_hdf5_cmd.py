@@ -22,7 +22,7 @@ def add_parser(subparsers) -> None:
         action="store_true",
         help="keep the files an earlier export of this collection with these settings wrote; write the rest",
     )
-    parser.add_argument("--no-progress", action="store_true")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(handler=run, smoke=("workers",))
 
 

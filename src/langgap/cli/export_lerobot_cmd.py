@@ -10,7 +10,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("collection", metavar="DIR", help="a directory written by `langgap collect`")
     parser.add_argument("--workers", type=int, default=1, help="rendering processes (0: here)")
     parser.add_argument("--image-size", type=int, metavar="PX", help="the images' height and width (default: 256)")
-    parser.add_argument("--no-progress", action="store_true")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(handler=run, smoke=("workers",))
 
 

@@ -25,6 +25,7 @@ from langgap.cli import (
     validate_cmd,
     verify_demos_cmd,
 )
+from langgap.cli.parser import Parser, described
 from langgap.errors import LangGapError
 
 VERBS = (
@@ -46,12 +47,13 @@ VERBS = (
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="langgap", description="LangGap: does a VLA policy read its instruction? Same-scene tasks on LIBERO."
     )
     subparsers = parser.add_subparsers(dest="verb", required=True, metavar="COMMAND")
     for verb in VERBS:
         verb.add_parser(subparsers)
+    described(parser)
     return parser
 
 

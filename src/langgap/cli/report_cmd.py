@@ -25,7 +25,13 @@ def add_parser(subparsers) -> None:
         "(it shows no published rows)",
     )
     parser.add_argument("--compare", nargs="+", default=[], metavar="RUN2", help="more runs, side by side")
-    parser.add_argument("--format", choices=sorted(FORMATS), default="md")
+    parser.add_argument(
+        "--format",
+        choices=sorted(FORMATS),
+        default="md",
+        help="md: Markdown tables; latex: the same as LaTeX tables; json: every number; csv: one row per run, table "
+        "and group (default: %(default)s)",
+    )
     parser.add_argument(
         "--summary",
         action="store_true",

@@ -8,6 +8,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
+from langgap.catalog.naming import SUITE_SHORT
 from langgap.catalog.task import (
     DEFAULT_STYLE,
     DIMENSIONS,
@@ -41,10 +42,26 @@ def add_catalog_options(parser) -> None:
     )
 
 
+# What a task selection is (`Catalog.select`; docs/catalogs.md, "Selecting tasks"), for every `--tasks`'s help.
+SELECTION_HELP = (
+    "terms joined by commas (any of them), & (all of them), ! before one (not it): a task id, a glob over ids "
+    "(spatial/s0/*), a suite (spatial, object, goal, libero10), original or extended, a dimension (change_object, "
+    "change_target, ...), a split (train, heldout), feasible or rejected, paper:N, all; e.g. 'spatial&heldout'"
+)
+
+
 def _add_tasks_option(parser) -> None:
     parser.add_argument(
-        "--tasks", metavar="SELECTION", default="all", help="selection expression (default: every task, gated or not)"
+        "--tasks",
+        metavar="SELECTION",
+        default="all",
+        help=f"the tasks: {SELECTION_HELP} (default: every task, gated or not)",
     )
+
+
+def _suite(name: str) -> str:
+    """A suite named in full (`libero_spatial`) or as task ids and selections name it (`spatial`)."""
+    return {short: suite for suite, short in SUITE_SHORT.items()}.get(name, name)
 
 
 def add_parser(subparsers) -> None:
@@ -53,10 +70,21 @@ def add_parser(subparsers) -> None:
 
     listing = verbs.add_parser("list", help="list tasks, optionally filtered")
     add_catalog_options(listing)
-    listing.add_argument("--suite", choices=SUITES)
-    listing.add_argument("--kind", choices=words(TaskKind))
-    listing.add_argument("--dimension", choices=DIMENSIONS)
-    listing.add_argument("--split", choices=[s for s in SPLITS if s != TaskKind.ORIGINAL] + [TaskKind.ORIGINAL.value])
+    listing.add_argument(
+        "--suite",
+        type=_suite,
+        choices=SUITES,
+        help=f"only this suite's tasks ({', '.join(SUITE_SHORT.values())} name them too)",
+    )
+    listing.add_argument(
+        "--kind", choices=words(TaskKind), help="only the LIBERO originals, or only the extended tasks"
+    )
+    listing.add_argument("--dimension", choices=DIMENSIONS, help="only the tasks of this dimension")
+    listing.add_argument(
+        "--split",
+        choices=[s for s in SPLITS if s != TaskKind.ORIGINAL] + [TaskKind.ORIGINAL.value],
+        help="only the extended tasks a policy may train on (train), those held out, or the originals",
+    )
     _add_tasks_option(listing)
     listing.add_argument("--json", action="store_true", help="print a JSON array of task objects")
     listing.set_defaults(handler=run_list)
@@ -64,7 +92,7 @@ def add_parser(subparsers) -> None:
     show = verbs.add_parser("show", help="show one task with its BDDL file and init-state source")
     add_catalog_options(show)
     show.add_argument("id", help="task id (see `langgap tasks list`)")
-    show.add_argument("--json", action="store_true")
+    show.add_argument("--json", action="store_true", help="print the task as a JSON object")
     show.add_argument(
         "--bddl", action="store_true", help="print only the task's BDDL file (a start for a task of your own)"
     )

@@ -6,13 +6,14 @@ from __future__ import annotations
 from pathlib import Path
 
 from langgap.errors import LangGapError
-from langgap.policies.text import VOCABULARIES
 from langgap.training import LOSSES
 
 
 def add_parser(subparsers) -> None:
-    parser = subparsers.add_parser("train", help="train small-bc on demonstrations, or launch LeRobot fine-tuning")
-    kinds = parser.add_subparsers(dest="train_kind", required=True, metavar="small-bc|lerobot")
+    parser = subparsers.add_parser(
+        "train", help="train small-bc or small-vla on demonstrations, or launch LeRobot fine-tuning"
+    )
+    kinds = parser.add_subparsers(dest="train_kind", required=True, metavar="small-bc|small-vla|lerobot")
 
     bc = kinds.add_parser("small-bc", help="train the small language-conditioned policy on simulator state (CPU)")
     _add_training_flags(bc, data="collection directory (repeatable)")
@@ -51,12 +52,6 @@ def _add_training_flags(parser, *, data: str) -> None:
     parser.add_argument("--threads", type=int, help="torch CPU threads (default: 2)")
     parser.add_argument("--loss", choices=LOSSES, help="regression loss on the action chunk (default: l1)")
     parser.add_argument("--device", help="where the model trains: cpu (the default) or a GPU, e.g. cuda")
-    parser.add_argument(
-        "--vocabulary",
-        choices=VOCABULARIES,
-        help="the model's words: every shipped catalog's sentences (the default), or only the training data's "
-        "(how earlier checkpoints were trained)",
-    )
 
 
 def _training_config(args, model_config: type):
@@ -75,8 +70,7 @@ def _training_config(args, model_config: type):
             raise LangGapError(f"--config {args.config}: {exc}") from None
         if not isinstance(values, dict):
             raise LangGapError(f"{args.config}: expected a mapping of options")
-    how = ("steps", "batch_size", "lr", "seed", "threads", "loss", "device", "vocabulary")
-    options = ("data", "catalog", "tasks", "out", *how)
+    options = ("data", "catalog", "tasks", "out", "steps", "batch_size", "lr", "seed", "threads", "loss", "device")
     for key in options:
         if getattr(args, key) is not None:
             values[key] = getattr(args, key)

@@ -79,6 +79,20 @@ def unknown_conditions(conditions: tuple[str, ...]) -> list[str]:
     return [c for c in conditions if c not in tuple(Condition) and switch_step(c) is None]
 
 
+def unknown_conditions_text(unknown: list[str]) -> str:
+    """The error naming conditions that are none (`unknown_conditions`): a `switch:` whose K is not a whole
+    number of 1 or more says so, any other names every condition."""
+    switches = [c for c in unknown if c.startswith(SWITCH)]
+    others = [c for c in unknown if not c.startswith(SWITCH)]
+    parts = [f"unknown condition(s) {others} ({CONDITION_HELP})"] if others or not switches else []
+    if switches:
+        parts.append(
+            f"{', '.join(map(repr, switches))}: {SWITCH}K takes K, the policy step at which the instruction changes, "
+            "as a whole number of 1 or more"
+        )
+    return "; ".join(parts)
+
+
 def _pick(pool: list[Task], *salt) -> Task:
     """A deterministic member of `pool`, spread over it by `salt` (a task id, an init index, a seed)."""
     digest = hashlib.sha256("#".join(str(s) for s in salt).encode()).digest()
@@ -159,7 +173,7 @@ def condition_instruction(task: Task, catalog: Catalog, condition: str, style: s
             raise CatalogError(f"no other instruction to shuffle in for {task.id}")
         # Deterministic and spread over the pool: the choice depends on the task and the init index only.
         return _pick(pool, task.id, init_index).instruction(style)
-    raise CatalogError(f"unknown condition {condition!r} ({CONDITION_HELP})")
+    raise CatalogError(unknown_conditions_text([condition]))
 
 
 def build_plan(
@@ -180,7 +194,7 @@ def build_plan(
         raise PlanParameterError("{episodes} must be at least 1, got {got}", got=episodes)
     unknown = unknown_conditions(conditions)
     if unknown:
-        raise CatalogError(f"unknown condition(s) {unknown} ({CONDITION_HELP})")
+        raise CatalogError(unknown_conditions_text(unknown))
     from langgap.catalog import files
     from langgap.catalog.files import scene_key
 
@@ -217,7 +231,7 @@ def switch_episode(key: EpisodeKey, task: Task, catalog: Catalog, style: str) ->
 
     k = switch_step(key.condition)
     if k is None:
-        raise CatalogError(f"unknown condition {key.condition!r} ({CONDITION_HELP})")
+        raise CatalogError(unknown_conditions_text([key.condition]))
     if k >= task.max_steps:
         raise CatalogError(
             f"{key.condition}: {task.id} ends at step {task.max_steps}, before its instruction would switch"

@@ -17,7 +17,7 @@ from langgap import stack
 from langgap.catalog.catalog import DEFAULT_CATALOG, catalog_hash, load_catalog
 from langgap.catalog.task import DEFAULT_STYLE, RUN_STYLES
 from langgap.engine.filming import VideoSelection
-from langgap.engine.plan import CONDITION_HELP, REPEAT_STRIDE, unknown_conditions
+from langgap.engine.plan import REPEAT_STRIDE, unknown_conditions, unknown_conditions_text
 from langgap.errors import LangGapError, ParameterError
 from langgap.policies import policy_kwargs
 from langgap.vocabulary import Condition, SeedScheme, Stepping, words
@@ -141,7 +141,7 @@ class RunSpec:
         conditions = tuple(dict.fromkeys(conditions))
         unknown = unknown_conditions(conditions)
         if unknown or not conditions:
-            raise SpecError(f"unknown condition(s) {unknown} ({CONDITION_HELP})")
+            raise SpecError(unknown_conditions_text(unknown))
         selected = load_catalog(catalog).select(tasks)
         for task in selected:
             task.instruction(style)  # `package`: every task must have a runner's sentence
