@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from langgap.errors import LangGapError
+from langgap.policies.text import VOCABULARIES
 from langgap.training import LOSSES
 
 
@@ -52,6 +53,12 @@ def _add_training_flags(parser, *, data: str) -> None:
     parser.add_argument("--threads", type=int, help="torch CPU threads (default: 2)")
     parser.add_argument("--loss", choices=LOSSES, help="regression loss on the action chunk (default: l1)")
     parser.add_argument("--device", help="where the model trains: cpu (the default) or a GPU, e.g. cuda")
+    parser.add_argument(
+        "--vocabulary",
+        choices=VOCABULARIES,
+        help="the model's words: every shipped catalog's sentences (the default), or only the training data's "
+        "(how earlier checkpoints were trained)",
+    )
 
 
 def _training_config(args, model_config: type):
@@ -70,7 +77,8 @@ def _training_config(args, model_config: type):
             raise LangGapError(f"--config {args.config}: {exc}") from None
         if not isinstance(values, dict):
             raise LangGapError(f"{args.config}: expected a mapping of options")
-    options = ("data", "catalog", "tasks", "out", "steps", "batch_size", "lr", "seed", "threads", "loss", "device")
+    how = ("steps", "batch_size", "lr", "seed", "threads", "loss", "device", "vocabulary")
+    options = ("data", "catalog", "tasks", "out", *how)
     for key in options:
         if getattr(args, key) is not None:
             values[key] = getattr(args, key)
