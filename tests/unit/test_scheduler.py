@@ -7,9 +7,11 @@ from collections import deque
 
 import pytest
 
+from langgap.engine.execute import scheduled
 from langgap.engine.plan import PlannedEpisode
 from langgap.engine.pools import ItemDone, ItemFailed, WorkerLost
 from langgap.engine.scheduler import RunStopped, make_units, schedule
+from langgap.engine.spec import ExecutionOptions
 from langgap.engine.work import Job, WorkFailed, refuse_gap
 from langgap.records import EpisodeKey, EpisodeRecord, Status
 
@@ -340,3 +342,21 @@ def test_work_that_has_no_gap_fails_the_command_once_its_attempts_are_spent():
     with pytest.raises(WorkFailed, match=r"^probe s0/a failed 2 time\(s\): GL context lost$") as info:
         run([Probe("s0/a")], pool, make_gap=refuse_gap, max_attempts=2)
     assert info.value.exit_code == 4
+
+
+@pytest.mark.parametrize(
+    ("episodes", "workers", "note"),
+    [
+        (plan(), 999, "note: 6 workers start, not 999: there are 6 episodes to run\n"),
+        (plan(tasks=[f"s{i}/t" for i in range(5)], episodes=1) + plan(tasks=("s9/u",), episodes=5), 10,
+         "note: 8 workers start, not 10: the 10 episodes to run make 8 parts (a task's episodes run in order on one "
+         "worker)\n"),
+        (plan(), 6, ""),
+        (plan(), 0, ""),  # this process runs them
+    ],
+)  # fmt: skip
+def test_asking_for_more_workers_than_can_start_says_how_many_do(episodes, workers, note, capsys):
+    pool = ScriptedPool()
+    records = list(scheduled(episodes, pool, ExecutionOptions(workers=workers), gap))
+    assert capsys.readouterr().err == note and len(records) == len(episodes)
+    assert len(pool.spawned) == (int(note.split()[1]) if note else max(1, workers))

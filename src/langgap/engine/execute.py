@@ -13,7 +13,7 @@ from typing import TypeVar
 
 from langgap.engine.pools import WorkerPool, make_pool
 from langgap.engine.runner import RunnerSetup
-from langgap.engine.scheduler import GapFactory, schedule
+from langgap.engine.scheduler import GapFactory, make_units, schedule
 from langgap.engine.spec import ExecutionOptions
 from langgap.engine.work import WorkItem, refuse_gap
 
@@ -24,16 +24,35 @@ Result = TypeVar("Result")
 def scheduled(
     items: list[Item], pool: WorkerPool, options: ExecutionOptions, make_gap: GapFactory[Item, Result]
 ) -> Iterator[Result]:
-    """`items` scheduled on `pool` with the retries, timeouts and fail-fast rule `options` give."""
+    """`items` scheduled on `pool` with the retries, timeouts and fail-fast rule `options` give; when fewer workers
+    can start than `options.workers` asks for, a `note:` line on stderr says so (`fewer_workers_note`)."""
+    workers = max(1, options.workers)
+    if note := fewer_workers_note(items, workers):
+        print(note, file=sys.stderr, flush=True)
     return schedule(
         items,
         pool,
-        workers=max(1, options.workers),
+        workers=workers,
         make_gap=make_gap,
         max_attempts=options.max_attempts,
         max_failure_streak=options.max_failure_streak,
         timeout_s=options.episode_timeout_s,
     )
+
+
+def fewer_workers_note(items: list[WorkItem], workers: int) -> str | None:
+    """The line that says fewer than `workers` workers start, and why: never more than the parts the work splits
+    into (`make_units`), one per item at most; None when every worker asked for starts."""
+    parts = len(make_units(items, workers))
+    if not items or parts >= workers:
+        return None
+    kind = items[0].kind
+    why = (
+        f"there are {len(items)} {kind}s to run"
+        if parts == len(items)
+        else f"the {len(items)} {kind}s to run make {parts} parts (a task's {kind}s run in order on one worker)"
+    )
+    return f"note: {parts} workers start, not {workers}: {why}"
 
 
 def execute(
