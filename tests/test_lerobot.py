@@ -30,6 +30,7 @@ from langgap.policies import make_policy  # noqa: E402
 from langgap.policies.lerobot import CheckpointError  # noqa: E402
 from langgap.policies.openpi import OpenpiPolicy  # noqa: E402
 from langgap.sim.env import EnvOptions, TaskEnv  # noqa: E402
+from tests.support.harness import run_cli  # noqa: E402
 from tests.support.lerobot_checkpoints import IMAGE_SIZE, N_ACTION_STEPS, diffusion_checkpoint, lora_adapter  # noqa: E402
 from tests.support.servers import free_port, langgap_serve, running, subprocess_env  # noqa: E402
 
@@ -79,6 +80,14 @@ def test_checkpoint_loads_with_its_processors_and_libero_spec(policy, checkpoint
     assert policy.config()["path"] == str(checkpoint)
     with pytest.raises(CheckpointError, match="no LeRobot checkpoint"):
         make_policy("lerobot", {"path": str(checkpoint.parent / "missing")})
+
+
+def test_a_missing_checkpoint_is_bad_input_before_the_run_starts(tmp_path):
+    missing, run = tmp_path / "missing", tmp_path / "run"
+    result = run_cli("eval", "--policy", "lerobot", "--policy-arg", f"path={missing}", "--run", str(run))
+    assert result.returncode == 2, result.stderr
+    expected = f"error: no LeRobot checkpoint at {missing} (expected config.json there or in pretrained_model/)\n"
+    assert result.stderr == expected and not run.exists()
 
 
 def test_policy_sees_what_lerobot_libero_pipeline_gives(policy, catalog):

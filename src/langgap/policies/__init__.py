@@ -64,7 +64,8 @@ def _coerce(value: str, like) -> object:
 
 
 def policy_kwargs(name: str, args: dict[str, str] | None = None) -> dict:
-    """Check `--policy-arg` strings against policy `name`'s constructor and convert them to its types."""
+    """Check `--policy-arg` strings against policy `name`'s constructor and convert them to its types; a policy
+    class with a static `check_arguments(**kwargs)` checks their values too (raising a `LangGapError`)."""
     cls = policy_class(name)
     params = inspect.signature(cls).parameters
     kwargs = {}
@@ -80,6 +81,10 @@ def policy_kwargs(name: str, args: dict[str, str] | None = None) -> dict:
             )
         except ValueError as exc:
             raise UnknownPolicyError(f"policy {name!r} argument {key}: {exc}") from None
+    # A policy may refuse bad arguments it can see without loading anything (a checkpoint path that holds none):
+    # refused here, before a run directory exists or a worker starts, not as a failure of every episode.
+    if (check := getattr(cls, "check_arguments", None)) is not None:
+        check(**kwargs)
     return kwargs
 
 

@@ -21,23 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
-from langgap.errors import LangGapError
 from langgap.lerobot_libero import ACTION_KEY, CAMERA_KEYS, IMAGE_PREFIX, STATE_KEY, image_tensor
 from langgap.policies.base import PolicySpec, TaskContext, current_instruction
+from langgap.policies.lerobot_checkpoint import CheckpointError, check_arguments, pretrained_dir
 from langgap.sim.env import ACTION_DIM, Observation
-
-
-class CheckpointError(LangGapError):
-    """A LeRobot checkpoint is missing, unreadable or incompatible with LIBERO."""
-
-
-def pretrained_dir(path: str) -> Path:
-    """The directory holding `config.json`: `path` itself or its `pretrained_model/`."""
-    root = Path(path).expanduser()
-    for candidate in (root, root / "pretrained_model"):
-        if (candidate / "config.json").is_file():
-            return candidate
-    raise CheckpointError(f"no LeRobot checkpoint at {root} (expected config.json there or in pretrained_model/)")
 
 
 def episode_seed(context: TaskContext) -> int:
@@ -47,6 +34,8 @@ def episode_seed(context: TaskContext) -> int:
 
 class LeRobotPolicy:
     """A LeRobot `PreTrainedPolicy` behind LangGap's policy protocol (see the module docstring)."""
+
+    check_arguments = staticmethod(check_arguments)  # before a run starts (`policy_kwargs`)
 
     def __init__(self, path: str, device: str = "cpu", adapter: str = "", image_size: int = 0, threads: int = 0):
         import torch
