@@ -74,6 +74,8 @@ _VALIDATE_CLI = "tests/test_validate.py::test_cli_validate_writes_report_and_rec
 _GENERATE_GATE = "tests/test_generate.py::test_generate_gates_every_candidate_and_records_how"
 _GENERATE_CLI = "tests/test_generate.py::test_cli_generate_writes_a_loadable_registry_and_prints_counts"
 _REPLAY = "tests/test_search.py::test_tasks_replay_replays_a_verdicts_demonstrations_and_fails_a_damaged_one"
+_SPLITS = "tests/unit/test_splits.py::test_generate_writes_a_file_that_shows_and_checks"
+_SPLIT_WORDS = "tests/unit/test_splits.py::test_novel_word_splits_hold_out_a_sentence_with_a_word_training_never_says"
 _AUDIT = "tests/test_external.py::test_audit_runs_the_start_check_on_k_init_states_and_records_it_beside_the_registry"
 _COLLECT_CLI = "tests/test_demos.py::test_collect_cli_without_lerobot_writes_compact_form"
 _CLAIMS_EXECUTION = "tests/test_validate.py::test_claims_only_runs_its_probes_on_the_execution_flags"
@@ -391,6 +393,15 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "train small-bc --seed": (ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),),
     "train small-bc --threads": (ProvenBy(_SMALL_BC_CLI),),
     "train small-bc --loss": (ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),),
+    "splits generate --catalog": (ProvenBy(_SPLITS),),
+    "splits generate --heldout": (ProvenBy(_SPLITS),),
+    "splits generate --name": (ProvenBy(_SPLITS),),
+    "splits generate --out": (ProvenBy(_SPLITS),),
+    "splits generate --subsets": (ProvenBy(_SPLITS),),
+    "splits generate --tasks": (ProvenBy(_SPLITS),),
+    "splits generate --seed": (ProvenBy("tests/unit/test_splits.py::test_a_generated_compositional_split_does_too"),),
+    "splits generate --style": (ProvenBy(_SPLIT_WORDS),),
+    "splits show --json": (ProvenBy(_SPLITS),),
     "train small-bc --vocabulary": (ProvenBy("tests/test_small_bc.py::test_the_vocabulary_is_fixed_before_training"),),
     "train small-bc --device": (
         ProvenBy("tests/test_flags.py::test_small_bc_training_options_reach_the_config"),

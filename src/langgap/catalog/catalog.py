@@ -28,7 +28,8 @@ from langgap.vocabulary import TaskKind
 
 DEFAULT_CATALOG = "langgap99"
 _KEYWORDS_HELP = (
-    "an id, a glob (spatial/*), paper:N, all, feasible, rejected, langgap99, a suite, kind, dimension or split; "
+    "an id, a glob (spatial/*), paper:N, all, feasible, rejected, langgap99, a suite, kind, dimension or split, "
+    "split:NAME:train|heldout|K; "
     "'&' intersects, '!' excludes"
 )
 
@@ -110,9 +111,10 @@ class Catalog:
         `paper:N`, `all`, `feasible` / `rejected` (a feasibility gate's verdict: rejected tasks are
         unproven or proven infeasible), `langgap99`
         (the paper's tasks), a suite (`libero_spatial` or `spatial`), a kind, a dimension or a
-        split. Terms joined with `&` intersect (`spatial&heldout`); `!` before a term excludes its
-        tasks (`original&!spatial/s0/*`; alone, from all tasks). A term matching nothing is an
-        error. No expression selects every task a feasibility gate did not reject.
+        split, or `split:NAME:PART` (a stored split's `train` or `heldout` tasks, or its nested subset of K
+        training tasks: `langgap.catalog.splits`). Terms joined with `&` intersect (`spatial&heldout`); `!`
+        before a term excludes its tasks (`original&!spatial/s0/*`; alone, from all tasks). A term matching
+        nothing is an error. No expression selects every task a feasibility gate did not reject.
 
         Args:
             expression: The selection (`spatial/s0/*`, `feasible&heldout`); None or blank: `feasible`.
@@ -149,6 +151,10 @@ class Catalog:
             return {term}
         if term == "all":
             return set(self._by_id)
+        if term.startswith("split:"):
+            from langgap.catalog.splits import split_tasks  # splits read catalogs: imported where used
+
+            return split_tasks(self, term)
         if term in ("feasible", "rejected"):
             # may be empty (a catalog whose every task passed): `feasible&!rejected` still means something
             return {t.id for t in self.tasks if t.feasible == (term == "feasible")}

@@ -20,6 +20,7 @@ from langgap.cli import (
     report_cmd,
     serve_cmd,
     smoke,
+    splits_cmd,
     tasks_cmd,
     train_cmd,
     validate_cmd,
@@ -30,6 +31,7 @@ from langgap.errors import LangGapError
 
 VERBS = (
     tasks_cmd,
+    splits_cmd,
     eval_cmd,
     check_policy_cmd,
     serve_cmd,

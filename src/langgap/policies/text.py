@@ -11,23 +11,18 @@ stays for reproducing results made with it.
 from __future__ import annotations
 
 import functools
-import re
 from collections.abc import Iterable
 
 from langgap import stack
 from langgap.bddl import parse_bddl
 from langgap.catalog.catalog import available_catalogs, load_catalog
+from langgap.catalog.words import words
 
 PAD, UNK = "<pad>", "<unk>"
 # Where a trained model's vocabulary comes from (`TrainConfig.vocabulary`): the shipped catalogs (the default),
 # or only its training data's sentences and entity names (how checkpoints were trained before).
 VOCABULARIES = ("catalogs", "training")
-_WORD = re.compile(r"[a-z]+|\d+")
-
-
-def words(text: str) -> list[str]:
-    """Lower-cased words and numbers of a sentence or an entity name (`akita_black_bowl_1`)."""
-    return _WORD.findall(text.lower().replace("_", " "))
+__all__ = ["PAD", "UNK", "VOCABULARIES", "Vocabulary", "catalog_texts", "catalog_vocabulary", "words"]
 
 
 class Vocabulary:
