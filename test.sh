@@ -12,5 +12,6 @@ fi
 .venv/bin/python -m pytest "$@"
 if [ -x .venv-lerobot/bin/python ] && [ $# -eq 0 ]; then
     # LeRobot, torch and lerobot-eval live in the second environment; these tests skip in .venv.
-    OMP_NUM_THREADS=1 .venv-lerobot/bin/python -m pytest tests/test_lerobot.py tests/test_lerobot_demos.py -m "slow or not slow"
+    OMP_NUM_THREADS=1 .venv-lerobot/bin/python -m pytest tests/test_lerobot.py tests/test_lerobot_demos.py \
+        tests/test_lerobot_experiment.py -m "slow or not slow"
 fi

@@ -1,4 +1,5 @@
-"""The paper's experiments as configuration, and the lerobot-train command they make."""
+"""The paper's experiments and LeRobot's policies as configuration, the lerobot-train command they make, and the
+plan `langgap experiment run --dry-run` prints (no LeRobot needed)."""
 
 from __future__ import annotations
 
@@ -6,7 +7,14 @@ import pytest
 
 from langgap.catalog.catalog import load_catalog
 from langgap.errors import LangGapError
-from langgap.training.lerobot_train import EXPERIMENTS, load_experiment, train_command
+from langgap.training.lerobot_train import (
+    EXPERIMENTS,
+    POLICIES,
+    load_experiment,
+    load_recipe,
+    train_command,
+    train_options,
+)
 from tests.support.harness import run_cli
 
 # Table III of the paper: tasks, demos, LoRA rank, steps, eval tasks, episodes.
@@ -19,6 +27,13 @@ TABLE_III = {
 }
 EVAL_TASKS = {"exp1": 1, "exp2": 5, "exp3": 5, "exp4": 16, "exp5": 16}
 TRAIN_TASKS = {"exp1": 1, "exp2": 6, "exp3": 45, "exp4": 16, "exp5": 56}
+# Demonstrations LangGap collects: the paper's count, or within 1 % of it where lerobot/libero's uneven 1,693
+# originals cannot be matched task by task (the experiment files say how).
+DEMONSTRATIONS = {"exp1": 56, "exp2": 300, "exp3": 2010, "exp4": 2400, "exp5": 4080}
+
+
+def _demonstrations(experiment, catalog) -> int:
+    return sum(len(catalog.select(g.tasks)) * g.demos for g in experiment.train)
 
 
 @pytest.mark.parametrize("name", EXPERIMENTS)
@@ -27,28 +42,83 @@ def test_experiment_matches_table_iii_and_selects_catalog_tasks(name):
     paper = experiment.paper
     row = (paper["tasks"], paper["demos"], paper["lora_rank"], paper["steps"], paper["eval_tasks"], paper["episodes"])
     assert row == TABLE_III[name]
-    assert experiment.lerobot["peft.r"] == paper["lora_rank"] and experiment.lerobot["steps"] == paper["steps"]
-    assert experiment.episodes == paper["episodes"]
-    assert experiment.lerobot["batch_size"] == 8 and experiment.lerobot["policy.optimizer_lr"] == 1e-4
+    assert (experiment.lora_rank, experiment.steps, experiment.episodes) == (row[2], row[3], row[5])
     catalog = load_catalog("langgap99")
-    assert len(catalog.select(experiment.train_tasks)) == TRAIN_TASKS[name]
-    evaluated = catalog.select(experiment.eval_tasks)
-    assert len(evaluated) == EVAL_TASKS[name] and all(t.kind == "extended" for t in evaluated)
+    trained = {t.id for g in experiment.train for t in catalog.select(g.tasks)}
+    assert len(trained) == TRAIN_TASKS[name]
+    demonstrations = _demonstrations(experiment, catalog)
+    assert demonstrations == DEMONSTRATIONS[name] and abs(demonstrations - paper["demos"]) <= 0.01 * paper["demos"]
+    evaluated = catalog.select(experiment.eval["trained"])
+    assert len(evaluated) == EVAL_TASKS[name] and all(t.kind == "extended" and t.id in trained for t in evaluated)
+    scenes = {t.scene_task for t in evaluated}
+    held_out = catalog.select(experiment.eval["heldout"])
+    assert held_out and all(t.split == "heldout" and t.scene_task in scenes for t in held_out)
+    originals = catalog.select(experiment.eval["original"])
+    assert {t.scene_task for t in originals} == scenes and all(t.kind == "original" for t in originals)
+
+
+def test_the_extended_share_of_the_dilution_experiments_is_the_papers():
+    """Exp 3 and 5 dilute the extended demonstrations with originals in the proportion the paper trained on."""
+    catalog = load_catalog("langgap99")
+    for name, extended, total in (("exp3", 250, 1993), ("exp5", 2400, 4093)):
+        experiment = load_experiment(name)
+        ours = sum(len(catalog.select(g.tasks)) * g.demos for g in experiment.train if g.tasks != "original")
+        assert abs(ours / _demonstrations(experiment, catalog) - extended / total) < 0.005
+
+
+@pytest.mark.parametrize("policy", POLICIES)
+def test_recipes_state_what_trains_and_every_lora_its_alpha_and_targets(policy):
+    recipe = load_recipe(policy)
+    assert recipe.tunings and all(t.trains and t.frozen for t in recipe.tunings.values())
+    for tuning in recipe.tunings.values():
+        if "peft.method_type" in tuning.options:
+            assert tuning.options["peft.lora_alpha"] in (8, "rank") and tuning.options["peft.target_modules"]
+    assert (recipe.tiny is None) == bool(recipe.tiny_blocked_by)
+
+
+def test_the_pi05_recipe_is_the_papers_setting():
+    experiment, recipe = load_experiment("exp2"), load_recipe("pi05")
+    paper = train_options(experiment, recipe)
+    assert paper["policy.type"] == "pi05" and paper["policy.pretrained_path"] == "lerobot/pi05_libero_base"
+    assert paper["batch_size"] == 8 and paper["policy.optimizer_lr"] == 1e-4 and paper["policy.dtype"] == "bfloat16"
+    assert paper["peft.r"] == 64 and paper["peft.lora_alpha"] == 8 and "gemma_expert" in paper["peft.target_modules"]
+    language = train_options(experiment, recipe, tuning="language")
+    assert language["peft.lora_alpha"] == 64 and "language_model" in language["peft.target_modules"]
+    with pytest.raises(LangGapError, match="no tiny version: LeRobot's π0.5 processor loads its tokenizer"):
+        train_options(experiment, recipe, tiny={"tiny_vlm": "x", "image_size": "64"})
 
 
 def test_train_command_is_a_lerobot_train_argv():
-    command = train_command(
-        load_experiment("exp2", {"steps": "10"}), dataset_root="/data/c/lerobot", repo_id="me/d", output_dir="/o"
-    )
+    options = train_options(load_experiment("exp2"), load_recipe("pi05"), overrides={"steps": "10"})
+    command = train_command(options, dataset_root="/data/c/lerobot", repo_id="me/d", output_dir="/o", job_name="j")
     assert command[0] == "lerobot-train"
     flags = dict(arg[2:].split("=", 1) for arg in command[1:])
     assert flags["policy.type"] == "pi05" and flags["peft.method_type"] == "LORA" and flags["peft.r"] == "64"
+    assert flags["peft.lora_alpha"] == "8" and flags["peft.target_modules"].startswith("(.*\\.gemma_expert")
     assert flags["steps"] == "10" and flags["dataset.root"] == "/data/c/lerobot" and flags["dataset.repo_id"] == "me/d"
     assert flags["policy.push_to_hub"] == "false" and flags["output_dir"] == "/o"
 
 
-def test_unknown_experiment_is_an_error():
+@pytest.mark.parametrize("name", EXPERIMENTS)
+def test_experiment_dry_run_prints_the_papers_counts_and_writes_nothing(name, tmp_path):
+    experiment = load_experiment(name)
+    out = tmp_path / "out"
+    result = run_cli("experiment", "run", name, "--out", str(out), "--dry-run")
+    assert result.returncode == 0, result.stderr
+    assert f"demonstrations: {DEMONSTRATIONS[name]} (paper: {experiment.paper['demos']})" in result.stdout
+    assert f"--steps={experiment.steps}" in result.stdout and f"--peft.r={experiment.lora_rank}" in result.stdout
+    assert f"--episodes {experiment.episodes}" in result.stdout and "tuning paper: trains LoRA" in result.stdout
+    assert not out.exists()
+
+
+def test_unknown_experiment_policy_or_tuning_is_an_error(tmp_path):
     with pytest.raises(LangGapError, match="unknown experiment"):
         load_experiment("exp9")
     result = run_cli("train", "lerobot", "exp9", "--dataset-root", "d", "--output-dir", "o", "--dry-run")
     assert result.returncode == 2 and result.stderr.startswith("error: unknown experiment")
+    for args, message in (
+        (("--policy", "octo"), "error: unknown policy recipe 'octo'"),
+        (("--tuning", "all"), "error: pi05 has no tuning 'all' (it has: paper, language)"),
+    ):
+        result = run_cli("experiment", "run", "exp1", "--out", str(tmp_path / "o"), "--dry-run", *args)
+        assert result.returncode == 2 and result.stderr.startswith(message), result.stderr

@@ -16,10 +16,17 @@ pytest.importorskip("lerobot", reason="LeRobot lives in .venv-lerobot (created b
 from lerobot.datasets.lerobot_dataset import LeRobotDataset  # noqa: E402
 
 from langgap.demos.compact import demo_files, load_demo  # noqa: E402
-from langgap.demos.export import CAMERA_FEATURES  # noqa: E402
+from langgap.demos.export import CAMERA_FEATURES, FPS  # noqa: E402
 from langgap.demos.record import start_episode  # noqa: E402
 from langgap.sim.env import CAMERAS, EnvOptions, TaskEnv  # noqa: E402
-from langgap.training.lerobot_train import EXPERIMENTS, load_experiment, train_command  # noqa: E402
+from langgap.training.lerobot_train import (  # noqa: E402
+    EXPERIMENTS,
+    POLICIES,
+    load_experiment,
+    load_recipe,
+    train_command,
+    train_options,
+)
 from tests.support.harness import TINY_TASK  # noqa: E402
 from tests.test_lerobot import lerobot_libero_batch  # noqa: E402
 
@@ -62,7 +69,7 @@ def small_dataset(tiny_collection, tmp_path_factory):
 def test_dataset_has_the_lerobot_libero_schema(dataset, catalog):
     root, ds = dataset
     demos = [load_demo(p) for p in demo_files(root)]
-    assert ds.fps == 20 and ds.num_episodes == 2 and ds.num_frames == sum(d.length for d in demos)
+    assert ds.fps == FPS == 10 and ds.num_episodes == 2 and ds.num_frames == sum(d.length for d in demos)
     features = ds.meta.features
     for key in CAMERA_FEATURES.values():
         assert features[key]["dtype"] == "video" and tuple(features[key]["shape"]) == (256, 256, 3)
@@ -114,15 +121,25 @@ def test_frames_are_oriented_as_lerobots_libero_processor_makes_them(exported_at
 
 
 @pytest.mark.parametrize("name", EXPERIMENTS)
-def test_experiment_commands_parse_with_lerobots_own_config(name):
+@pytest.mark.parametrize("policy", POLICIES)
+def test_experiment_commands_parse_with_lerobots_own_config(name, policy):
+    """Every experiment, policy and tuning makes a command LeRobot's own parser reads back as written: LoRA's rank,
+    alpha and targets where the tuning uses LoRA, the experiment's steps, the dataset."""
     import draccus
     import lerobot.policies  # noqa: F401  (registers the policy types the parser chooses from)
     from lerobot.configs.train import TrainPipelineConfig
 
-    experiment = load_experiment(name)
-    command = train_command(experiment, dataset_root="/d", repo_id="local/x", output_dir="/o")
-    config = draccus.parse(TrainPipelineConfig, args=command[1:])
-    assert config.peft.method_type == "LORA" and config.peft.r == experiment.paper["lora_rank"]
-    assert config.steps == experiment.paper["steps"] and config.batch_size == 8
-    assert config.policy.type == "pi05" and config.policy.optimizer_lr == 1e-4 and config.policy.dtype == "bfloat16"
-    assert str(config.dataset.root) == "/d" and config.dataset.repo_id == "local/x"
+    experiment, recipe = load_experiment(name), load_recipe(policy)
+    for tuning in recipe.tunings.values():
+        options = train_options(experiment, recipe, tuning=tuning.name)
+        command = train_command(options, dataset_root="/d", repo_id="local/x", output_dir="/o", job_name=name)
+        config = draccus.parse(TrainPipelineConfig, args=command[1:])
+        assert config.policy.type == recipe.lerobot["policy.type"] and config.steps == experiment.paper["steps"]
+        assert str(config.dataset.root) == "/d" and config.dataset.repo_id == "local/x" and config.batch_size == 8
+        if "peft.method_type" in tuning.options:
+            assert config.peft.method_type == "LORA" and config.peft.r == experiment.paper["lora_rank"]
+            assert config.peft.target_modules == tuning.options["peft.target_modules"]
+            expected_alpha = experiment.lora_rank if tuning.options["peft.lora_alpha"] == "rank" else 8
+            assert float(config.peft.lora_alpha) == expected_alpha
+        else:
+            assert config.peft is None

@@ -45,9 +45,10 @@ NOT_RUN: dict[tuple[str, str], str] = {
     ("docs/evaluation.md", "langgap validate --catalog langgap99 --backend ray --ray-address HEAD:6379 --workers "
      "16 --record"): "joins a Ray cluster at HEAD; tests/test_ray.py runs validate and collect on a two-node "
      "cluster in a network namespace (a head started here would listen beyond 127.0.0.1)",
-    ("docs/training.md", ".venv-lerobot/bin/langgap train lerobot exp2 --dataset-root data/exp2/lerobot "
-     "--output-dir outputs/exp2"): "fine-tunes π0.5 with lerobot-train on a GPU for hours, then evaluates it; "
-     "test_lerobot_demos.py parses each experiment's lerobot-train command with LeRobot's own config",
+    ("docs/training.md", ".venv-lerobot/bin/langgap experiment run exp1 --out runs/exp1 --workers 8"):
+        "fine-tunes π0.5 (downloaded from the hub) with lerobot-train on a GPU for hours; the rehearsal block "
+        "before it runs the same stages with a tiny SmolVLA, test_lerobot_demos.py parses every experiment's "
+        "lerobot-train command with LeRobot's own config",
     ("README.md", ".venv-lerobot/bin/langgap eval --policy lerobot --policy-arg path=/ckpts/pi05_libero_finetuned \\"):
         "needs a π0.5 checkpoint and a CUDA GPU; test_lerobot.py runs the lerobot policy on tiny checkpoints",
     ("docs/vla.md", "# ./setup.sh created .venv-lerobot (Python 3.12, lerobot 0.6.1, torch, LangGap, the plugin)"):

@@ -68,6 +68,9 @@ _COLLECT = (
 )
 _SMALL_BC = ("train", "small-bc", "--data", "{collection}", "--out", "{dir}/bc.safetensors")
 _LEROBOT = ("train", "lerobot", "exp1", "--dataset-root", "{dir}/data", "--output-dir", "{dir}/out", "--dry-run")
+_EXPERIMENT = ("experiment", "run", "exp1", "--out", "{dir}/exp1", "--dry-run")
+_EXPERIMENT_CHAIN = "tests/test_lerobot_experiment.py::test_act_experiment_runs_end_to_end_and_resumes"
+_TINY_SMOLVLM = "tests/test_lerobot_experiment.py::test_smolvla_experiment_trains_on_a_tiny_smolvlm_built_here"
 
 _EVAL_FLAGS = "tests/test_eval.py::test_every_flag_of_a_run_reaches_its_effect"
 _VALIDATE_CLI = "tests/test_validate.py::test_cli_validate_writes_report_and_records_verdicts"
@@ -430,6 +433,36 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "train lerobot --output-dir": (Differs(_LEROBOT, ("--output-dir", "{dir}/elsewhere")),),
     "train lerobot --set": (Differs(_LEROBOT, ("--set", "steps=7")),),
     "train lerobot --dry-run": (Differs(_LEROBOT[:-1], ("--dry-run",), path=""),),
+    "train lerobot --policy": (Differs(_LEROBOT, ("--policy", "act")),),
+    "train lerobot --tuning": (
+        Differs(_LEROBOT, ("--tuning", "language")),
+        Refused((*_LEROBOT, "--tuning", "nope"), "pi05 has no tuning 'nope'"),
+    ),
+    # -- experiment ----------------------------------------------------------------------------------------------
+    "experiment run --out": (ProvenBy(_EXPERIMENT_CHAIN),),
+    "experiment run --dry-run": (ProvenBy(_EXPERIMENT_CHAIN),),
+    "experiment run --policy": (Differs(_EXPERIMENT, ("--policy", "act")),),
+    "experiment run --tuning": (Differs(_EXPERIMENT, ("--tuning", "language")),),
+    "experiment run --tiny": (
+        Differs(_EXPERIMENT, ("--policy", "act", "--tiny")),
+        Refused((*_EXPERIMENT, "--tiny"), "pi05 has no tiny version"),
+    ),
+    "experiment run --catalog": (Refused((*_EXPERIMENT, "--catalog", "{dir}/nowhere.yaml"), "nowhere.yaml"),),
+    "experiment run --demos": (Differs(_EXPERIMENT, ("--demos", "2")),),
+    "experiment run --steps": (Differs(_EXPERIMENT, ("--steps", "7")),),
+    "experiment run --episodes": (Differs(_EXPERIMENT, ("--episodes", "2")),),
+    "experiment run --eval-sets": (
+        Differs(_EXPERIMENT, ("--eval-sets", "trained")),
+        Refused((*_EXPERIMENT, "--eval-sets", "trained,nope"), "--eval-sets takes trained, heldout, original"),
+    ),
+    "experiment run --image-size": (Differs(_EXPERIMENT, ("--image-size", "128")),),
+    "experiment run --seed": (Differs(_EXPERIMENT, ("--seed", "3")),),
+    "experiment run --noise": (Differs(_EXPERIMENT, ("--noise", "0.3")),),
+    "experiment run --originals": (Refused((*_EXPERIMENT, "--originals", "{dir}/none"), "not a LeRobot dataset"),),
+    "experiment run --device": (Differs(_EXPERIMENT, ("--device", "cpu")),),
+    "experiment run --workers": (Differs(_EXPERIMENT, ("--workers", "2")),),
+    "experiment run --set": (Differs(_EXPERIMENT, ("--set", "batch_size=4")),),
+    "experiment tiny-smolvlm --image-size": (ProvenBy(_TINY_SMOLVLM),),
 }
 
 

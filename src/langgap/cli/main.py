@@ -13,9 +13,11 @@ from langgap.cli import (
     collect_cmd,
     doctor_cmd,
     eval_cmd,
+    experiment_cmd,
     export_hdf5_cmd,
     export_lerobot_cmd,
     generate_cmd,
+    merge_lerobot_cmd,
     parameter_flags,
     report_cmd,
     serve_cmd,
@@ -44,7 +46,9 @@ VERBS = (
     verify_demos_cmd,
     export_lerobot_cmd,
     export_hdf5_cmd,
+    merge_lerobot_cmd,
     train_cmd,
+    experiment_cmd,
 )
 
 

@@ -26,7 +26,7 @@ def add_parser(subparsers) -> None:
     vla.set_defaults(handler=run_small_vla, smoke=("steps", "collected_tasks"))
 
     lr = kinds.add_parser(
-        "lerobot", help="launch lerobot-train (PEFT LoRA on pi0.5) for one of the paper's experiments"
+        "lerobot", help="launch lerobot-train for one of the paper's experiments (`langgap experiment run` chains it)"
     )
     lr.add_argument("config", metavar="CONFIG", help="experiment name (exp1..exp5) or YAML file")
     lr.add_argument(
@@ -34,7 +34,9 @@ def add_parser(subparsers) -> None:
     )
     lr.add_argument("--dataset-repo-id", default="local/langgap_demos", help="its repo id (default: %(default)s)")
     lr.add_argument("--output-dir", required=True, metavar="DIR", help="lerobot-train output directory")
-    lr.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a config value (repeatable)")
+    lr.add_argument("--policy", default="pi05", help="pi05 (the paper's), pi0, smolvla, act, or a recipe YAML file")
+    lr.add_argument("--tuning", help="which parameters train (`langgap experiment list` shows each policy's)")
+    lr.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a lerobot-train option (repeatable)")
     lr.add_argument("--dry-run", action="store_true", help="print the command line and exit")
     lr.set_defaults(handler=run_lerobot)
 
@@ -128,11 +130,18 @@ def _trained(train, config, out) -> int:
 
 def run_lerobot(args) -> int:
     from langgap.cli.policy_options import parse_key_values
-    from langgap.training.lerobot_train import launch, load_experiment, train_command
+    from langgap.training.lerobot_train import launch, load_experiment, load_recipe, train_command, train_options
 
-    experiment = load_experiment(args.config, overrides=parse_key_values(args.set, "--set"))
+    experiment = load_experiment(args.config)
+    options = train_options(
+        experiment, load_recipe(args.policy), tuning=args.tuning, overrides=parse_key_values(args.set, "--set")
+    )
     command = train_command(
-        experiment, dataset_root=args.dataset_root, repo_id=args.dataset_repo_id, output_dir=args.output_dir
+        options,
+        dataset_root=args.dataset_root,
+        repo_id=args.dataset_repo_id,
+        output_dir=args.output_dir,
+        job_name=f"langgap_{experiment.name}",
     )
     if args.dry_run:
         import shlex

@@ -4,9 +4,9 @@ Schema of `lerobot/libero`: `observation.images.image` (agentview) and `observat
 (wrist), 256x256 by default (`image_size` renders another square size) and upright (LangGap's images:
 the raw render rotated 180 degrees, what LeRobot's `LiberoProcessorStep` makes of the raw render),
 `observation.state` 8-D, `action` 7-D (the oracle's command, without the execution noise of
-`collect --noise`), the task string (the exact catalog instruction in the collection's style), fps 20
-(the control rate: one frame per action). Frames are rendered by replaying the recorded states of kept
-demonstrations.
+`collect --noise`), the task string (the exact catalog instruction in the collection's style). One frame per
+control step (LIBERO runs at 20 Hz), labelled 10 fps as the LIBERO datasets users train on are (`FPS`). Frames are
+rendered by replaying the recorded states of kept demonstrations.
 """
 
 from __future__ import annotations
@@ -20,7 +20,12 @@ from langgap.demos.compact import LEROBOT_DIR, demo_files, read_manifest
 from langgap.demos.render import IMAGE_SIZE, iter_demos
 from langgap.errors import DependencyNotInstalled, LangGapError
 
-FPS = 20
+# The fps label, not a rate: every frame is one 20 Hz control step, as in LIBERO's own demonstrations, which
+# openpi's conversion and the `lerobot/libero` datasets label 10 fps. LeRobot aggregates only datasets of one
+# label, and a policy's action chunk is a run of consecutive frames whatever the label (LeRobot turns the
+# chunk's time offsets i / fps back into frame offsets i), so it spans consecutive control steps, which is what
+# LangGap executes: one action per step.
+FPS = 10
 # LangGap camera -> LeRobot feature (the `lerobot/libero` names).
 CAMERA_FEATURES = {"agentview": "observation.images.image", "robot0_eye_in_hand": "observation.images.image2"}
 
