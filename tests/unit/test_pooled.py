@@ -86,9 +86,12 @@ def test_pools_of_several_runs_are_compared_over_their_runs(replicates, tmp_path
     text = pooled_text(pools)
     assert "### Between pools over their runs" in text
     assert (
-        "| memorising vs reading | Extended, training split | 0.0, 0.0 | 100.0, 100.0 | +100.0 | 0.333 | 0.333 |"
-        in text
+        "| memorising vs reading | Extended, training split | 0.0, 0.0 | 100.0, 100.0 | +100.0 (reading minus "
+        "memorising) | 0.333 | 0.333 |" in text
     )
+    assert "Difference of means (points, second minus first)" in text  # the column says which side minus which
+    swapped = pooled_text({"reading": pools["reading"], "memorising": pools["memorising"]})
+    assert "| -100.0 (memorising minus reading) |" in swapped
     data = json.loads(pooled_text(pools, "json"))
     assert [row["label"] for row in data["pools"]] == ["memorising", "reading", "blind"]
     assert [t["group"] for t in data["tests"]] == ["train", "heldout", "did_source_task"]

@@ -164,21 +164,23 @@ def replicate_tests(rows: list[PooledRow]) -> list[ReplicateTest]:
 
 
 def replicate_tests_table(tests: list[ReplicateTest]) -> Table:
-    """A row per pair of pools and group: each replicate's rate, the difference of means, p and its floor."""
+    """A row per pair of pools and group: each replicate's rate, the difference of means (second minus first, which
+    each cell names: a bare sign reads either way), p and its floor."""
     rows = [
         [
             f"{t.first} vs {t.second}",
             label(GROUP_LABEL, t.group),
             ", ".join(map(pct, t.first_rates)),
             ", ".join(map(pct, t.second_rates)),
-            f"{100 * t.difference:+.1f}",
+            f"{100 * t.difference:+.1f} ({t.second} minus {t.first})",
             "–" if t.p is None else f"{t.p:.3g}",
             f"{t.floor:.3g}",
         ]
         for t in tests
     ]
-    headers = ["Pools", "Group", "First pool's runs %", "Second pool's runs %", "Difference of means (points)",
-               "p (exact permutation over runs)", "Smallest p possible"]  # fmt: skip
+    headers = ["Pools", "Group", "First pool's runs %", "Second pool's runs %",
+               "Difference of means (points, second minus first)", "p (exact permutation over runs)",
+               "Smallest p possible"]  # fmt: skip
     return Table("Between pools over their runs (each run one sample; two-sided exact permutation test)", headers, rows)
 
 
