@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections import defaultdict
 
 from langgap.catalog.catalog import available_catalogs, load_catalog
-from langgap.policies.text import UNK, Vocabulary, catalog_vocabulary, words
+from langgap.policies.text import UNK, Vocabulary, catalog_texts, catalog_vocabulary, words
 
 
 def test_it_holds_every_word_of_every_catalog_instruction_in_every_style():
@@ -42,3 +42,38 @@ def test_a_training_sentence_alone_would_read_held_out_sentences_alike():
     assert len({tuple(alone.encode(t.instruction(), 24)) for t in tasks}) < len(tasks)
     fixed = catalog_vocabulary()
     assert len({tuple(fixed.encode(t.instruction(), 24)) for t in tasks}) == len(tasks)
+
+
+def test_ids_are_padding_unknown_then_the_sorted_words():
+    vocab = Vocabulary(["plate", "bowl", "plate", "<unk>", "<pad>", "akita"])
+    assert vocab.tokens == ["<pad>", "<unk>", "akita", "bowl", "plate"] and len(vocab) == 5
+    assert Vocabulary.from_texts(["Put the bowl", "the akita_black_bowl_1"]).tokens == [
+        "<pad>",
+        "<unk>",
+        "1",
+        "akita",
+        "black",
+        "bowl",
+        "put",
+        "the",
+    ]
+
+
+def test_encode_pads_with_zero_truncates_and_reads_an_unknown_word_as_one():
+    vocab = Vocabulary(["bowl", "plate", "put"])  # ids: bowl 2, plate 3, put 4
+    assert vocab.encode("put bowl", 5) == [4, 2, 0, 0, 0]
+    assert vocab.encode("put the bowl on the plate", 3) == [4, 1, 2]
+    assert vocab.encode("put the bowl", 3) == [4, 1, 2]
+    assert vocab.encode("", 2) == [0, 0]
+
+
+def test_the_texts_are_every_catalogs_sentences_and_their_scenes_entity_names():
+    """`catalog_texts` itself (the vocabulary it makes is cached for the process, so it is read directly)."""
+    texts = catalog_texts()
+    assert texts == sorted(set(texts))
+    for name in available_catalogs():
+        for task in load_catalog(name):
+            assert set(task.instructions.values()) <= set(texts), task.id
+    # the scenes' object and fixture names, as the BDDL files write them
+    assert {"glazed_rim_porcelain_ramekin_1", "flat_stove_1", "main_table"} <= set(texts)
+    assert catalog_vocabulary().tokens == Vocabulary.from_texts(texts).tokens

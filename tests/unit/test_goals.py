@@ -201,3 +201,66 @@ def test_moved_is_langgaps_own_atom_never_a_witness_nor_a_bddl_goal():
     )
     with pytest.raises(BddlError, match="no BDDL file states it"):
         parse_bddl(stated)
+
+
+@pytest.mark.parametrize(
+    ("text", "says"),
+    [
+        ("((On a b))", r"^goal '\(\(On a b\)\)': expected '\(Name \.\.\.\)' at token 0$"),
+        ("()", r"expected '\(Name \.\.\.\)' at token 0"),
+        ("(And (", r"^goal '\(And \(': expected '\(Name \.\.\.\)' at token 2$"),
+        ("(On", "an atom's arguments must be names, closed by"),
+        ("(On a b", r"^goal '\(On a b': an atom's arguments must be names, closed by '\)'$"),
+        ("(And (On a b)", r"^goal '\(And \(On a b\)': \(And \.\.\.\) takes expressions only, or lacks '\)'$"),
+        ("(And (On a (b)))", r"^goal '\(And \(On a \(b\)\)\)': an atom's arguments"),
+    ],
+)
+def test_a_malformed_goal_is_named_whole_with_where_it_breaks(text, says):
+    with pytest.raises(BddlError, match=says):
+        parse_goal(text)
+
+
+def test_an_empty_registry_goal_is_one_error():
+    with pytest.raises(BddlError, match="^goal is empty$"):
+        goal_from_strings([])
+
+
+def test_order_is_found_and_dropped_under_a_negation_too():
+    a, b = Atom(Predicate.of("On", ["a", "b"])), Atom(Predicate.of("On", ["c", "d"]))
+    assert is_ordered(Not(Then((a, b)))) and not is_ordered(Not(And((a, b))))
+    assert unordered(Not(Then((a, b)))) == Not(And((a, b)))
+    assert unordered(Or((Then((a, b)), a))) == Or((And((a, b)), a))
+    assert unordered(Not(a)) == Not(a)
+
+
+def test_a_witness_names_every_atom_libero_cannot_state():
+    with pytest.raises(BddlError, match=r"its witness needs \(Moved a\), \(Moved b\), which LIBERO"):
+        witness(parse_goal("(And (Moved a) (Moved b))"))
+
+
+def test_the_unordered_parts_join_the_last_stage_of_the_order():
+    goal = parse_goal("(And (Then (On a x) (On b x) (On c x)) (On d x))")
+    assert [[str(p) for p in group] for group in stages(goal)] == [
+        ["(On a x)"],
+        ["(On b x)"],
+        ["(On c x)", "(On d x)"],
+    ]
+    with pytest.raises(BddlError, match=r"^goal .*: more than one ordered part$"):
+        stages(parse_goal("(And (Then (On a x) (On b x)) (Then (On c x) (On d x)) (Then (On e x) (On f x)))"))
+
+
+def test_a_negation_is_followed_step_by_step_and_remembers_when_it_first_held():
+    on = Predicate.of("On", ["a", "b"])
+    progress = GoalProgress(Not(Atom(on)))
+    assert [progress.observe(step, lambda p, held=held: held) for step, held in enumerate([True, False, True])] == [
+        False,
+        True,
+        False,
+    ]
+    assert progress.first_held == 1
+    # an order under a negation needs the first steps of its parts: evaluated with the step
+    a, b = Predicate.of("On", ["a", "x"]), Predicate.of("On", ["b", "x"])
+    progress = GoalProgress(Not(Then((Atom(a), Atom(b)))))
+    assert progress.observe(0, lambda p: p == a)
+    assert not progress.observe(1, lambda p: True)
+    assert progress.first_held == 0

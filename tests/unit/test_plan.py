@@ -8,8 +8,18 @@ import hashlib
 import pytest
 
 from langgap import stack
-from langgap.catalog.catalog import catalog_hash, load_catalog
-from langgap.engine.plan import build_plan, condition_instruction, episode_seed, repeat_of
+from langgap.catalog.catalog import Catalog, catalog_hash, load_catalog
+from langgap.engine.plan import (
+    build_plan,
+    condition_instruction,
+    episode_seed,
+    repeat_of,
+    switch_episode,
+    switch_note,
+    switch_source,
+    unknown_conditions_text,
+    without_switch_source,
+)
 from langgap.engine.pools import make_pool
 from langgap.engine.spec import ExecutionOptions, RunSpec, SpecError
 from langgap.errors import LangGapError
@@ -230,3 +240,150 @@ def test_repeats_run_each_init_state_with_other_seeds(catalog):
         (0, 3), (0, 1003), (0, 2003), (1, 4), (1, 1004), (1, 2004)
     ]  # fmt: skip
     assert {repeat_of(p.key.seed, p.key.init_index, 3) for p in plan} == {0, 1, 2}
+
+
+def test_a_spec_defaults_to_seed_zero_one_repeat_and_keeps_its_policy():
+    spec = RunSpec.create("noop", tasks=BOWL_1, episodes=1)
+    assert (spec.policy, spec.seed, spec.repeats, spec.inits) == ("noop", 0, 1, (0,))
+    assert RunSpec.create("noop", tasks=BOWL_1, episodes=1, repeats=1000).repeats == 1000  # REPEAT_STRIDE: the most
+    with pytest.raises(SpecError, match=r"^unknown seed scheme 'daily' \(known: per-episode, openpi\)$"):
+        RunSpec.create("noop", tasks=BOWL_1, episodes=1, seed_scheme="daily")
+
+
+def test_a_difference_is_shown_whole_up_to_sixty_characters():
+    spec = RunSpec(
+        policy="noop", policy_args={}, catalog="langgap99", catalog_hash="abc", selection=None, tasks=("a",),
+        inits=(0,), seed=0, repeats=1, conditions=("given",), style="libero", physics={},
+    )  # fmt: skip
+    sixty, sixty_one = "x" * 58, "x" * 59  # their reprs: 60 and 61 characters
+    assert spec.describe_differences({"selection": sixty}, ["selection"]) == f"selection: stored '{sixty}', given None"
+    shown = spec.describe_differences({"selection": sixty_one}, ["selection"])
+    assert shown == f"selection: stored '{'x' * 56}..., given None"
+
+
+@pytest.mark.parametrize(
+    "options",
+    [
+        {"timeout_s": 0.5},
+        {"max_attempts": 1},
+        {"max_failure_streak": 1},
+        {"backend": "ray", "ray_address": "10.0.0.1:6379"},
+        {"shared_policy": True, "max_batch": 1},
+    ],
+)
+def test_the_least_valid_execution_options_are_accepted(options):
+    made = ExecutionOptions(**options)
+    assert all(getattr(made, name) == value for name, value in options.items())
+
+
+def test_gpus_for_the_policy_need_ray():
+    with pytest.raises(
+        SpecError, match=r"^policy_gpus needs backend ray \(a local policy process uses the GPUs it can see\)$"
+    ):
+        ExecutionOptions(shared_policy=True, policy_gpus=1.0)
+
+
+def test_a_repeat_is_read_back_from_its_seed():
+    for run_seed, init_index, repeat in ((10, 3, 2), (600, 7, 1), (0, 600, 1), (5, 0, 0)):
+        found = repeat_of(episode_seed(run_seed, init_index, repeat), init_index, run_seed)
+        assert found == repeat and isinstance(found, int)
+
+
+def test_nonsense_has_as_many_words_drawn_from_the_catalogs_sentences(catalog):
+    task = catalog.get("spatial/s0/black-bowl-2-on-plate")
+    words = {w for t in catalog for w in t.instruction("libero").split()}
+    drawn = [condition_instruction(task, catalog, "nonsense", "libero", k) for k in range(3)]
+    assert all(len(s.split()) == len(task.instruction("libero").split()) for s in drawn)
+    assert all(set(s.split()) <= words for s in drawn) and len(set(drawn)) == 3
+    assert drawn == [condition_instruction(task, catalog, "nonsense", "libero", k) for k in range(3)]
+    other = catalog.get("spatial/s0/ramekin-on-plate")
+    assert condition_instruction(other, catalog, "nonsense", "libero", 0) != drawn[0]  # seeded by the task too
+    paper = condition_instruction(task, catalog, "nonsense", "paper", 0)
+    assert len(paper.split()) == len(task.instruction("paper").split())
+
+
+def test_the_drawn_instructions_are_pinned_so_a_plan_never_changes_between_versions(catalog):
+    """Which sibling a shuffled episode and an original's switch episode start under, and the nonsense words, are
+    part of a run's identity: a resumed or re-run plan must draw the same."""
+    task = catalog.get("spatial/s0/black-bowl-2-on-plate")
+    assert [condition_instruction(task, catalog, "shuffled", "libero", k) for k in range(3)] == [
+        "pick up the cookie box and place it on the wooden cabinet",
+        "pick up the ramekin and place it on the cookie box",
+        "pick up the cookie box and place it on the ramekin",
+    ]
+    assert condition_instruction(task, catalog, "nonsense", "libero", 0).split()[:4] == [
+        "tomato",
+        "top",
+        "bowl",
+        "middle",
+    ]
+    plan = build_plan(catalog.select("spatial/s0/black-bowl-1-on-plate"), catalog, episodes=1, conditions=("switch:5",))
+    assert [p.started_as for p in plan] == ["spatial/s0/open-cabinet-top-drawer"]
+
+
+def test_a_scene_with_one_task_shuffles_in_its_suites_other_instructions(catalog):
+    task = catalog.get("libero10/s5/book-in-caddy-back")
+    own = task.instruction("libero")
+    suite = {t.instruction("libero") for t in catalog if t.suite == task.suite} - {own}
+    shuffled = {condition_instruction(task, catalog, "shuffled", "libero", k) for k in range(8)}
+    assert shuffled <= suite and len(shuffled) > 1
+    alone = Catalog("alone", [task])
+    with pytest.raises(LangGapError, match="^no other instruction to shuffle in for libero10/s5/book-in-caddy-back$"):
+        condition_instruction(task, alone, "shuffled", "libero", 0)
+    with pytest.raises(LangGapError, match=r"^unknown condition\(s\) \['loud'\]"):
+        condition_instruction(task, catalog, "loud", "libero", 0)
+
+
+def test_unknown_conditions_are_named_together():
+    assert unknown_conditions_text(["switch:0", "switch:x"]).startswith("'switch:0', 'switch:x': switch:K takes K")
+    both = unknown_conditions_text(["loud", "switch:0"])
+    assert both.startswith("unknown condition(s) ['loud'] (") and "); 'switch:0': switch:K takes K" in both
+
+
+def test_a_switch_episode_starts_under_another_tasks_instruction_and_changes_at_k(catalog):
+    extended = catalog.get("spatial/s0/black-bowl-2-on-plate")
+    original = catalog.get("spatial/s0/black-bowl-1-on-plate")
+    lone = catalog.get("libero10/s5/book-in-caddy-back")
+    tasks = [original, extended, lone]
+    plan = build_plan(tasks, catalog, episodes=2, seed=4, conditions=("given", "switch:5"))
+    switched = [p for p in plan if p.key.condition == "switch:5"]
+    assert [(p.task_id, p.key.init_index, p.key.seed) for p in switched] == [
+        (original.id, 0, 4),
+        (original.id, 1, 5),
+        (extended.id, 0, 4),
+        (extended.id, 1, 5),
+    ]  # the lone task has no switch episode, but its given ones
+    assert [p.task_id for p in plan if p.key.condition == "given"] == [t.id for t in tasks for _ in range(2)]
+    for p in switched:
+        task = catalog.get(p.task_id)
+        first = catalog.get(p.started_as)
+        assert p.instruction == first.instruction("libero") and p.changes == ((5, task.instruction("libero")),)
+        assert p.scene == next(q.scene for q in plan if q.task_id == p.task_id and q.key.condition == "given")
+    assert {p.started_as for p in switched if p.task_id == extended.id} == {original.id}  # an extended: its source
+    pool = {p.started_as for p in switched if p.task_id == original.id}
+    assert pool and all(catalog.get(s).goal != original.goal and s != original.id for s in pool)
+    assert without_switch_source(tasks, catalog) == [lone.id]
+    note = switch_note(tasks, catalog, ("switch:5",))
+    assert note == (
+        "note: 1 task(s) have no other task in their scene to start under; their switch:K episodes are not "
+        f"planned: {lone.id}"
+    )
+    assert switch_note(tasks, catalog, ("given",)) == ""
+    lone_ones = without_switch_source(catalog.select("libero10/*"), catalog)  # 8 of libero_10's 10 scenes
+    many = switch_note(catalog.select("libero10/*"), catalog, ("switch:5",))
+    assert many.startswith(f"note: {len(lone_ones)} task(s)")
+    assert many.endswith(f"planned: {', '.join(lone_ones[:4])}, … ({len(lone_ones) - 4} more)")
+
+
+def test_switch_episodes_that_cannot_be_planned_are_errors(catalog):
+    lone = catalog.get("libero10/s5/book-in-caddy-back")
+    with pytest.raises(LangGapError, match="^switch: no selected task has another task in its scene to start under$"):
+        build_plan([lone], catalog, episodes=1, conditions=("switch:5",))
+    task = catalog.get("spatial/s0/black-bowl-2-on-plate")
+    with pytest.raises(LangGapError, match=f"^switch:220: {task.id} ends at step 220, before its instruction would"):
+        build_plan([task], catalog, episodes=1, conditions=("switch:220",))
+    assert build_plan([task], catalog, episodes=1, conditions=("switch:219",))[0].changes[0][0] == 219
+    with pytest.raises(LangGapError, match="switch:K takes K"):
+        switch_episode(EpisodeKey(task.id, 0, 0, "switch:0"), task, catalog, "libero")
+    with pytest.raises(LangGapError, match=f"^switch: {lone.id} has no sibling task in its scene to start under$"):
+        switch_source(lone, catalog, "libero", 0)

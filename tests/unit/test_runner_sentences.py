@@ -97,3 +97,27 @@ def test_a_task_map_that_does_not_parse_is_an_error_naming_it(plus_wheel):
     plus_wheel("libero_task_map = {")
     with pytest.raises(CatalogError, match="^cannot read LIBERO-Plus's task map .*libero_suite_task_map.py: "):
         plus_registered()
+
+
+def test_only_a_leading_capital_marks_a_scene_prefix_and_the_first_scene_word_ends_it():
+    assert file_name_sentence("libero_10/Kitchen_SCENE3_turn_on_the_stove.bddl") == "turn on the stove"
+    assert file_name_sentence("a/b/STUDY_SCENE1_pick_up_the_SCENE_book.bddl") == "pick up the SCENE book"
+    assert file_name_sentence("a/b/open_the_drawer.bddl") == "open the drawer"
+
+
+def test_libero_plus_falls_back_unless_the_file_defines_a_named_problem():
+    language = "(:language put it down)"
+    assert plus_sentence(f"(define (problem p) {language})") == "put it down"
+    assert plus_sentence(f"(describe (problem p) {language})") == PLUS_FALLBACK  # not a definition
+    assert plus_sentence("()") == PLUS_FALLBACK  # nothing in it
+    # the problem's name is its group's last word, and `unknown` is what LIBERO-Plus calls no name
+    assert plus_sentence(f"(define (problem unknown) {language})") == PLUS_FALLBACK
+    assert plus_sentence(f"(define (problem p unknown) {language})") == PLUS_FALLBACK
+    assert plus_sentence(f"(define (problem unknown p) {language})") == "put it down"
+
+
+def test_a_file_is_reached_by_its_name_with_or_without_its_directory(plus_wheel):
+    plus_wheel(_TASK_MAP)
+    assert is_plus_registered("libero_goal", "open_the_drawer_language_2.bddl")
+    assert is_plus_registered("libero_goal", "open_the_drawer_language_2")
+    assert not is_plus_registered("libero_goal", "open_the_drawer_language_2/x.bddl")

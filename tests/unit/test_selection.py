@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from langgap.catalog.catalog import load_catalog
+from langgap.catalog.catalog import catalog_from_data, load_catalog
 from langgap.errors import LangGapError
 
 REGISTRY = Path(__file__).parents[2] / "src/langgap/catalog/registry/langgap99.yaml"
@@ -174,3 +174,19 @@ def test_a_near_miss_id_gets_suggestions(catalog):
         catalog.select("spatial/s0/ramekin-on-plat")
     with pytest.raises(LangGapError, match="all, feasible, rejected, langgap99"):  # the keywords are listed
         catalog.select("spatial/s9/*-on-moon")
+
+
+def test_a_term_that_is_no_id_nor_glob_is_an_unknown_task_and_paper_takes_one_number():
+    catalog = load_catalog("langgap99")
+    with pytest.raises(LangGapError, match="^unknown task 'Xylophone' in catalog langgap99"):
+        catalog.select("Xylophone")
+    with pytest.raises(LangGapError, match="^paper id must be a number: 'paper:3:4'$"):
+        catalog.select("paper:3:4")
+
+
+def test_langgap99_in_a_catalog_without_its_tasks_names_the_term():
+    data = yaml.safe_load(REGISTRY.read_text())
+    data["catalog"] = "mine"
+    data["tasks"] = [e | {"in_langgap99": False} for e in data["tasks"]]
+    with pytest.raises(LangGapError, match="^selection term 'langgap99' matches no task in catalog mine"):
+        catalog_from_data(data).select("langgap99")

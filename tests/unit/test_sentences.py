@@ -9,7 +9,8 @@ import pytest
 from langgap.catalog import files
 from langgap.catalog.catalog import load_catalog
 from langgap.goals import And, Atom, Not, Or
-from langgap.validity.sentences import TEMPLATES, sentence_findings, template_counts
+from langgap.validity.audit import Finding
+from langgap.validity.sentences import TEMPLATES, sentence_findings, template_counts, template_of, templates_text
 
 NOT_WHERE = "spatial/s0/black-bowl-1-on-plate~not-where"
 NOT_WHAT = "spatial/s5/black-bowl-1-on-plate~not-what"
@@ -68,3 +69,58 @@ def test_every_task_falls_under_the_template_its_sentence_follows(beyond):
     counts = template_counts(beyond, files.scene_problem)
     assert counts["not-where"] == 17 and counts["not-what"] == 26 and counts["ordering"] == 176
     assert counts["push"] == 5  # "push the plate to the front of the stove" and its paraphrases
+
+
+def _all(task) -> list[Finding]:
+    return sentence_findings(task, files.scene_problem(task))
+
+
+def test_a_negation_without_alternatives_is_narrower_and_one_without_its_negation_is_wider(beyond):
+    task = beyond.get(NOT_WHERE)
+    alternatives, negated = task.goal.parts
+    assert _all(replace(task, goal=negated)) == [
+        Finding("goal narrower than its sentence", NOT_WHERE, "no alternative to the negated goal")
+    ]
+    # only one place, and no negation: both findings, each naming the task
+    one = replace(task, goal=And((Or(alternatives.parts[:1]),)))
+    assert _all(one) == [
+        Finding("goal wider than its sentence", NOT_WHERE, "nothing excludes what the sentence negates"),
+        Finding(
+            "goal narrower than its sentence",
+            NOT_WHERE,
+            "akita_black_bowl_1 set down elsewhere (the bare table) fails: the goal accepts 1 named places only",
+        ),
+    ]
+
+
+def test_anything_but_names_every_object_it_leaves_out_and_reads_the_receiver_without_a_negation(beyond):
+    task = beyond.get(NOT_WHAT)
+    dropped = {"(On cookies_1 plate_1)", "(On akita_black_bowl_2 plate_1)"}
+    assert _all(_without(task, dropped)) == [
+        Finding("goal narrower than its sentence", NOT_WHAT, "not accepted: " + ", ".join(sorted(dropped)))
+    ]
+    alternatives, _ = task.goal.parts
+    first = alternatives.parts[0]
+    findings = _all(replace(task, goal=And((Or((first,)),))))
+    assert [f.name for f in findings] == ["goal wider than its sentence", "goal narrower than its sentence"]
+    assert str(first) not in findings[1].detail and "(On akita_black_bowl_1 plate_1)" in findings[1].detail
+
+
+def test_the_negation_template_is_the_last_variant_of_a_negation_tasks_id(beyond):
+    task = beyond.get(NOT_WHERE)
+    scene = files.scene_problem(task)
+    assert template_of(replace(task, id="spatial/s0/bowl~paraphrase~not-where"), scene) == "not-where"
+    assert template_of(replace(task, id="spatial/s0/bowl~other"), scene) == "both"  # read from the goal's form
+    assert template_of(replace(task, dimension="paraphrase"), scene) == "both"
+
+
+def test_the_templates_text_says_what_each_used_template_allows_and_checks():
+    place = TEMPLATES["place"]
+    assert templates_text({"place": 2, "push": 1}).splitlines()[:5] == [
+        f"place: 2 task(s), e.g. {place.example!r}",
+        f"  sentence allows: {place.allows}",
+        f"  goal checks: {place.checks}",
+        f"  verdict: {place.verdict}",
+        f"push: 1 task(s), e.g. {TEMPLATES['push'].example!r}",
+    ]
+    assert templates_text({}) == ""

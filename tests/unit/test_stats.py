@@ -117,3 +117,17 @@ def test_the_permutation_test_has_a_floor_and_a_limit():
     assert permutation_p([0.1, 0.2, 0.3, 0.4, 0.5], [0.6, 0.7, 0.8, 0.9, 1.0]) == pytest.approx(2 / 252)
     assert permutation_p([0.0] * 13, [1.0] * 13) is None  # C(26, 13) splits: more than it enumerates
     assert permutation_p([], [1.0]) is None
+
+
+def test_a_wilson_interval_never_leaves_zero_to_one():
+    # unclamped, 20 of 20 reaches 1.0000000000000002 in floating point
+    assert wilson(20, 20)[1] == 1.0 and wilson(0, 20)[0] == 0.0
+
+
+def test_kappa_of_a_single_item_rated_apart_is_zero():
+    assert cohen_kappa(0, 1, 0, 0) == 0.0
+    assert cohen_kappa(1, 0, 0, 0) is None  # both rate it alike: chance agrees already
+
+
+def test_no_episode_detects_nothing_but_the_whole_range():
+    assert minimum_detectable_effect(0.3, 0) == 1.0

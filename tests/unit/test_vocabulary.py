@@ -87,7 +87,8 @@ def test_a_task_whose_starts_do_not_come_to_rest_reads_unsettled_with_its_reason
 def test_the_core_words_are_the_strings_registries_and_stores_hold():
     assert [str(k) for k in TaskKind] == ["original", "extended"]
     assert [str(c) for c in Condition] == ["given", "empty", "shuffled", "source", "nonsense"]
-    assert [switch_step(c) for c in ("switch:5", "switch:0", "switch:x", "given")] == [5, None, None, None]
+    conditions = ("switch:5", "switch:1", "switch:0", "switch:x", "given")
+    assert [switch_step(c) for c in conditions] == [5, 1, None, None, None]
     assert [str(o) for o in Outcome] == [
         "success", "persisted", "wrong_order", "did_source_task", "did_other_task", "no_goal_reached",
         "policy_error", "gap",
