@@ -1,8 +1,9 @@
 """The fast layer: pure code only, no simulator.
 
-When the layer runs on its own (`./test.sh tests/unit`), importing the simulator stack is an error,
-so a unit test that starts to need MuJoCo fails at once instead of quietly making the layer slow.
-In a full run the other tests have loaded the stack already and the guard stays off.
+When the layer runs on its own (`./test.sh --fast`, or paths under tests/unit), importing the simulator stack
+or PyTorch is an error from the start, collection included, so a unit test that starts to need MuJoCo fails at
+once instead of quietly making the layer slow (and a test module that imports one lies in tests/, not here).
+In a full run the other tests load the stack and the guard stays off.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import sys
 from pathlib import Path
 
 HEAVY = ("mujoco", "robosuite", "libero", "torch", "ray")
-_HERE = Path(__file__).parent
+_HERE = Path(__file__).resolve().parent
 
 
 class _Refuse(importlib.abc.Loader):
@@ -36,7 +37,9 @@ class _BlockHeavy(importlib.abc.MetaPathFinder):
         return spec
 
 
-def pytest_collection_modifyitems(session, config, items):
-    alone = all(_HERE in Path(item.fspath).parents for item in items)
-    if alone and not any(m in sys.modules for m in HEAVY):
+def pytest_configure(config):
+    # Decided from the paths asked for, before any test module is imported: a module-level import of a heavy
+    # package (or `pytest.importorskip` of one) must meet the guard, not switch it off.
+    asked = [(config.invocation_params.dir / str(arg).split("::")[0]).resolve() for arg in config.args]
+    if asked and all(path == _HERE or _HERE in path.parents for path in asked):
         sys.meta_path.insert(0, _BlockHeavy())

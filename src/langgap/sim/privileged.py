@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import mujoco
 import numpy as np
 
 from langgap.sim.privileged_schema import PrivilegedState
@@ -153,6 +152,8 @@ def _articulation(model, fixture, joint_name: str, data) -> _Articulation:
 
 
 def _layout(env) -> _Layout:
+    import mujoco  # here, not above: reading demonstrations (`langgap.demos`) imports this module without simulating
+
     sim = env.sim
     model = sim.model
     raw = model._model
