@@ -11,7 +11,7 @@ Each variant keeps its package's BDDL file unchanged (a run reads it, checked by
 that file's `(:language)`, its goal the file's goal read by LangGap's goal language; its `package` instruction
 is what its package's runner sends instead (`catalog/runner_sentences`), and a LIBERO-Plus origin says whether
 that runner reaches it (`registered`). A file that does not
-parse is left out, as an `unreadable` finding. `files_findings` runs LangGap's file checks (`catalog/audit`).
+parse is left out, as an `unreadable` finding. `files_findings` runs LangGap's file checks (`validity/audit`).
 """
 
 from __future__ import annotations
