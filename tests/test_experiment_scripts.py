@@ -1,6 +1,7 @@
-"""`experiments/small_scale_vla.sh` around its steps: which policies it runs (`CONFIGS`), and the reports it writes
-from every finished run in OUT, earlier invocations' included. Every training and evaluation step is already
-done here (its marker and store exist, the stores synthetic), so the script runs only `langgap report`."""
+"""`experiments/small_scale_vla.sh` and `experiments/diversity_sweep.sh` around their steps: which policies they
+run, the settings they refuse, and the reports they write from every finished run in OUT, earlier invocations'
+included. Every training and evaluation step is already done here (its marker and store exist, the stores
+synthetic), so the scripts run only `langgap report` (and the sweep its table and figure)."""
 
 from __future__ import annotations
 
@@ -9,10 +10,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
+from langgap.report.stats import wilson
 from tests.support.harness import REPO
 from tests.support.reports import memoriser, reader, write_run
 
 SCRIPT = REPO / "experiments" / "small_scale_vla.sh"
+SWEEP = REPO / "experiments" / "diversity_sweep.sh"
 
 
 def finished_experiment(out: Path, runs: dict[str, str]) -> Path:
@@ -29,11 +34,11 @@ def finished_experiment(out: Path, runs: dict[str, str]) -> Path:
     return out
 
 
-def run_script(out: Path, **environment: str) -> subprocess.CompletedProcess:
+def run_script(out: Path, script: Path = SCRIPT, **environment: str) -> subprocess.CompletedProcess:
     path = f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"  # this environment's `langgap`
     env = {**os.environ, "PATH": path, **environment}
     env.pop("LANGGAP_SMOKE", None)
-    return subprocess.run(["bash", str(SCRIPT), str(out)], capture_output=True, text=True, cwd=REPO, env=env)
+    return subprocess.run(["bash", str(script), str(out)], capture_output=True, text=True, cwd=REPO, env=env)
 
 
 def test_each_seeds_report_compares_every_finished_policy_of_earlier_invocations_too(tmp_path):
@@ -59,4 +64,57 @@ def test_an_unknown_policy_in_configs_stops_the_script_before_anything_runs(tmp_
     done = run_script(tmp_path / "out", CONFIGS="original dilutd")
     assert done.returncode == 2
     assert done.stderr.startswith("error: CONFIGS: unknown policy 'dilutd'")
+    assert not (tmp_path / "out").exists()
+
+
+def finished_sweep(out: Path, seeds: dict[int, str]) -> Path:
+    """OUT as the sweep leaves it after K = 1 at width 64 for each seed in `seeds` (seed -> `reader` or
+    `memoriser`: what its three runs hold), and `blind`."""
+    (out / "demos").mkdir(parents=True)
+    (out / "demos" / "collection.json").write_text("{}")
+    (out / "frames.tsv").write_text("1\t95\n")
+    for name in ("compositional", "novel-word", "trained"):
+        write_run(out / "runs" / f"blind-{name}", "blind", memoriser(sees_state=True, sees_goal=True))
+        (out / "runs" / f"blind-{name}" / "complete").touch()
+    for seed, records in seeds.items():
+        policy = f"k1-d64-seed{seed}" if seed else "k1-d64"
+        (out / f"{policy}.safetensors").touch()  # trained: the sweep does not train it again
+        for name in ("compositional", "novel-word", "trained"):
+            write_run(
+                out / "runs" / f"{policy}-{name}", "small-bc", {"reader": reader, "memoriser": memoriser}[records]()
+            )
+            (out / "runs" / f"{policy}-{name}" / "complete").touch()
+    return out
+
+
+def test_the_sweeps_table_counts_every_group_of_a_run_and_each_seed_beside_the_pool(tmp_path):
+    out = finished_sweep(tmp_path / "out", {0: "reader", 1: "memoriser"})
+    done = run_script(out, SWEEP, KS="1", WIDTHS="64", SEEDS="0 1")
+    assert done.returncode == 0, done.stderr
+    assert not (out / "times.tsv").exists()  # nothing collected, trained or evaluated again
+    # The reader succeeds in 11 of its 12 episodes, the memoriser in 4 of 11 (one gap): the catalog's split groups
+    # of a run (original, training, held-out) are counted together, never the episodes that did the original task.
+    low, high = wilson(15, 23)
+    cell = f"{100 * 15 / 23:.1f} [{100 * low:.1f}, {100 * high:.1f}]; 11/12, 4/11"
+    rows = (out / "sweep.md").read_text().splitlines()
+    assert f"| 1 | 64 | {cell} | {cell} | {cell} |" in rows
+    assert "| `blind` | – | 36.4 [15.2, 64.6]; 4 of 11 |" in rows[2]
+    pooled = (out / "pooled-compositional.md").read_text()
+    assert "| k1-d64 | 2 |" in pooled and "| blind | 1 |" in pooled
+    assert (out / "sweep.png").read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.parametrize(
+    ("setting", "message"),
+    [
+        ({"KS": "1 5"}, "error: KS: full-spatial-s0-compositional has no subset of '5' tasks (it has: 1 3 6 12 24)"),
+        ({"WIDTHS": "64 130"}, "error: WIDTHS: 130 is not a multiple of the model's 4 heads"),
+        ({"PASSES": "1.5"}, "error: PASSES: '1.5' is not a whole number above 0"),
+        ({"SEEDS": "0 one"}, "error: SEEDS: 'one' is not a whole number"),
+    ],
+)
+def test_a_misspelt_sweep_setting_stops_it_before_anything_runs(tmp_path, setting, message):
+    done = run_script(tmp_path / "out", SWEEP, **setting)
+    assert done.returncode == 2
+    assert done.stderr.strip() == message
     assert not (tmp_path / "out").exists()

@@ -1,0 +1,164 @@
+#!/usr/bin/env bash
+# The diversity sweep: does more same-scene semantic diversity make held-out compositions work, or does capacity
+# run out? With langgap commands only (collect -> train -> eval -> report), on the `full` catalog's spatial/s0 scene
+# and its two shipped splits (docs/splits.md):
+#   full-spatial-s0-compositional   a pool of 24 training tasks with nested subsets of K = 1, 3, 6, 12, 24 tasks,
+#                                   and 4 held-out tasks that combine parts seen in the pool in a new way
+#   full-spatial-s0-novel-word      3 held-out tasks whose sentence holds a word no pool sentence holds
+# Training data = oracle demonstrations of the pool's 24 tasks from fresh placements (never the evaluation init
+# states). For each K, `small-bc` trains on the K-task subset's demonstrations for an equal number of passes over
+# its frames: steps = ceil(PASSES x frames_K / BATCH), frames_K read from the collection (`langgap train` prints
+# it; OUT/frames.tsv keeps it). Two model widths (d_model), several training seeds. Each policy is evaluated on
+# the compositional held-out tasks, the novel-word held-out tasks and its own K trained tasks (three runs),
+# beside `blind` (the oracle doing the scene's original task whatever the instruction says) on the same tasks.
+#
+# Order: for each seed, every (K, width) trains and runs its two held-out evaluations, smallest K first, the
+# widths alternating; then the same policies on their trained tasks. So the first seed's held-out curve comes
+# first, then its trained-task curve, then the next seed's.
+#
+#   experiments/diversity_sweep.sh [OUT]     (default OUT: runs/diversity_sweep; re-running skips finished steps)
+# Environment: DEMOS (per task, default 12), NOISE (execution noise of the demonstrations, default 0.3), PASSES
+# (passes over each policy's frames, a whole number, default 18), BATCH (frames per step, default 128), MAX_STEPS
+# (a cap on every policy's steps, for a quick try; default none), KS (the subsets, default "1 3 6 12 24"), WIDTHS
+# (d_model of each width, default "64 128"; a multiple of the model's 4 heads), SEEDS (training seeds, default
+# "0 1 2"; seed 0 writes k<K>-d<W>.safetensors and runs/k<K>-d<W>-<set>, seed N k<K>-d<W>-seedN.*), EPISODES (per
+# task, default 10), WORKERS (default 2), THREADS (training threads, default 1).
+# Every step's wall time is appended to OUT/times.tsv. The results: OUT/pooled-<set>.md (`langgap report --pool`
+# of each set: compositional, novel-word, trained; .json beside), OUT/sweep.md (each set's success against K per
+# width, every split group of a run counted together) and OUT/sweep.png (experiments/diversity_plot.py).
+# Needs `langgap` with the train and plot extras on PATH (source .venv/bin/activate).
+set -euo pipefail
+OUT="${1:-runs/diversity_sweep}"
+DEMOS="${DEMOS:-12}"
+NOISE="${NOISE:-0.3}"
+PASSES="${PASSES:-18}"
+BATCH="${BATCH:-128}"
+MAX_STEPS="${MAX_STEPS:-}"
+KS="${KS:-1 3 6 12 24}"
+WIDTHS="${WIDTHS:-64 128}"
+SEEDS="${SEEDS:-0 1 2}"
+EPISODES="${EPISODES:-10}"
+WORKERS="${WORKERS:-2}"
+THREADS="${THREADS:-1}"
+COMPOSITIONAL="full-spatial-s0-compositional"
+NOVEL="full-spatial-s0-novel-word"
+SUBSETS="1 3 6 12 24"  # the compositional split's nested subsets
+
+fail() { echo "error: $*" >&2; exit 2; }
+whole() { [[ "$2" =~ ^[1-9][0-9]*$ ]] || fail "$1: '$2' is not a whole number above 0"; }
+for name in DEMOS PASSES BATCH EPISODES WORKERS THREADS ${MAX_STEPS:+MAX_STEPS}; do whole "$name" "${!name}"; done
+for k in $KS; do
+    [[ " $SUBSETS " == *" $k "* ]] || fail "KS: $COMPOSITIONAL has no subset of '$k' tasks (it has: $SUBSETS)"
+done
+for width in $WIDTHS; do
+    whole WIDTHS "$width"
+    [ $((width % 4)) -eq 0 ] || fail "WIDTHS: $width is not a multiple of the model's 4 heads"
+done
+for seed in $SEEDS; do [[ "$seed" =~ ^[0-9]+$ ]] || fail "SEEDS: '$seed' is not a whole number"; done
+[[ "$NOISE" =~ ^[0-9]*\.?[0-9]+$ ]] || fail "NOISE: '$NOISE' is not a number"
+mkdir -p "$OUT"
+
+timed() {  # timed STEP COMMAND...: run it, then append "STEP<TAB>seconds" to OUT/times.tsv
+    local step="$1" start status=0
+    shift
+    start=$(date +%s)
+    "$@" || status=$?
+    printf '%s\t%s\n' "$step" "$(($(date +%s) - start))" >> "$OUT/times.tsv"
+    return "$status"
+}
+
+if [ ! -f "$OUT/demos/collection.json" ]; then
+    # Exit code 1: written, but some tasks kept fewer than DEMOS (listed in collection.json); the sweep trains on
+    # what there is.
+    timed "collect" langgap collect --catalog full --tasks "split:$COMPOSITIONAL:train" --demos "$DEMOS" \
+        --noise "$NOISE" --out "$OUT/demos" --workers "$WORKERS" --seed 1000 --format compact --no-progress \
+        || [ $? -eq 1 ]
+fi
+
+frames() {  # frames K: the training frames of the K-task subset's demonstrations (cached in OUT/frames.tsv)
+    local known printed
+    known=$(awk -v k="$1" '$1 == k { print $2 }' "$OUT/frames.tsv" 2>/dev/null)
+    if [ -z "$known" ]; then  # one training step prints them: "trained on N demonstrations (F frames) ..."
+        printed=$(langgap train small-bc --data "$OUT/demos" --catalog full --tasks "split:$COMPOSITIONAL:$1" \
+            --steps 1 --threads "$THREADS" --out "$OUT/frames-k$1.safetensors" | tail -n 1)
+        rm -f "$OUT/frames-k$1.safetensors"
+        known=$(sed -n 's/.*(\([0-9]*\) frames).*/\1/p' <<< "$printed")
+        [ -n "$known" ] || fail "no frame count in: $printed"
+        printf '%s\t%s\n' "$1" "$known" >> "$OUT/frames.tsv"
+    fi
+    echo "$known"
+}
+steps() {  # steps K: ceil(PASSES x frames_K / BATCH), capped at MAX_STEPS
+    local n
+    n=$(((PASSES * $(frames "$1") + BATCH - 1) / BATCH))
+    [ -n "$MAX_STEPS" ] && [ "$n" -gt "$MAX_STEPS" ] && n="$MAX_STEPS"
+    echo "$n"
+}
+
+declare -A SETS=([compositional]="split:$COMPOSITIONAL:heldout" [novel-word]="split:$NOVEL:heldout")
+suffix() { [ "$1" = 0 ] || echo "-seed$1"; }  # seed 0 keeps the plain names
+evaluate() {  # evaluate RUN TASKS POLICY [POLICY-ARG...]: one run of EPISODES per task on init states 0..
+    local run="$1" tasks="$2" policy="$3"
+    shift 3
+    [ -f "$OUT/runs/$run/complete" ] && return
+    timed "eval $run" langgap eval --catalog full --policy "$policy" "$@" --tasks "$tasks" \
+        --episodes "$EPISODES" --run "$OUT/runs/$run" --workers "$WORKERS" --resume --no-progress --quiet
+    touch "$OUT/runs/$run/complete"
+}
+train() {  # train K WIDTH SEED
+    local name="k$1-d$2$(suffix "$3")" config="$OUT/width-$2.yaml" n
+    [ -f "$OUT/$name.safetensors" ] && return
+    printf 'model:\n  d_model: %s\n' "$2" > "$config"
+    n=$(steps "$1")
+    timed "train $name ($n steps)" langgap train small-bc --config "$config" --data "$OUT/demos" --catalog full \
+        --tasks "split:$COMPOSITIONAL:$1" --steps "$n" --batch-size "$BATCH" --threads "$THREADS" --seed "$3" \
+        --out "$OUT/$name.safetensors"
+}
+
+# blind's episodes that start alike are one rollout judged for each task: a few minutes for all three sets.
+for set in compositional novel-word; do evaluate "blind-$set" "${SETS[$set]}" blind --share-rollouts; done
+evaluate blind-trained "split:$COMPOSITIONAL:train" blind --share-rollouts
+
+tables() {  # every finished run of each set pooled over its seeds, then the sweep's table and figure
+    local set k width seed name runs pools
+    for set in compositional novel-word trained; do
+        pools=(--pool "blind=$OUT/runs/blind-$set")
+        for width in $WIDTHS; do
+            for k in $KS; do
+                runs=()
+                for seed in $SEEDS; do
+                    name="k$k-d$width$(suffix "$seed")-$set"
+                    [ -f "$OUT/runs/$name/complete" ] && runs+=("$OUT/runs/$name")
+                done
+                if [ ${#runs[@]} -gt 0 ]; then
+                    pools+=(--pool "k$k-d$width=$(printf '%s\n' "${runs[@]}" | paste -sd,)")
+                fi
+            done
+        done
+        langgap report "${pools[@]}" > "$OUT/pooled-$set.md"
+        langgap report "${pools[@]}" --format json > "$OUT/pooled-$set.json"
+    done
+    python "$(dirname "$0")/diversity_plot.py" "$OUT"
+    echo "wrote $OUT/sweep.md and $OUT/sweep.png"
+}
+
+for seed in $SEEDS; do
+    s=$(suffix "$seed")
+    for k in $KS; do
+        for width in $WIDTHS; do
+            train "$k" "$width" "$seed"
+            for set in compositional novel-word; do
+                evaluate "k$k-d$width$s-$set" "${SETS[$set]}" small-bc "--policy-arg" \
+                    "checkpoint=$OUT/k$k-d$width$s.safetensors"
+            done
+        done
+        tables || echo "note: the tables failed (above); the sweep goes on" >&2
+    done
+    for k in $KS; do
+        for width in $WIDTHS; do
+            evaluate "k$k-d$width$s-trained" "split:$COMPOSITIONAL:$k" small-bc --policy-arg \
+                "checkpoint=$OUT/k$k-d$width$s.safetensors"
+        done
+        tables || echo "note: the tables failed (above); the sweep goes on" >&2
+    done
+done
