@@ -12,7 +12,7 @@ from langgap.engine.plan import PlannedEpisode
 from langgap.engine.pools import ItemDone, ItemFailed, WorkerLost
 from langgap.engine.scheduler import RunStopped, make_units, schedule
 from langgap.engine.spec import ExecutionOptions
-from langgap.engine.work import Job, WorkFailed, refuse_gap
+from langgap.engine.work import AttemptsExhausted, Job, refuse_gap
 from langgap.records import EpisodeKey, EpisodeRecord, Status
 
 
@@ -339,7 +339,7 @@ def test_work_of_another_kind_gets_the_same_scheduling_with_a_timeout_scaled_by_
 def test_work_that_has_no_gap_fails_the_command_once_its_attempts_are_spent():
     pool = ProbePool(lambda item, attempt: "never")
     pool.submit = lambda worker, item, attempt: pool._events.append(ItemFailed(worker, "GL context lost"))
-    with pytest.raises(WorkFailed, match=r"^probe s0/a failed 2 time\(s\): GL context lost$") as info:
+    with pytest.raises(AttemptsExhausted, match=r"^probe s0/a failed 2 time\(s\): GL context lost$") as info:
         run([Probe("s0/a")], pool, make_gap=refuse_gap, max_attempts=2)
     assert info.value.exit_code == 4
 

@@ -61,7 +61,8 @@ class RunnerSetup:
 
 
 class WorkFailure(Exception):
-    """A work item could not be done (infrastructure): its one-line message travels to the scheduler."""
+    """One attempt at a work item failed (infrastructure): its one-line message travels to the scheduler, which
+    retries the item (`langgap.engine.work.AttemptsExhausted`: no attempt left)."""
 
 
 class WorkRunner:

@@ -91,12 +91,13 @@ class Job:
         raise NotImplementedError
 
 
-class WorkFailed(LangGapError):
-    """A work item failed on every attempt; work other than an evaluation episode has no gap to record."""
+class AttemptsExhausted(LangGapError):
+    """A work item failed on every attempt (each one a `WorkFailure` on its worker); work other than an evaluation
+    episode has no gap to record, so the command fails."""
 
     exit_code = 4
 
 
 def refuse_gap(item: WorkItem, error: str, attempts: int) -> Any:
     """The gap factory of work whose results cannot have gaps: the whole command fails with one line."""
-    raise WorkFailed(f"{item.kind} {item.task_id} failed {attempts} time(s): {error}")
+    raise AttemptsExhausted(f"{item.kind} {item.task_id} failed {attempts} time(s): {error}")

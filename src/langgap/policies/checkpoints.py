@@ -13,7 +13,8 @@ from langgap.policies.text import Vocabulary
 
 
 class CheckpointError(LangGapError):
-    """A checkpoint is missing or is not one of the kind asked for."""
+    """A checkpoint is missing, unreadable, or not one of the kind asked for (a LeRobot one: incompatible with
+    LIBERO)."""
 
 
 def write_checkpoint(

@@ -5,11 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from langgap.errors import LangGapError
-
-
-class CheckpointError(LangGapError):
-    """A LeRobot checkpoint is missing, unreadable or incompatible with LIBERO."""
+from langgap.policies.checkpoints import CheckpointError
 
 
 def pretrained_dir(path: str) -> Path:
