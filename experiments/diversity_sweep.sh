@@ -12,9 +12,8 @@
 # the compositional held-out tasks, the novel-word held-out tasks and its own K trained tasks (three runs),
 # beside `blind` (the oracle doing the scene's original task whatever the instruction says) on the same tasks.
 #
-# Order: for each seed, every (K, width) trains and runs its two held-out evaluations, smallest K first, the
-# widths alternating; then the same policies on their trained tasks. So the first seed's held-out curve comes
-# first, then its trained-task curve, then the next seed's.
+# Order: for each seed, smallest K first, each width in turn trains and runs its three evaluations; the tables
+# are written again after each K. So the first seed's curves come first, from K = 1 up, then the next seed's.
 #
 #   experiments/diversity_sweep.sh [OUT]     (default OUT: runs/diversity_sweep; re-running skips finished steps)
 # Environment: DEMOS (per task, default 12), NOISE (execution noise of the demonstrations, default 0.3), PASSES
@@ -147,17 +146,11 @@ for seed in $SEEDS; do
     for k in $KS; do
         for width in $WIDTHS; do
             train "$k" "$width" "$seed"
+            checkpoint="checkpoint=$OUT/k$k-d$width$s.safetensors"
             for set in compositional novel-word; do
-                evaluate "k$k-d$width$s-$set" "${SETS[$set]}" small-bc "--policy-arg" \
-                    "checkpoint=$OUT/k$k-d$width$s.safetensors"
+                evaluate "k$k-d$width$s-$set" "${SETS[$set]}" small-bc --policy-arg "$checkpoint"
             done
-        done
-        tables || echo "note: the tables failed (above); the sweep goes on" >&2
-    done
-    for k in $KS; do
-        for width in $WIDTHS; do
-            evaluate "k$k-d$width$s-trained" "split:$COMPOSITIONAL:$k" small-bc --policy-arg \
-                "checkpoint=$OUT/k$k-d$width$s.safetensors"
+            evaluate "k$k-d$width$s-trained" "split:$COMPOSITIONAL:$k" small-bc --policy-arg "$checkpoint"
         done
         tables || echo "note: the tables failed (above); the sweep goes on" >&2
     done
