@@ -32,10 +32,6 @@ TRAIN_TASKS = {"exp1": 1, "exp2": 6, "exp3": 45, "exp4": 16, "exp5": 56}
 DEMONSTRATIONS = {"exp1": 56, "exp2": 300, "exp3": 2010, "exp4": 2400, "exp5": 4080}
 
 
-def _demonstrations(experiment, catalog) -> int:
-    return sum(len(catalog.select(g.tasks)) * g.demos for g in experiment.train)
-
-
 @pytest.mark.parametrize("name", EXPERIMENTS)
 def test_experiment_matches_table_iii_and_selects_catalog_tasks(name):
     experiment = load_experiment(name)
@@ -46,7 +42,7 @@ def test_experiment_matches_table_iii_and_selects_catalog_tasks(name):
     catalog = load_catalog("langgap99")
     trained = {t.id for g in experiment.train for t in catalog.select(g.tasks)}
     assert len(trained) == TRAIN_TASKS[name]
-    demonstrations = _demonstrations(experiment, catalog)
+    demonstrations = experiment.demonstrations(catalog)
     assert demonstrations == DEMONSTRATIONS[name] and abs(demonstrations - paper["demos"]) <= 0.01 * paper["demos"]
     evaluated = catalog.select(experiment.eval["trained"])
     assert len(evaluated) == EVAL_TASKS[name] and all(t.kind == "extended" and t.id in trained for t in evaluated)
@@ -63,7 +59,7 @@ def test_the_extended_share_of_the_dilution_experiments_is_the_papers():
     for name, extended, total in (("exp3", 250, 1993), ("exp5", 2400, 4093)):
         experiment = load_experiment(name)
         ours = sum(len(catalog.select(g.tasks)) * g.demos for g in experiment.train if g.tasks != "original")
-        assert abs(ours / _demonstrations(experiment, catalog) - extended / total) < 0.005
+        assert abs(ours / experiment.demonstrations(catalog) - extended / total) < 0.005
 
 
 @pytest.mark.parametrize("policy", POLICIES)

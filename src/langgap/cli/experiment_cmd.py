@@ -53,12 +53,15 @@ def add_parser(subparsers) -> None:
 
 
 def run_list(args) -> int:
+    from langgap.catalog.catalog import load_catalog
     from langgap.training.lerobot_train import EXPERIMENTS, POLICIES, load_experiment, load_recipe
 
+    catalog = load_catalog()
     print(f"{'experiment':<11} {'paper: demos':>12} {'here':>6}  {'steps':>7}  rank  title")
     for name in EXPERIMENTS:
         e = load_experiment(name)
-        print(f"{name:<11} {e.paper['demos']:>12} {_demonstrations(e):>6}  {e.steps:>7}  {e.lora_rank:>4}  {e.title}")
+        here = e.demonstrations(catalog)
+        print(f"{name:<11} {e.paper['demos']:>12} {here:>6}  {e.steps:>7}  {e.lora_rank:>4}  {e.title}")
     for name in POLICIES:
         recipe = load_recipe(name)
         tiny = "tiny rehearsal: yes" if recipe.tiny is not None else f"no tiny rehearsal: {recipe.tiny_blocked_by}"
@@ -67,13 +70,6 @@ def run_list(args) -> int:
             default = " (default)" if tuning.name == recipe.default_tuning else ""
             print(f"  --tuning {tuning.name}{default}: trains {tuning.trains}; frozen: {tuning.frozen}")
     return 0
-
-
-def _demonstrations(experiment, catalog: str | None = None, demos: int | None = None) -> int:
-    from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
-
-    tasks = load_catalog(catalog or DEFAULT_CATALOG)
-    return sum(len(tasks.select(g.tasks)) * (demos or g.demos) for g in experiment.train)
 
 
 def _settings(args):
@@ -130,9 +126,7 @@ def run_experiment(args) -> int:
         demos = settings.demos or group.demos
         source = " (from --originals)" if settings.originals and group.tasks == TaskKind.ORIGINAL else ""
         print(f"  train: {group.tasks}: {count} tasks x {demos} demonstrations = {count * demos}{source}")
-    print(
-        f"  demonstrations: {_demonstrations(experiment, catalog, settings.demos)} (paper: {experiment.paper['demos']})"
-    )
+    print(f"  demonstrations: {experiment.demonstrations(tasks, settings.demos)} (paper: {experiment.paper['demos']})")
     print(f"  policy: {recipe.title}{' -- tiny random-weight rehearsal' if settings.tiny else ''}")
     print(f"  tuning {tuning.name}: trains {tuning.trains}; frozen: {tuning.frozen}")
     for index, stage in enumerate(stages, 1):

@@ -62,11 +62,10 @@ class Experiment:
     steps: int
     lora_rank: int
 
-    @property
-    def demos(self) -> int:
-        """Demonstrations per task of the single training group (an experiment with several has no one number)."""
-        (group,) = self.train
-        return group.demos
+    def demonstrations(self, catalog, demos: int | None = None) -> int:
+        """How many demonstrations it trains on: each group's tasks in `catalog` times their demonstrations per
+        task (`demos` per task instead, for a rehearsal)."""
+        return sum(len(catalog.select(g.tasks)) * (demos or g.demos) for g in self.train)
 
 
 @dataclass(frozen=True)
