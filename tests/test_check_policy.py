@@ -12,7 +12,7 @@ import pytest
 
 import tests.support.policies as policies
 from langgap.cli.main import main
-from langgap.engine.policy_check import EPISODE_CHECKS, UPRIGHT, check_policy
+from langgap.diagnostics.policy_check import EPISODE_CHECKS, UPRIGHT, check_policy
 from langgap.engine.rollout import env_options_for
 from langgap.policies.simple import NoopPolicy
 from langgap.sim.env import TaskEnv

@@ -115,7 +115,7 @@ def test_check_policy_shows_what_a_checkpoint_is_given_and_passes(checkpoint):
     """`langgap check-policy lerobot`: the page names the batch the checkpoint's preprocessor gets (the keys, dtypes
     and shapes of `test_policy_sees_what_lerobot_libero_pipeline_gives`), and the reseeded sampling policy gives the
     same actions on the same episode."""
-    from langgap.engine.policy_check import check_policy
+    from langgap.diagnostics.policy_check import check_policy
 
     report = check_policy("lerobot", {"path": str(checkpoint.parent), "threads": "1"})
     assert report.exit_code == 0, report.page()

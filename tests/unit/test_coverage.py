@@ -58,7 +58,7 @@ def test_tasks_gate_prints_the_recorded_verdicts(capsys):
 
 
 def test_doctor_says_how_many_shipped_verdicts_were_made_on_another_stack():
-    from langgap.doctor import CHECKS
+    from langgap.diagnostics.doctor import CHECKS
 
     (check,) = [c for c in CHECKS if c.__name__ == "_verdict_stacks"]
     found = check()

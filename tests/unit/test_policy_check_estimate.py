@@ -7,7 +7,7 @@ import dataclasses
 
 import pytest
 
-from langgap.engine.policy_timing import EpisodeTimes, Timing, duration
+from langgap.diagnostics.policy_timing import EpisodeTimes, Timing, duration
 from langgap.policies.base import config_hash, policy_config
 from langgap.policies.simple import NoopPolicy
 

@@ -45,7 +45,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
-    from langgap.engine.policy_check import check_policy
+    from langgap.diagnostics.policy_check import check_policy
 
     report = check_policy(
         args.policy,

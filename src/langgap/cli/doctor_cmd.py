@@ -9,8 +9,8 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
-    from langgap.checks import check_lines
-    from langgap.doctor import run_checks
+    from langgap.diagnostics.checks import check_lines
+    from langgap.diagnostics.doctor import run_checks
 
     failed = 0
     for check in run_checks():

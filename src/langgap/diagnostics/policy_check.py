@@ -6,7 +6,7 @@ episode eval would plan for the selection (its first task, init state 0, the run
 environment cut to `CHECK_CALLS` policy calls. The episode runs twice, the policy reset once more in between,
 so one short run shows the spec, what the policy receives and sends, its actions, its lifecycle, whether the
 same seed gives the same actions, and its latency, from which the run's wall time is computed
-(`langgap.engine.policy_timing`).
+(`langgap.diagnostics.policy_timing`).
 """
 
 from __future__ import annotations
@@ -24,11 +24,8 @@ import numpy as np
 
 from langgap.catalog.catalog import DEFAULT_CATALOG, Catalog, load_catalog
 from langgap.catalog.task import DEFAULT_STYLE
-from langgap.checks import Check, check_lines
-from langgap.engine.context import planned_context
-from langgap.engine.episode import EpisodeSettings, execute_episode
-from langgap.engine.plan import PlannedEpisode, build_plan
-from langgap.engine.policy_timing import (
+from langgap.diagnostics.checks import Check, check_lines
+from langgap.diagnostics.policy_timing import (
     RETRIED,
     EpisodeTimes,
     StepLimits,
@@ -37,6 +34,9 @@ from langgap.engine.policy_timing import (
     latency_check,
     wall_time_check,
 )
+from langgap.engine.context import planned_context
+from langgap.engine.episode import EpisodeSettings, execute_episode
+from langgap.engine.plan import PlannedEpisode, build_plan
 from langgap.engine.rollout import env_options_for
 from langgap.engine.spec import DEFAULT_TIMEOUT_S, PAPER_EPISODES, SpecParameterError
 from langgap.errors import LangGapError, SimulationError

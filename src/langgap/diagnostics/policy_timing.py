@@ -16,7 +16,7 @@ import statistics
 from collections import Counter
 from dataclasses import dataclass
 
-from langgap.checks import Check
+from langgap.diagnostics.checks import Check
 from langgap.engine.spec import DEFAULT_FAILURE_STREAK, DEFAULT_MAX_ATTEMPTS
 
 TIMEOUT_MARGIN = 2.0  # the run's longest episode must fit this many times into eval's --timeout

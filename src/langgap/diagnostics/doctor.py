@@ -11,7 +11,7 @@ import numpy as np
 from langgap import stack
 from langgap.catalog.catalog import available_catalogs, load_catalog
 from langgap.catalog.files import task_bddl_path
-from langgap.checks import Check
+from langgap.diagnostics.checks import Check
 
 # A generated (extended) task, used to prove generated BDDL loads, resets and renders.
 PROBE_TASK = "spatial/s0/black-bowl-2-on-plate"
