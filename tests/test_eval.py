@@ -217,17 +217,19 @@ def test_videos_of_the_first_episodes_are_written(short_catalog, tmp_path):
     assert _clip(tmp_path / "run", first) == (SHORT_STEPS // FRAME_EVERY, 2.0)
 
 
-def test_per_outcome_videos_replay_the_chosen_episodes(short_catalog, tmp_path):
+def test_per_outcome_videos_replay_the_chosen_episodes(short_catalog, tmp_path, capsys):
     # Init states 2 and 3 end in a policy error, 0 and 1 in no goal: one clip per outcome is of 0 and 2.
     policy, task = "tests.support.policies:ErrsOnInitsPolicy", "spatial/s0/black-bowl-1-on-plate"
     spec = _spec(short_catalog, policy, 4, tasks=task, policy_args={"inits": "2,3"})
     evaluate(spec, tmp_path / "run", ExecutionOptions(workers=0, progress=False))
     before = store_rows(tmp_path / "run")
     assert [r["outcome"] for r in before] == ["no_goal_reached"] * 2 + ["policy_error"] * 2
-    # Filming a finished run: nothing runs again but the two replays, and only their clips are added.
-    options = ExecutionOptions(workers=1, video="per-outcome:1", progress=False)
+    # Filming a finished run: nothing runs again but the two replays, and only their clips are added; the
+    # replays have a progress bar of their own.
+    options = ExecutionOptions(workers=1, video="per-outcome:1", progress=True)
     summary = evaluate(spec, tmp_path / "run", options, resume=True)
     assert (summary.ran, summary.filmed, summary.film_mismatches) == (0, 2, 0)
+    assert re.search(r"filming: 100%.*2/2 \[.*clip", capsys.readouterr().err)
     after = store_rows(tmp_path / "run")
     assert [r["video"] is not None for r in after] == [True, False, True, False]
     assert [{**r, "video": None} for r in after] == before

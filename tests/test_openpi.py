@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 import time
 
 import numpy as np
@@ -168,6 +169,16 @@ def test_no_server_fails_within_connect_timeout():
     with pytest.raises(PolicyServerError, match="no policy server"):
         OpenpiPolicy(port=free_port(), connect_timeout=1.0)
     assert time.monotonic() - start < 3
+
+
+def test_a_long_wait_for_the_server_says_so_with_the_time_left(capsys):
+    """The run's bar stands at 0 while the policy waits for its server: the wait has its own lines."""
+    port = free_port()
+    with pytest.raises(PolicyServerError, match="no policy server"):
+        OpenpiPolicy(port=port, connect_timeout=3.0)
+    notes = [line for line in capsys.readouterr().err.splitlines() if line.startswith("note: waiting")]
+    assert len(notes) == 1 and f"policy server at 127.0.0.1:{port} (2 s so far" in notes[0]
+    assert re.search(r"giving up in [01] s; /healthz: ConnectionRefusedError", notes[0])
 
 
 def test_server_killed_mid_episode(catalog):

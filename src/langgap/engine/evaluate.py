@@ -234,7 +234,7 @@ def evaluate(
             finally:
                 pool.close()
 
-        _film(plan, videos, run, summary, replay)
+        _film(plan, videos, run, summary, replay, progress=options.progress)
     return summary
 
 
@@ -244,9 +244,12 @@ def _film(
     run: Path,
     summary: RunSummary,
     replay: Callable[[list[PlannedEpisode]], Iterator[EpisodeRecord]],
+    *,
+    progress: bool,
 ) -> None:
     """Give every episode `videos` chooses a clip: replay the chosen judged episodes that have none with the
-    cameras on, and attach each clip whose replay ended as the stored episode did (else delete it)."""
+    cameras on, and attach each clip whose replay ended as the stored episode did (else delete it). With
+    `progress`, the replays have a bar of their own: they come after the run's bar has reached its end."""
     with RunStore.open(run, write=True) as store:
         stored = {r.key: r for r in store.records()}
         chosen = videos.choose([p.key for p in plan], stored.values())
@@ -257,7 +260,7 @@ def _film(
             return
         replays = replay(todo)
         try:
-            for record in replays:
+            for record in with_progress(replays, len(todo), unit="clip", enabled=progress, label="filming"):
                 if record.video is None:
                     continue
                 if replay_matches(stored[record.key], record):

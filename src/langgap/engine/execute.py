@@ -84,15 +84,22 @@ def with_progress(
     unit: str,
     enabled: bool,
     describe: Callable[[Result], str] | None = None,
+    label: str | None = None,
 ) -> Iterator[Result]:
-    """`results` as they come, with a progress bar (ETA, and `describe` of the latest result) on stderr."""
+    """`results` as they come, with a progress bar (ETA, and `describe` of the latest result) on stderr, named
+    `label` when the command shows more than one."""
     if not (enabled and total):
         yield from results
         return
     from tqdm import tqdm
 
     bar = tqdm(
-        total=total, unit=unit, file=sys.stderr, dynamic_ncols=True, mininterval=0.5 if sys.stderr.isatty() else 30.0
+        total=total,
+        unit=unit,
+        desc=label,
+        file=sys.stderr,
+        dynamic_ncols=True,
+        mininterval=0.5 if sys.stderr.isatty() else 30.0,
     )
     try:
         for result in results:

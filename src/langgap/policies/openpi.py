@@ -17,6 +17,7 @@ from __future__ import annotations
 import http.client
 import itertools
 import secrets
+import sys
 import time
 
 import numpy as np
@@ -31,18 +32,33 @@ from langgap.sim.env import CAMERAS, Observation
 
 # openpi's LIBERO example renders at 256 (the training data's resolution) and sends 224.
 RENDER_SIZE = 256
+WAIT_NOTE_S = 2.0  # a server that has not answered by then is waited for out loud
+WAIT_NOTE_EVERY_S = 30.0
 
 
 def wait_for_health(host: str, port: int, deadline: float) -> None:
     """Poll `GET /healthz` until the server answers over HTTP or the monotonic `deadline` passes.
 
-    Any HTTP answer counts: a server without a health route still proves it is listening.
+    Any HTTP answer counts: a server without a health route still proves it is listening. A wait longer than
+    `WAIT_NOTE_S` says so on stderr, and again every `WAIT_NOTE_EVERY_S`, so a run whose progress bar stands at
+    0 is seen waiting for its server (a server loading a model takes minutes), with the time left.
     """
     last = "no answer"
+    start = time.monotonic()
+    next_note = start + WAIT_NOTE_S
     while True:
-        remaining = deadline - time.monotonic()
+        now = time.monotonic()
+        remaining = deadline - now
         if remaining <= 0:
             raise PolicyServerError(f"no policy server at {host}:{port}: {protocol.HEALTH_PATH} failed ({last})")
+        if now >= next_note:
+            print(
+                f"note: waiting for the policy server at {host}:{port} ({now - start:.0f} s so far; "
+                f"giving up in {remaining:.0f} s; {protocol.HEALTH_PATH}: {last})",
+                file=sys.stderr,
+                flush=True,
+            )
+            next_note = now + WAIT_NOTE_EVERY_S
         connection = http.client.HTTPConnection(host, port, timeout=min(remaining, 5.0))
         try:
             connection.request("GET", protocol.HEALTH_PATH)
