@@ -125,7 +125,11 @@ def test_a_gap_fails_env_builds_and_is_not_judged(catalog):
     row = task_row(catalog.get(ELSEWHERE), catalog, records, drift=0.0, demonstrated=[])
     assert (row.episodes, row.gaps) == (10, 1) and row.reason == "env builds" and not row.feasible
     row = task_row(catalog.get(ELSEWHERE), catalog, _episodes(ELSEWHERE, 0, gaps=2), drift=0.0, demonstrated=[])
-    assert row.checks["env builds"] is False and row.episodes == 0 and not row.short
+    assert row.checks["env builds"] is False and row.episodes == 0 and not row.short and row.rate == 0.0
+    row = task_row(catalog.get(ELSEWHERE), catalog, [], drift=0.0, demonstrated=[])  # no episode at all
+    assert row.checks["env builds"] is False and not row.feasible
+    one = task_row(catalog.get(ELSEWHERE), catalog, _episodes(ELSEWHERE, 1), drift=0.0, demonstrated=[])
+    assert one.checks["env builds"] and one.feasible  # a single init state is a gate too
 
 
 def test_the_scene_settles_up_to_its_tolerance(catalog):
@@ -154,4 +158,5 @@ def test_the_recorded_verdict_carries_the_rows_evidence(catalog):
     failed.demonstration = "demonstrations/x"  # no searched episode: the path is not recorded
     verdict = failed.verdict(10, proof="the plate is out of reach")
     assert verdict.demonstration == "" and verdict.demonstrated_inits == () and verdict.physics == {}
+    assert verdict.made_by == ""
     assert verdict.proof == "the plate is out of reach" and verdict.reason == "oracle 7/10"

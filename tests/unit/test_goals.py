@@ -246,7 +246,7 @@ def test_the_unordered_parts_join_the_last_stage_of_the_order():
         ["(On c x)", "(On d x)"],
     ]
     with pytest.raises(BddlError, match=r"^goal .*: more than one ordered part$"):
-        stages(parse_goal("(And (Then (On a x) (On b x)) (Then (On c x) (On d x)) (Then (On e x) (On f x)))"))
+        stages(parse_goal("(And (Then (On a x) (On b x)) (Then (On c x) (On d x)))"))
 
 
 def test_a_negation_is_followed_step_by_step_and_remembers_when_it_first_held():

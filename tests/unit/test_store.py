@@ -8,7 +8,7 @@ from dataclasses import fields
 
 import pytest
 
-from langgap.records import EpisodeKey, EpisodeRecord, Privilege, Status, privilege
+from langgap.records import EpisodeKey, EpisodeRecord, Privilege, Status, _columns, privilege
 from langgap.report.load import load_runs
 from langgap.report.summary import results
 from langgap.store import SCHEMA_VERSION, RunStore, StoreError
@@ -178,3 +178,24 @@ def test_a_switch_s_timeline_round_trips(tmp_path):
     with RunStore.open(tmp_path / "run") as store:
         (stored,) = store.records()
     assert stored == switched and stored.timeline == [(0, "put it there"), (20, "put it here")]
+
+
+def test_a_clip_is_attached_to_its_own_episode_only(tmp_path):
+    assert not RunStore.exists(tmp_path / "run")
+    with RunStore.create(tmp_path / "run", {}) as store:
+        store.write(record())
+        store.write(record(init_index=1))
+        store.attach_video(EpisodeKey("spatial/s0/a", 1, 1), "videos/a-1.mp4")
+        assert [r.video for r in store.records()] == [None, "videos/a-1.mp4"]
+    assert RunStore.exists(tmp_path / "run")
+
+
+def test_the_table_columns_are_derived_from_the_records_fields():
+    """`_columns` runs once, at import, into `COLUMNS`; it is called here so its derivation is what is checked."""
+    columns = {c.name: (c.kind, c.nullable) for c in _columns()}
+    assert list(columns) == [f.name for f in fields(EpisodeRecord)]
+    assert columns["task_id"] == (str, False) and columns["init_index"] == (int, False)
+    assert columns["success"] == (bool, False) and columns["wall_time_s"] == (float, False)
+    assert columns["failure_kind"] == (str, True) and columns["video"] == (str, True)
+    assert columns["reached"] == (dict, False) and columns["instructions"] == (list, False)
+    assert columns["cameras"] == (list, False) and columns["physics"] == (dict, False)
