@@ -155,7 +155,7 @@ def test_what_cannot_be_trained_or_loaded_is_a_clear_error(tiny_collection, coll
         mismatch.returncode != 0 and "the model takes 64 px images and the demonstrations hold 32 px" in mismatch.stderr
     )
     assert not (tmp_path / "x.safetensors").exists() and not (tmp_path / "y.safetensors").exists()
-    with pytest.raises(CheckpointError, match="small-vla needs --policy-arg checkpoint"):
+    with pytest.raises(CheckpointError, match="small-vla needs checkpoint=PATH"):
         make_policy("small-vla", {})
     with pytest.raises(CheckpointError, match="no small-vla checkpoint"):
         make_policy("small-vla", {"checkpoint": str(tmp_path / "none.safetensors")})

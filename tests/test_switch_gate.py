@@ -96,7 +96,7 @@ def test_the_switch_gate_takes_switch_conditions_only_and_no_plain_gate_flags(tw
     registry = _copy(two_task_catalog, tmp_path)
     base = ("validate", EXTENDED, "--catalog", str(registry), "--inits", "1", "--workers", "0")
     for extra, message in [
-        (("--condition", "given"), "validate --condition takes switch:K only"),
+        (("--condition", "given"), "--condition takes switch:K only"),
         (("--condition", "switch:5", "--blind"), "--condition runs the switch gate, which has no --blind"),
         (("--condition", "switch:5", "--search-budget", "3"), "which has no --search-budget"),
     ]:

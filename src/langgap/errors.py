@@ -18,9 +18,10 @@ class LangGapError(Exception):
 
 
 class ParameterError(LangGapError):
-    """An argument is out of range, or needs another one. The message names each parameter as a Python
-    caller passed it (`episodes must be at least 1, got 0`); a front end that spells them otherwise reads
-    `naming` (the CLI: `--episodes must be at least 1, got 0`).
+    """An argument is out of range or needs another one, or the way on is another argument (`pass resume to
+    continue it`). The message names each parameter as a Python caller passed it (`episodes must be at least 1,
+    got 0`); a front end that spells them otherwise reads `naming` (the CLI: `--episodes must be at least 1, got
+    0`). Below the CLI every error that names a parameter is one: only the CLI spells flags.
 
     Args:
         template: The message, each parameter written as a `{name}` field.
@@ -58,6 +59,16 @@ class ParameterError(LangGapError):
 
 class CatalogError(LangGapError):
     """The task registry or a task selection is invalid."""
+
+
+class CatalogParameterError(CatalogError, ParameterError):
+    """An argument that selects or splits a catalog's tasks is invalid, named as the caller passed it."""
+
+
+class PolicyArgumentError(ParameterError):
+    """A policy's argument is missing or refused. Its parameters are the arguments of the policy's constructor
+    (`make_policy`'s `args`), which the CLI spells as `--policy-arg NAME` (`{checkpoint}=PATH` reads
+    `--policy-arg checkpoint=PATH` there)."""
 
 
 class UnknownTaskError(CatalogError):

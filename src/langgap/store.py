@@ -20,7 +20,7 @@ import sqlite3
 from dataclasses import astuple
 from pathlib import Path
 
-from langgap.errors import LangGapError
+from langgap.errors import LangGapError, ParameterError
 from langgap.records import (
     COLUMNS,
     KEY_COLUMNS,
@@ -57,6 +57,11 @@ class StoreError(LangGapError):
     """The run store is missing, corrupt, or belongs to another run configuration."""
 
 
+class StoreParameterError(StoreError, ParameterError):
+    """The run directory asked for cannot be written as asked; named as `evaluate`'s caller passed it (`run`,
+    `resume`)."""
+
+
 def _to_row(record: EpisodeRecord) -> tuple:
     data = record_dict(record)
     return tuple(json.dumps(data[c.name], sort_keys=True) if c.json else data[c.name] for c in COLUMNS)
@@ -86,8 +91,10 @@ def _lock_for_writing(directory: Path) -> int:
     except BlockingIOError:
         holder = os.read(fd, 32).decode(errors="replace").strip() or "unknown"
         os.close(fd)
-        raise StoreError(
-            f"run {directory} is being written by another process (pid {holder}); wait for it, or choose another --run"
+        raise StoreParameterError(
+            "run {directory} is being written by another process (pid {holder}); wait for it, or choose another {run}",
+            directory=directory,
+            holder=holder,
         ) from None
     os.ftruncate(fd, 0)
     os.pwrite(fd, str(os.getpid()).encode(), 0)
@@ -121,14 +128,17 @@ class RunStore:
         directory = Path(directory)
         path = cls.path_of(directory)
         if directory.exists() and not directory.is_dir():
-            raise StoreError(f"--run {directory} is a file, not a directory")
+            raise StoreParameterError("{run} {directory} is a file, not a directory", directory=directory)
         directory.mkdir(parents=True, exist_ok=True)
         with contextlib.ExitStack() as undo:
             lock = _lock_for_writing(directory)
             undo.callback(os.close, lock)
             # Checked under the lock: another process may be creating the same run.
             if path.exists():
-                raise StoreError(f"run {directory} already exists; pass --resume to continue it, or choose a new --run")
+                raise StoreParameterError(
+                    "run {directory} already exists; pass {resume} to continue it, or choose a new {run}",
+                    directory=directory,
+                )
             db = cls._connect(path)
             undo.callback(db.close)
             with db:
@@ -164,9 +174,12 @@ class RunStore:
             if schema not in READABLE_SCHEMAS:
                 raise StoreError(f"{path}: unsupported run store schema {version[0] if version else 'none'}")
             if write and schema != SCHEMA_VERSION:
-                raise StoreError(
-                    f"{path} has run store schema {schema}, written by an older LangGap: reports read it, but it "
-                    f"cannot be resumed (this LangGap writes schema {SCHEMA_VERSION}); start a new --run"
+                raise StoreParameterError(
+                    "{path} has run store schema {schema}, written by an older LangGap: reports read it, but it "
+                    "cannot be resumed (this LangGap writes schema {current}); start a new {run}",
+                    path=path,
+                    schema=schema,
+                    current=SCHEMA_VERSION,
                 )
             undo.pop_all()
         return cls(directory, db, lock, schema)

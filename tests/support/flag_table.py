@@ -274,7 +274,7 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "validate --out": (ProvenBy(_VALIDATE_CLI),),
     "validate --condition": (
         ProvenBy(_SWITCH_GATE),
-        Refused((*_VALIDATE, "--condition", "given"), "validate --condition takes switch:K only"),
+        Refused((*_VALIDATE, "--condition", "given"), "--condition takes switch:K only"),
         _claims_refuse(("--condition", "switch:5")),
     ),
     "validate --record": (ProvenBy(_VALIDATE_CLI),),

@@ -47,7 +47,7 @@ def test_a_checkpoint_directory_or_its_pretrained_model_is_accepted(checkpoint, 
     ("arguments", "message"),
     [
         ({"path": "/nonexistent"}, "no LeRobot checkpoint at /nonexistent (expected config.json there or in "),
-        ({}, "lerobot needs --policy-arg path=DIR"),
+        ({}, "lerobot needs path=DIR"),
         ({"adapter": "/no-adapter"}, "no PEFT adapter directory at /no-adapter"),
     ],
 )

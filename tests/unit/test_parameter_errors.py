@@ -4,16 +4,25 @@
 
 from __future__ import annotations
 
+import ast
 import copy
 import pickle
+import re
+from collections.abc import Iterator
 
 import pytest
 
 from langgap.cli.execution_flags import execution_options
 from langgap.cli.main import build_parser, main
 from langgap.cli.parameter_flags import error_message
+from langgap.engine.evaluate import evaluate
 from langgap.engine.spec import ExecutionOptions, RunSpec, SpecError
 from langgap.errors import ParameterError
+from langgap.policies.lerobot_checkpoint import check_arguments
+from langgap.report.pooled import pool
+from langgap.store import RunStore
+from tests.support.harness import REPO, cli_parsers
+from tests.support.reports import reader, write_run
 
 BOWL_1 = "spatial/s0/black-bowl-1-on-plate"
 
@@ -91,3 +100,104 @@ def test_a_flag_of_another_dest_is_found_in_the_parser():
     with pytest.raises(ParameterError) as info:
         execution_options(args)
     assert error_message(info.value, parser, args) == "--max-task-attempts must be at least 1, got 0"
+
+
+# Below the CLI, an error names a Python parameter: a flag of LangGap's CLI in what a library module raises is one
+# the CLI should have spelled. A whole command quoted for the user to run (`langgap export-hdf5 DIR --images`) reads
+# the same from Python; other tools' flags (pip's, lerobot-eval's) are theirs.
+_FLAG = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]*")
+_COMMAND = re.compile(r"`langgap [^`]*`")
+_RAISES = re.compile(r"(Error|Exhausted|Stopped)$")
+
+
+def _callee(node: ast.AST) -> str:
+    func = node.func if isinstance(node, ast.Call) else None
+    return func.id if isinstance(func, ast.Name) else func.attr if isinstance(func, ast.Attribute) else ""
+
+
+def _raised_strings(tree: ast.AST) -> Iterator[tuple[int, str]]:
+    """The strings of each exception a scope raises or builds, with those of the names it builds them from."""
+    for scope in ast.walk(tree):
+        if not isinstance(scope, ast.Module | ast.FunctionDef | ast.AsyncFunctionDef):
+            continue
+        made = [n.exc for n in ast.walk(scope) if isinstance(n, ast.Raise) and n.exc is not None]
+        made += [n for n in ast.walk(scope) if _RAISES.search(_callee(n))]
+        names = {n.id for m in made for n in ast.walk(m) if isinstance(n, ast.Name)}
+        made += [
+            n.value
+            for n in ast.walk(scope)
+            if isinstance(n, ast.Assign) and any(isinstance(t, ast.Name) and t.id in names for t in n.targets)
+        ]
+        for node in made:
+            pieces = list(ast.walk(node))
+            inside = {id(v) for f in pieces if isinstance(f, ast.JoinedStr) for v in f.values}
+            for piece in pieces:
+                if isinstance(piece, ast.JoinedStr):  # an f-string read whole, its fields as {}
+                    yield piece.lineno, "".join(v.value if isinstance(v, ast.Constant) else "{}" for v in piece.values)
+                elif isinstance(piece, ast.Constant) and isinstance(piece.value, str) and id(piece) not in inside:
+                    yield piece.lineno, piece.value
+
+
+def _flags_raised(source: str, flags: set[str]) -> set[str]:
+    return {
+        f"{line}: {flag}"
+        for line, text in _raised_strings(ast.parse(source))
+        for flag in _FLAG.findall(_COMMAND.sub("", text))
+        if flag in flags
+    }
+
+
+def test_no_library_module_raises_an_error_that_spells_a_flag():
+    flags = {o for _, p in cli_parsers(build_parser()) for a in p._actions for o in a.option_strings}
+    src = REPO / "src" / "langgap"
+    library = [p for p in sorted(src.rglob("*.py")) if p.relative_to(src).parts[0] != "cli"]
+    found = [f"{p.relative_to(src)}:{hit}" for p in library for hit in sorted(_flags_raised(p.read_text(), flags))]
+    assert not found, found
+    # what the scan finds: a flag raised, or built into a message beforehand; not a command quoted, nor pip's flag
+    caught = _flags_raised(
+        "def f(x):\n"
+        "    hint = ' (--extend grows it)'\n"
+        "    if x:\n"
+        "        raise SpecError('run ' + hint)\n"
+        "    raise LangGapError('--run exists; run `langgap eval --resume` or pip download --no-deps')\n"
+        "def g(x):\n"
+        "    raise LangGapError(f'--device {x}: run `langgap export-hdf5 {x} --images` first')\n",
+        flags,
+    )
+    assert caught == {"2: --extend", "5: --run", "7: --device"}
+
+
+def test_a_resume_with_another_spec_names_extend_as_the_caller_passes_it(tmp_path, capsys):
+    run = tmp_path / "run"
+    RunStore.create(run, {"spec": RunSpec.create("noop", tasks=BOWL_1, episodes=1).to_dict()}).close()
+    grown = RunSpec.create("noop", tasks=BOWL_1, episodes=2)
+    with pytest.raises(SpecError) as info:
+        evaluate(grown, run, ExecutionOptions(workers=0), resume=True)
+    assert str(info.value).endswith(" (extend grows a run's tasks, episodes or conditions)")
+    argv = ["eval", "--policy", "noop", "--tasks", BOWL_1, "--episodes", "2", "--run", str(run), "--resume"]
+    assert main([*argv, "--workers", "0"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: run {run} was made with another spec: ")
+    assert err.endswith(" (--extend grows a run's tasks, episodes or conditions)\n")
+
+
+def test_pooling_runs_of_two_protocols_names_allow_mismatch_as_the_caller_passes_it(tmp_path, capsys):
+    first = write_run(tmp_path / "a", "my-vla", reader())
+    other = write_run(tmp_path / "b", "my-vla", reader(), physics={"mujoco": "3.3.0"})
+    with pytest.raises(ParameterError) as info:
+        pool({"x": [first, other]})
+    assert str(info.value).endswith("must come from one protocol (allow_mismatch pools them anyway)")
+    assert main(["report", "--pool", f"x={first},{other}"]) == 2
+    assert capsys.readouterr().err == (
+        f"error: {other} differs from {first} in physics: pooled episodes must come from one protocol "
+        "(--allow-mismatch pools them anyway)\n"
+    )
+
+
+def test_a_policy_argument_reads_as_the_constructor_takes_it_and_as_policy_arg_on_the_command_line(capsys):
+    with pytest.raises(ParameterError) as info:
+        check_arguments()
+    assert str(info.value) == "lerobot needs path=DIR, a checkpoint's pretrained_model/ directory"
+    parser = build_parser()
+    args = parser.parse_args(["eval", "--policy", "lerobot", "--run", "r"])
+    assert error_message(info.value, parser, args).startswith("lerobot needs --policy-arg path=DIR, ")

@@ -30,7 +30,7 @@ from langgap.atomic import write_text_atomically
 from langgap.catalog.catalog import Catalog, catalog_hash, load_catalog
 from langgap.catalog.task import DEFAULT_STYLE, Task
 from langgap.catalog.words import words
-from langgap.errors import CatalogError
+from langgap.errors import CatalogError, CatalogParameterError
 
 SPLIT_KINDS = ("instruction", "compositional", "novel-word")
 PARTS = ("train", "heldout")
@@ -171,7 +171,11 @@ def generate(
         train = [t for t in tasks if t.split == "train"]
     elif kind in ("compositional", "novel-word"):
         if heldout <= 0 or heldout >= len(tasks):
-            raise CatalogError(f"--heldout must be between 1 and {len(tasks) - 1} for {len(tasks)} selected tasks")
+            raise CatalogParameterError(
+                "{heldout} must be between 1 and {most} for {count} selected tasks",
+                most=len(tasks) - 1,
+                count=len(tasks),
+            )
         pick = _compositional if kind == "compositional" else _novel_word
         held = pick(tasks, heldout, rng, style)
         train = [t for t in tasks if t not in held]
@@ -319,7 +323,12 @@ def split_tasks(catalog: Catalog, term: str) -> set[str]:
         raise CatalogError(f"{term!r}: a split term reads split:NAME:train, split:NAME:heldout or split:NAME:K")
     split = load_split(name)
     if split.catalog != catalog.name:
-        raise CatalogError(f"split {split.name} is of catalog {split.catalog}, not {catalog.name}: add --catalog")
+        raise CatalogParameterError(
+            "split {name} is of catalog {of}, not {this}: pass {catalog} {of}",
+            name=split.name,
+            of=split.catalog,
+            this=catalog.name,
+        )
     if catalog_hash(split.catalog) != split.catalog_sha256:
         raise CatalogError(f"split {split.name}: catalog {split.catalog} changed since it was made: generate it again")
     return set(split.part(part))

@@ -144,7 +144,7 @@ def run(args) -> int:
     try:
         summary = evaluate(spec, args.run, options, resume=args.resume, extend=args.extend)
     except RunStopped as exc:
-        raise RunStopped(f"{exc}; {check_hint(spec)}") from None
+        raise RunStopped(exc.template + "; {hint}", **exc.values, hint=check_hint(spec)) from None
     print(
         f"run {summary.run}: {summary.planned} planned, {summary.skipped} already stored, {summary.ran} run "
         f"({summary.successes} successes, {summary.gaps} gaps)"

@@ -7,11 +7,11 @@ from __future__ import annotations
 import argparse
 from collections.abc import Iterator
 
-from langgap.errors import LangGapError, ParameterError
+from langgap.errors import LangGapError, ParameterError, PolicyArgumentError
 
 # The parameters set by a flag of another `dest`; every other parameter is its flag's dest. The retries' flag
 # stores `work_attempts`: `collect` spells it `--max-task-attempts`, its own `--max-attempts` being another option.
-DESTS = {"timeout_s": "timeout", "max_attempts": "work_attempts"}
+DESTS = {"timeout_s": "timeout", "max_attempts": "work_attempts", "conditions": "condition"}
 # A parameter that commands set under another name: the init states each task runs are `eval --episodes` and
 # `validate --inits` (which reaches `RunSpec.create` as `episodes`).
 SYNONYMS = {"episodes": ("inits",)}
@@ -32,9 +32,11 @@ def _flag(action: argparse.Action) -> str:
 def error_message(error: LangGapError, parser: argparse.ArgumentParser, args: argparse.Namespace) -> str:
     """The line the CLI prints for `error`, a `ParameterError`'s parameters spelled as the flags of the command
     that parsed `args`: the flag that sets the parameter (`SYNONYMS`: `validate --inits` sets `episodes`), else
-    the flag of its name, as the other commands spell it."""
+    the flag of its name, as the other commands spell it; a policy's argument as `--policy-arg NAME`."""
     if not isinstance(error, ParameterError):
         return str(error)
+    if isinstance(error, PolicyArgumentError):
+        return error.naming({p: f"--policy-arg {p}" for p in error.parameters})
     flags = {a.dest: _flag(a) for p in _parsers(parser, args) for a in p._actions if a.option_strings}
 
     def spelled(parameter: str) -> str:

@@ -42,7 +42,7 @@ from langgap.demos.compact import HDF5_DIR, DemoFileError, demo_files, read_mani
 from langgap.demos.export import FPS
 from langgap.demos.record import Demo
 from langgap.demos.render import IMAGE_ORIENTATION, IMAGE_SIZE, iter_demos
-from langgap.errors import DependencyNotInstalled, LangGapError
+from langgap.errors import DependencyNotInstalled, LangGapError, ParameterError
 from langgap.version import code_version
 
 # LangGap camera -> LIBERO's observation key.
@@ -106,7 +106,7 @@ def write_hdf5(
     before anything is written; so does, with `resume`, one written from elsewhere or with other settings.
     """
     if force and resume:
-        raise LangGapError("--force replaces the existing files and --resume keeps them: pass one of them")
+        raise ParameterError("{force} replaces the existing files and {resume} keeps them: pass one of them")
     h5py = require_h5py()
     root = Path(root)
     manifest = read_manifest(root)
@@ -119,9 +119,11 @@ def write_hdf5(
     existing = {task_id: path for task_id, path in targets.items() if path.exists()}
     if existing and not (force or resume):
         more = f" (and {len(existing) - 1} more)" if len(existing) > 1 else ""
-        raise LangGapError(
-            f"{next(iter(existing.values()))} exists already{more}; pass --resume to keep what is written "
-            "and add the rest, or --force to overwrite"
+        raise ParameterError(
+            "{path} exists already{more}; pass {resume} to keep what is written and add the rest, or {force} to "
+            "overwrite",
+            path=next(iter(existing.values())),
+            more=more,
         )
     stored_size = image_size if images else 0  # what a file records: 0 for one without images
     kept = {}
@@ -158,19 +160,22 @@ def _check_resumable(h5py, path: Path, collection: dict, image_size: int) -> Non
             written_from = json.loads(attrs["langgap_collection"])
             env_kwargs = json.loads(attrs["env_args"])["env_kwargs"]
     except (OSError, KeyError, ValueError) as exc:
-        raise LangGapError(
-            f"cannot resume: {path} is not a LangGap HDF5 export ({exc}); pass --force to replace it"
+        raise ParameterError(
+            "cannot resume: {path} is not a LangGap HDF5 export ({exc}); pass {force} to replace it", path=path, exc=exc
         ) from None
     written_size = env_kwargs.get("camera_heights", 0)
     if written_from != json.loads(json.dumps(collection)):  # compared as stored: JSON has no tuples
-        raise LangGapError(
-            f"cannot resume: {path} was exported from another collection, or from this one before it changed; "
-            "pass --force to replace it"
+        raise ParameterError(
+            "cannot resume: {path} was exported from another collection, or from this one before it changed; "
+            "pass {force} to replace it",
+            path=path,
         )
     if written_size != image_size:
-        raise LangGapError(
-            f"cannot resume: {path} has {_images(written_size)}, this export asks for {_images(image_size)}; "
-            "pass --force to replace it"
+        raise ParameterError(
+            "cannot resume: {path} has {written}, this export asks for {asked}; pass {force} to replace it",
+            path=path,
+            written=_images(written_size),
+            asked=_images(image_size),
         )
 
 

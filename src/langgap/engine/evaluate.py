@@ -16,7 +16,7 @@ from langgap.engine.plan import PlannedEpisode, build_plan
 from langgap.engine.pools import WorkerPool, make_pool
 from langgap.engine.runner import RunnerSetup
 from langgap.engine.sharing import SharedRollout, policy_spec, share_rollouts
-from langgap.engine.spec import PLAN_FIELDS, ExecutionOptions, RunSpec, SpecError
+from langgap.engine.spec import PLAN_FIELDS, ExecutionOptions, RunSpec, SpecParameterError
 from langgap.errors import LangGapError, one_line
 from langgap.records import EpisodeKey, EpisodeRecord, Status
 from langgap.store import PROGRESS, RunStore
@@ -102,10 +102,12 @@ def _open_store(spec: RunSpec, options: ExecutionOptions, run: Path, *, resume: 
         growing = extend and not set(differing) - set(PLAN_FIELDS)
         if differing and not growing:
             hint = (
-                " (--extend grows a run's tasks, episodes or conditions)" if set(differing) <= set(PLAN_FIELDS) else ""
+                " ({extend} grows a run's tasks, episodes or conditions)" if set(differing) <= set(PLAN_FIELDS) else ""
             )
-            raise SpecError(
-                f"run {run} was made with another spec: {spec.describe_differences(stored, differing)}{hint}"
+            raise SpecParameterError(
+                "run {path} was made with another spec: {differences}" + hint,
+                path=run,
+                differences=spec.describe_differences(stored, differing),
             )
         if differing:
             store.set_meta("spec", spec.to_dict())

@@ -14,7 +14,7 @@ import numpy as np
 
 from langgap.catalog.catalog import Catalog
 from langgap.catalog.task import Task
-from langgap.errors import CatalogError, InitStateError, ParameterError
+from langgap.errors import CatalogError, CatalogParameterError, InitStateError
 from langgap.records import EpisodeKey
 from langgap.vocabulary import SWITCH, Condition, TaskKind, switch_step
 
@@ -29,10 +29,6 @@ _CONDITION_MEANING = {
     f"{TaskKind.ORIGINAL}'s sibling) until policy step K, then the task's own",
 }
 CONDITION_HELP = "; ".join(f"{condition}: {meaning}" for condition, meaning in _CONDITION_MEANING.items())
-
-
-class PlanParameterError(CatalogError, ParameterError):
-    """An argument of `build_plan` is invalid, named as the caller passed it."""
 
 
 @dataclass(frozen=True)
@@ -191,7 +187,7 @@ def build_plan(
     each `repeats` times with its own seed (same init state); no `switch:K` episode of a task that has nothing
     to start under (`without_switch_source`)."""
     if episodes < 1:
-        raise PlanParameterError("{episodes} must be at least 1, got {got}", got=episodes)
+        raise CatalogParameterError("{episodes} must be at least 1, got {got}", got=episodes)
     unknown = unknown_conditions(conditions)
     if unknown:
         raise CatalogError(unknown_conditions_text(unknown))

@@ -24,7 +24,7 @@ from typing import Generic, TypeVar
 
 from langgap.engine.pools import ItemDone, ItemFailed, WorkerLost, WorkerPool
 from langgap.engine.work import WorkItem
-from langgap.errors import LangGapError
+from langgap.errors import ParameterError
 
 POLL_S = 0.2
 Item = TypeVar("Item", bound=WorkItem)
@@ -33,8 +33,8 @@ Result = TypeVar("Result")
 GapFactory = Callable[[Item, str, int], Result]
 
 
-class RunStopped(LangGapError):
-    """The run stopped after repeated infrastructure failures with one cause; `--resume` continues it."""
+class RunStopped(ParameterError):
+    """The run stopped after repeated infrastructure failures with one cause; a resume (`resume`) continues it."""
 
     exit_code = 4
 
@@ -117,8 +117,11 @@ class _Streak:
         self.items.add(item.key)
         if len(self.items) >= self.limit:
             raise RunStopped(
-                f"stopped after {len(self.items)} {item.kind}s in a row failed with: {cause} "
-                "(stored results are intact; fix the cause and run again, with --resume where the command has it)"
+                "stopped after {count} {kind}s in a row failed with: {cause} "
+                "(stored results are intact; fix the cause and run again with {resume}, where the command has it)",
+                count=len(self.items),
+                kind=item.kind,
+                cause=cause,
             )
 
 

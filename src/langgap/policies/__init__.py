@@ -64,8 +64,9 @@ def _coerce(value: str, like) -> object:
 
 
 def policy_kwargs(name: str, args: dict[str, str] | None = None) -> dict:
-    """Check `--policy-arg` strings against policy `name`'s constructor and convert them to its types; a policy
-    class with a static `check_arguments(**kwargs)` checks their values too (raising a `LangGapError`)."""
+    """Check arguments `args` (strings, or values already of their type) against policy `name`'s constructor and
+    convert the strings to its types; a policy class with a static `check_arguments(**kwargs)` checks their values
+    too (raising a `LangGapError`; a `PolicyArgumentError` names the argument)."""
     cls = policy_class(name)
     params = inspect.signature(cls).parameters
     kwargs = {}
@@ -89,7 +90,7 @@ def policy_kwargs(name: str, args: dict[str, str] | None = None) -> dict:
 
 
 def make_policy(name: str, args: dict[str, str] | None = None) -> Policy:
-    """Build policy `name` with keyword arguments given as strings (`--policy-arg k=v`).
+    """Build policy `name` with its constructor's arguments, given as strings (`{"checkpoint": "bc.safetensors"}`).
 
     Args:
         name: A registered policy's name (`noop`, `random`, `oracle`, `small-bc`, `openpi`, ...) or the
@@ -102,6 +103,7 @@ def make_policy(name: str, args: dict[str, str] | None = None) -> Policy:
 
     Raises:
         LangGapError: An unknown policy or one that cannot be imported, an argument its constructor does not
-            take or that does not convert, or a refusal of its constructor (no checkpoint, no server).
+            take or that does not convert, or a refusal of its constructor (no checkpoint, no server); a missing
+            argument is a `PolicyArgumentError` that names it as the constructor does (`checkpoint`).
     """
     return policy_class(name)(**policy_kwargs(name, args))

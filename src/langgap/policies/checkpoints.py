@@ -8,13 +8,17 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from langgap.errors import LangGapError
+from langgap.errors import LangGapError, PolicyArgumentError
 from langgap.policies.text import Vocabulary
 
 
 class CheckpointError(LangGapError):
     """A checkpoint is missing, unreadable, or not one of the kind asked for (a LeRobot one: incompatible with
     LIBERO)."""
+
+
+class CheckpointArgumentError(CheckpointError, PolicyArgumentError):
+    """A policy that loads a checkpoint was given no argument naming one (named as the policy's argument)."""
 
 
 def write_checkpoint(

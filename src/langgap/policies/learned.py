@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from langgap.policies.base import TaskContext, current_instruction
-from langgap.policies.checkpoints import CheckpointError
+from langgap.policies.checkpoints import CheckpointArgumentError
 from langgap.sim.env import Observation
 
 
@@ -15,7 +15,9 @@ class LearnedPolicy:
 
     def __init__(self, checkpoint: str, *, kind: str, load: Callable[[str], tuple]):
         if not checkpoint:
-            raise CheckpointError(f"{kind} needs --policy-arg checkpoint=PATH (a file written by `langgap train`)")
+            raise CheckpointArgumentError(
+                "{kind} needs {checkpoint}=PATH (a file written by `langgap train`)", kind=kind
+            )
         import torch
 
         torch.set_num_threads(1)  # deterministic, and one core per worker

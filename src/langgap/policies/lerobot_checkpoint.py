@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from langgap.policies.checkpoints import CheckpointError
+from langgap.policies.checkpoints import CheckpointArgumentError, CheckpointError
 
 
 def pretrained_dir(path: str) -> Path:
@@ -29,7 +29,7 @@ def check_arguments(path: str = "", adapter: str = "", **_: object) -> None:
         CheckpointError: No `path`, no checkpoint there, or an `adapter` that is no directory.
     """
     if not path:
-        raise CheckpointError("lerobot needs --policy-arg path=DIR, a checkpoint's pretrained_model/ directory")
+        raise CheckpointArgumentError("lerobot needs {path}=DIR, a checkpoint's pretrained_model/ directory")
     pretrained_dir(path)
     if adapter and not Path(adapter).expanduser().is_dir():
         raise CheckpointError(f"no PEFT adapter directory at {adapter}")

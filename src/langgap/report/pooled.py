@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import ClassVar
 
 from langgap.catalog.labels import SPLIT_LABEL, SPLIT_ORDER, label
-from langgap.errors import LangGapError
+from langgap.errors import LangGapError, ParameterError
 from langgap.report.data import Spec
 from langgap.report.load import load_runs
 from langgap.report.stats import Rate, permutation_floor, permutation_p
@@ -107,9 +107,12 @@ def pool(pools: dict[str, list[str | Path]], *, allow_mismatch: bool = False) ->
         for replicate in replicates:
             differences = protocol_differences(first, replicate)
             if differences and not allow_mismatch:
-                raise LangGapError(
-                    f"{replicate.path} differs from {first.path} in {', '.join(differences)}: pooled episodes must "
-                    "come from one protocol (--allow-mismatch pools them anyway)"
+                raise ParameterError(
+                    "{path} differs from {first} in {fields}: pooled episodes must come from one protocol "
+                    "({allow_mismatch} pools them anyway)",
+                    path=replicate.path,
+                    first=first.path,
+                    fields=", ".join(differences),
                 )
         per_run = [_groups(r) for r in replicates]
         present = {g for groups in per_run for g, rate in groups.items() if rate.episodes or rate.gaps}

@@ -14,7 +14,7 @@ import numpy as np
 import torch
 
 from langgap.demos.compact import read_manifest
-from langgap.errors import LangGapError
+from langgap.errors import LangGapError, ParameterError
 from langgap.policies.text import VOCABULARIES, Vocabulary, catalog_vocabulary
 from langgap.training import LOSSES
 
@@ -53,11 +53,11 @@ class TrainConfig:
         try:
             device = torch.device(self.device)
         except RuntimeError as exc:
-            raise LangGapError(f"--device {self.device}: {exc}") from None
+            raise ParameterError("{device} {name}: {exc}", name=self.device, exc=exc) from None
         if device.type == "cuda" and not torch.cuda.is_available():
-            raise LangGapError(f"--device {self.device}: PyTorch sees no CUDA device on this machine")
+            raise ParameterError("{device} {name}: PyTorch sees no CUDA device on this machine", name=self.device)
         if device.type not in ("cpu", "cuda"):
-            raise LangGapError(f"--device {self.device}: only cpu and cuda are supported")
+            raise ParameterError("{device} {name}: only cpu and cuda are supported", name=self.device)
         return device
 
 

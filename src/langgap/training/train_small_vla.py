@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from langgap.errors import LangGapError
+from langgap.errors import ParameterError
 from langgap.policies.small_vla.model import SmallVLA, StateNormalizer, VisionConfig, save_checkpoint
 from langgap.training.image_demos import ImageDemo, load_image_demos
 from langgap.training.loop import TrainConfig, chunk_loss, chunk_targets, optimise, selected, training_facts
@@ -45,9 +45,11 @@ def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=pri
     size = demos[0].image_size
     model_config = config.model or VisionConfig(image_size=size)
     if model_config.image_size != size:
-        raise LangGapError(
-            f"the model takes {model_config.image_size} px images and the demonstrations hold {size} px: "
-            f"export them with --image-size {model_config.image_size}, or set model.image_size to {size}"
+        raise ParameterError(
+            "the model takes {wanted} px images and the demonstrations hold {size} px: export them with "
+            "{image_size} {wanted}, or set model.image_size to {size}",
+            wanted=model_config.image_size,
+            size=size,
         )
     vocab = config.words([d.instruction for d in demos])
     targets = [chunk_targets(d.labels, model_config.chunk) for d in demos]

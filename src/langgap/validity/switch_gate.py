@@ -20,7 +20,7 @@ from langgap.catalog.switch_verdicts import SwitchVerdicts, record_switch_verdic
 from langgap.catalog.task import GateResult, verdict_counts, verdict_of
 from langgap.engine.evaluate import evaluate
 from langgap.engine.spec import ExecutionOptions, RunSpec
-from langgap.errors import LangGapError
+from langgap.errors import ParameterError
 from langgap.records import EpisodeRecord
 from langgap.stack import DEFAULT_STEPPING
 from langgap.store import RunStore
@@ -70,8 +70,10 @@ def switch_conditions(conditions: list[str]) -> tuple[str, ...]:
     """The `switch:K` conditions the switch gate runs; anything else is a LangGapError."""
     other = [c for c in conditions if switch_step(c) is None]
     if other:
-        raise LangGapError(
-            f"validate --condition takes {SWITCH}K only (the plain gate needs no condition), got {', '.join(other)}"
+        raise ParameterError(
+            "{conditions} takes {switch}K only (the plain gate needs no condition), got {got}",
+            switch=SWITCH,
+            got=", ".join(other),
         )
     return tuple(dict.fromkeys(conditions))
 

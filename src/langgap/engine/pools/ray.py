@@ -137,7 +137,7 @@ def check_reachable(address: str, timeout_s: float = HEAD_TIMEOUT_S) -> None:
         with socket.create_connection((host, int(port)), timeout=timeout_s):
             return
     except ValueError:
-        raise LangGapError(f"--ray-address takes HOST:PORT, got {address!r}") from None
+        raise ParameterError("{ray_address} takes HOST:PORT, got {got!r}", got=address) from None
     except OSError as exc:
         raise LangGapError(f"cannot reach the Ray cluster at {address}: {exc}") from None
 
