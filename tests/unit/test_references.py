@@ -1,4 +1,5 @@
-"""Referring expressions resolved on hand-built scenes: each relation, each viewpoint, and the moka pots."""
+"""Referring expressions resolved on hand-built scenes: each relation, each viewpoint, and the moka pots; a
+finding's words."""
 
 from __future__ import annotations
 
@@ -7,11 +8,14 @@ import pytest
 
 from langgap.bddl import BddlProblem, Region
 from langgap.goals import goal_from_strings
+from langgap.validity.reference_check import judged_findings
 from langgap.validity.references import Layout, View, expected_entity, mentions, outcome, resolve
 
-# The robot looks along +x (its left is +y); the agentview camera looks back at it along -x (its right is +y).
+# The robot looks along +x (its left is +y); the agentview camera looks back at it along -x (its right is +y);
+# the policy's image is the camera's mirrored left to right (its right is -y again).
 ROBOT = View("robot", right=np.array([0.0, -1.0, 0.0]), forward=np.array([1.0, 0.0, 0.0]))
 CAMERA = View("camera", right=np.array([0.0, 1.0, 0.0]), forward=np.array([-1.0, 0.0, 0.0]))
+POLICY = View("policy image", right=np.array([0.0, -1.0, 0.0]), forward=np.array([-1.0, 0.0, 0.0]))
 
 SPATIAL = BddlProblem(
     problem_name="libero_tabletop_manipulation",
@@ -73,6 +77,29 @@ def test_between_picks_the_one_on_the_segment_and_not_between_the_other():
     assert _picks(sentence.format("between"), SPATIAL, beyond) == ()
 
 
+def _bowls(one: tuple[float, float], two: tuple[float, float]) -> Layout:
+    """The plate at the origin, the ramekin 20 cm along +y (the segment), the two bowls where given."""
+    return _layout(akita_black_bowl_1=one, akita_black_bowl_2=two, plate_1=(0.0, 0.0),
+                   glazed_rim_porcelain_ramekin_1=(0.0, 0.2), cookies_1=(0.3, 0.4))  # fmt: skip
+
+
+def test_between_is_bounded_along_and_across_the_segment_and_picks_neither_when_none_fits():
+    between = "pick up the black bowl between the plate and the ramekin and place it on the plate"
+    not_between = between.replace("between", "not between")
+    # One bowl past the ramekin (t 1.26), the other level with the segment's middle but 30 cm off it.
+    past_the_end = _bowls((0.0, 0.252), (0.3, 0.1))
+    assert _picks(between, SPATIAL, past_the_end) == ()
+    assert _picks(not_between, SPATIAL, past_the_end) == ("akita_black_bowl_1", "akita_black_bowl_2")
+    # 6 cm off a 20 cm segment (BETWEEN_WIDTH: a quarter of it, 5 cm) is beside it.
+    assert _picks(between, SPATIAL, _bowls((0.06, 0.1), (0.3, 0.1))) == ()
+    assert _picks(between, SPATIAL, _bowls((0.0, 0.211), (0.3, 0.1))) == ()  # t 1.055: past BETWEEN_ENDS
+    # Within both bounds (t 1.045 on the line; 4.9 cm off at the middle) both fit; the nearer the line is picked.
+    assert _picks(between, SPATIAL, _bowls((0.0, 0.209), (0.3, 0.1))) == ("akita_black_bowl_1",)
+    assert _picks(between, SPATIAL, _bowls((0.049, 0.1), (0.3, 0.1))) == ("akita_black_bowl_1",)
+    assert _picks(between, SPATIAL, _bowls((0.049, 0.1), (0.0, 0.209))) == ("akita_black_bowl_2",)
+    assert _picks(not_between, SPATIAL, _bowls((0.049, 0.1), (0.0, 0.209))) == ("akita_black_bowl_1",)
+
+
 def test_next_to_picks_the_nearest_and_is_ambiguous_within_the_margin():
     sentence = "pick up the black bowl next to the cookie box and place it on the plate"
     assert _picks(sentence, SPATIAL, BOWLS) == ("akita_black_bowl_2",)
@@ -126,6 +153,7 @@ def test_the_left_moka_pot_is_the_goals_from_the_robot_and_the_other_from_the_ca
     assert expected == "moka_pot_1"
     assert outcome(resolve(pot, MOKA, layout, ROBOT), expected) == "goal's"
     assert outcome(resolve(pot, MOKA, layout, CAMERA), expected) == "other"
+    assert outcome(resolve(pot, MOKA, layout, POLICY), expected) == "goal's"
     both = next(m for m in mentions("put both moka pots on the stove", MOKA) if m.category == "moka_pot")
     assert both.plural and expected_entity(both, [both], goal, MOKA) is None
 
@@ -138,6 +166,13 @@ def test_the_left_moka_pot_is_the_goals_from_the_robot_and_the_other_from_the_ca
         ("place it on the plate after you pick up the ramekin", [("plate", "target"), ("ramekin", "object")]),
         ("the ramekin should be picked up and placed on the plate", [("ramekin", "object"), ("plate", "target")]),
         ("pick up anything but the ramekin and place it on the plate", [("ramekin", "excluded"), ("plate", "target")]),
+        # LIBERO-Plus's rewordings of libero_10 scene 4 ("-3", "-28", "-35"): where the mugs go
+        ("Lets have the white mug on the left plate and the yellow and white mug on the right plate",
+         [("white mug", "object"), ("plate", "target"), ("yellow and white mug", "object"), ("plate", "target")]),
+        ("Arrange the white mug on the left plate and set the yellow and white mug on the right plate",
+         [("white mug", "object"), ("plate", "target"), ("yellow and white mug", "object"), ("plate", "target")]),
+        ("the white mug belongs on the left plate and the yellow and white mug on the right plate",
+         [("white mug", "object"), ("plate", "target"), ("yellow and white mug", "object"), ("plate", "target")]),
     ],
 )  # fmt: skip
 def test_each_mention_gets_its_role_in_the_sentence(sentence, roles):
@@ -164,3 +199,26 @@ def test_words_the_reader_does_not_follow_leave_the_expression_unread():
     )
     assert next(m for m in found if m.category == "akita_black_bowl").unread
     assert not next(m for m in mentions("pick up the bowl and place it on the plate", SPATIAL)).unread
+
+
+def test_a_finding_says_what_the_expression_picks_from_every_viewpoint():
+    sentence = "put the left moka pot on the stove"
+    pot = next(m for m in mentions(sentence, MOKA) if m.category == "moka_pot")
+    by_view = {
+        "robot": [(0, ("moka_pot_1",)), (1, ("moka_pot_1",))],
+        "camera": [(0, ("moka_pot_2",)), (1, ())],
+        "policy image": [(0, ("moka_pot_1",)), (1, ("moka_pot_1",))],
+    }
+    views = (
+        "robot: the goal's on init state(s) 0–1 (2 of 2); camera (raw render): moka_pot_2 on init state(s) 0 (1 of 2), "
+        "neither on init state(s) 1 (1 of 2); policy's image: the goal's on init state(s) 0–1 (2 of 2)"
+    )
+    found = judged_findings("libero10/s8/pro-task", sentence, pot, "moka_pot_1", by_view, 2)
+    assert [(f.name, f.task, f.detail) for f in found] == [
+        ("sentence picks another object", "libero10/s8/pro-task",
+         f"'left moka pot' picks moka_pot_2, not the goal's moka_pot_1 — {views} — in {sentence!r}"),
+        ("sentence picks no object", "libero10/s8/pro-task",
+         f"'left moka pot' picks neither — {views} — in {sentence!r}"),
+    ]  # fmt: skip
+    right = {view: [(0, ("moka_pot_1",))] for view in by_view}
+    assert judged_findings("libero10/s8/pro-task", sentence, pot, "moka_pot_1", right, 2) == []

@@ -419,20 +419,22 @@ def _references_check(args, tasks: list[Task], about: dict, recorded: list, ran:
     from langgap.validity.audit import CHECKS
 
     if args.references:
-        from langgap.validity.reference_check import reference_findings
-        from langgap.validity.references import MARGIN
+        from langgap.validity.reference_check import VIEWS, reference_findings
+        from langgap.validity.references import BETWEEN_ENDS, BETWEEN_WIDTH, MARGIN
         from langgap.validity.starts import SEED
 
         found, checked = reference_findings(tasks, args.references, progress=lambda line: print(line, flush=True))
         unread = [f"{task}: {phrase}" for task, phrases in sorted(checked.unread.items()) for phrase in phrases]
-        how = {"inits": args.references, "seed": SEED, "margin_m": MARGIN, "judged": checked.judged}
+        how = {"inits": args.references, "seed": SEED, "margin_m": MARGIN, "judged": checked.judged_count}
+        how |= {"between_ends": BETWEEN_ENDS, "between_width": BETWEEN_WIDTH, "viewpoints": list(VIEWS)}
         ran["references"] = {args.tasks: how | {"unread": len(unread), "unread_examples": unread[:10]}}
-        print(f"references: {checked.judged} expression(s) judged on init states 0..{args.references - 1} from the "
-              f"robot's and the camera's viewpoint (seed {SEED}); {len(unread)} not read")  # fmt: skip
+        print(f"references: {checked.judged_count} expression(s) judged on init states 0..{args.references - 1} "
+              f"from the robot's viewpoint, the camera's (raw render) and in the policy's image (seed {SEED}); "
+              f"{len(unread)} expression(s) not read")  # fmt: skip
         return found
     for selection, how in about.get("references", {}).items():
         print(f"references: recorded for tasks {selection!r} on init states 0..{how['inits'] - 1}, "
-              f"{how['judged']} judged, {how['unread']} not read (rerun: --references K)")  # fmt: skip
+              f"{how['judged']} expression(s) judged, {how['unread']} not read (rerun: --references K)")  # fmt: skip
     chosen = {t.id for t in tasks}
     return [f for f in recorded if f.name in CHECKS["references"] and f.task in chosen]
 

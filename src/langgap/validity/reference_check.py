@@ -1,13 +1,16 @@
 """The audit's reference check: on every init state, does each referring expression of a task's sentence pick
-the object its goal names, from the robot's viewpoint and from the agentview camera's?
+the object its goal names, from the robot's viewpoint, from the agentview camera's (its raw, unrotated render)
+and in the image a policy is given (that render rotated 180°, as openpi's and OpenVLA's LIBERO runners and
+LangGap give it: the camera's picture mirrored left to right)?
 
 For each task, the expressions that must tell objects apart (`langgap.validity.references`: a category the
 scene holds more than once, or one with a relation or side) are resolved on the scene as a policy first sees
 it (init state k, seed 0, after the settle steps), with the objects' positions and LIBERO's `On` / `In`
 decided by the simulator. An expression picks the goal's object, another, none, or several; the last three
-are findings, with the init states on which they happen. An expression the reader does not follow is counted
-as unread, never judged. Tasks set in the same scene with the same init states share one simulator (their
-goals move nothing at t0).
+are findings, each with what the expression picks from every viewpoint on which init states. Every expression
+found is judged or counted as unread: one with words the reader does not follow, or whose object the reader
+cannot find in the goal (its role there), is unread, never judged nor left out. Tasks set in the same scene
+with the same init states share one simulator (their goals move nothing at t0).
 """
 
 from __future__ import annotations
@@ -35,7 +38,9 @@ from langgap.validity.references import (
 from langgap.validity.starts import SEED, inits_text
 
 CAMERA = "agentview"
-VIEWS = ("robot", "camera")
+VIEWS = ("robot", "camera", "policy image")
+# How a finding names each viewpoint.
+VIEW_NAMES = {"robot": "robot", "camera": "camera (raw render)", "policy image": "policy's image"}
 OUTCOME_FINDING = {
     "other": "sentence picks another object",
     "none": "sentence picks no object",
@@ -46,10 +51,19 @@ STYLES = ("libero", "paper")
 
 @dataclass
 class Checked:
-    """What the check read in a catalog's tasks: expressions judged, and those it could not read (by task)."""
+    """What the check read in a catalog's tasks, by task: the expressions judged and those it could not read
+    (each with its sentence, and for an unread one why)."""
 
-    judged: int = 0
+    judged: dict[str, list[str]] = field(default_factory=dict)
     unread: dict[str, list[str]] = field(default_factory=dict)
+
+    @property
+    def judged_count(self) -> int:
+        return sum(map(len, self.judged.values()))
+
+    @property
+    def unread_count(self) -> int:
+        return sum(map(len, self.unread.values()))
 
 
 def needs_resolving(mention: Mention, scene: BddlProblem) -> bool:
@@ -77,8 +91,10 @@ def _layout_group(task: Task) -> tuple[str, str]:
 
 
 def _views(env) -> dict[str, View]:
-    """The robot's viewpoint (its base's axes: forward x, left y) and the agentview camera's (its image's right;
-    it looks along its -z)."""
+    """The robot's viewpoint (its base's axes: forward x, left y), the agentview camera's (its raw render's
+    right, MuJoCo's camera x; it looks along its -z) and the policy's image's (that render rotated 180°: its
+    right is the camera's left; MuJoCo's render comes bottom row first, so the rotation turns it upright and
+    mirrors it, and what is nearer the camera stays in front)."""
     import mujoco
 
     model, data = env.sim.model._model, env.sim.data._data
@@ -92,6 +108,7 @@ def _views(env) -> dict[str, View]:
     return {
         "robot": View("robot", right=flat(-base[:, 1]), forward=flat(base[:, 0])),
         "camera": View("camera", right=flat(camera[:, 0]), forward=flat(-camera[:, 2])),
+        "policy image": View("policy image", right=flat(-camera[:, 0]), forward=flat(-camera[:, 2])),
     }
 
 
@@ -129,11 +146,14 @@ def reference_findings(
     scenes = {task.id: files.scene_problem(task) for task in tasks}  # parsed once: the loops below are per init
     todo: dict[str, list] = {}
     for task in tasks:
-        for sentence, mention, found in _expressions(task, scenes[task.id]):
-            if mention.unread:
-                checked.unread.setdefault(task.id, []).append(f"{mention.phrase} (in {sentence!r})")
+        scene = scenes[task.id]
+        for sentence, mention, found in _expressions(task, scene):
+            expected = expected_entity(mention, found, task.goal, scene)
+            if mention.unread or expected is None:
+                why = "words not read" if mention.unread else f"no single {mention.category} of the goal in its role"
+                checked.unread.setdefault(task.id, []).append(f"{mention.phrase} (in {sentence!r}: {why})")
             else:
-                todo.setdefault(task.id, []).append((sentence, mention, found))
+                todo.setdefault(task.id, []).append((sentence, mention, expected))
     groups: dict[tuple[str, str], list[Task]] = {}
     for task in tasks:
         if task.id in todo:
@@ -160,32 +180,46 @@ def reference_findings(
                             )
     found = []
     for task in tasks:
-        for sentence, mention, all_mentions in todo.get(task.id, []):
-            checked.judged += 1
-            expected = expected_entity(mention, all_mentions, task.goal, scenes[task.id])
-            found += _judged(
-                task, sentence, mention, expected, {v: picks[(task.id, sentence, mention, v)] for v in VIEWS}
-            )
+        for sentence, mention, expected in todo.get(task.id, []):
+            checked.judged.setdefault(task.id, []).append(f"{mention.phrase} (in {sentence!r})")
+            by_view = {v: picks[(task.id, sentence, mention, v)] for v in VIEWS}
+            of = len(instances(mention.category, scenes[task.id]))
+            found += judged_findings(task.id, sentence, mention, expected, by_view, of)
     return found, checked
 
 
-def _judged(task: Task, sentence: str, mention: Mention, expected: str | None, by_view: dict) -> list[Finding]:
-    """The findings of one expression: per outcome, the viewpoints and init states it happens on."""
+Picks = list[tuple[int, tuple[str, ...]]]  # (init state, the entities an expression picked on it)
+
+
+def _named(picked: tuple[str, ...], expected: str, of: int) -> str:
+    """What an expression picked among `of` objects, in words: `the goal's`, the entities, `neither` or `none`."""
+    if picked == (expected,):
+        return "the goal's"
+    return ", ".join(picked) or ("neither" if of == 2 else "none")
+
+
+def judged_findings(
+    task: str, sentence: str, mention: Mention, expected: str, by_view: dict[str, Picks], of: int
+) -> list[Finding]:
+    """The findings of one expression of `task` naming one of `of` objects, the goal's `expected`, from what it
+    picked per viewpoint (`by_view`): one per outcome that is a finding, naming what it picks most often with
+    that outcome and, for every viewpoint, what it picks on which init states."""
+    every = [picked for results in by_view.values() for _, picked in results]
+    views = "; ".join(f"{VIEW_NAMES[view]}: {_picks_text(results, expected, of)}" for view, results in by_view.items())
     found = []
     for kind, name in OUTCOME_FINDING.items():
-        parts = []
-        for view, results in by_view.items():
-            hit = [(i, picked) for i, picked in results if outcome(picked, expected) == kind]
-            if hit:
-                which = Counter(", ".join(picked) or "nothing" for _, picked in hit).most_common(1)[0][0]
-                parts.append((view, [i for i, _ in hit], len(results), which))
-        if not parts:
-            continue
-        views = " and ".join(
-            f"from the {view}'s viewpoint on {inits_text(inits, total)}" for view, inits, total, _ in parts
-        )
-        picked = parts[0][3]
-        goal = f", not the goal's {expected}" if expected and kind == "other" else ""
-        detail = f"'{mention.phrase}' picks {picked}{goal} {views} — in {sentence!r}"
-        found.append(Finding(name, task.id, detail))
+        hit = [picked for picked in every if outcome(picked, expected) == kind]
+        if hit:
+            picked = _named(Counter(hit).most_common(1)[0][0], expected, of)
+            goal = f", not the goal's {expected}" if kind == "other" else ""
+            found.append(Finding(name, task, f"'{mention.phrase}' picks {picked}{goal} — {views} — in {sentence!r}"))
     return found
+
+
+def _picks_text(results: Picks, expected: str, of: int) -> str:
+    """`plate_2 on init state(s) 0–49 (50 of 50)`: what was picked on which init states, the most frequent first."""
+    by_pick: dict[tuple[str, ...], list[int]] = {}
+    for index, picked in results:
+        by_pick.setdefault(picked, []).append(index)
+    ranked = sorted(by_pick.items(), key=lambda item: (-len(item[1]), item[1][0]))
+    return ", ".join(f"{_named(picked, expected, of)} on {inits_text(inits, len(results))}" for picked, inits in ranked)

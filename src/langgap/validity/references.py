@@ -5,18 +5,20 @@ refers to objects by category ("the black bowl"), attribute ("the left moka pot"
 plate and the ramekin", "next to", "on", "in the top drawer of", "on the right of", "from table center").
 Where the scene holds one object of a category, the category picks it; where it holds several, the rest of
 the expression must. This module reads the expressions (`mentions`) and resolves each against the objects'
-positions at t0 (`Layout`), from a viewpoint (`View`: the robot's, or the agentview camera's, whose left
-and right are mirrored), and says whether it picks the object the goal names, another, none, or more than
-one (ambiguous). It reads the LIBERO phrasings LangGap's catalogs use; a sentence it cannot read is
-`unread`, never a verdict.
+positions at t0 (`Layout`), from a viewpoint (`View`: the robot's; the agentview camera's, as its raw,
+unrotated render shows it, whose left and right are the robot's mirrored; or the image a policy is given, that
+render rotated 180°, whose left is the robot's left again), and says whether it picks the object the goal
+names, another, none, or more than one (ambiguous). It reads the LIBERO phrasings LangGap's catalogs use; a
+sentence it cannot read is `unread`, never a verdict.
 
 The rules, with `MARGIN` (2 cm) as the distance below which two objects fit a comparison equally well:
 
 - *left / right / front / back* before the noun: the object farthest that way among its category;
 - *left of / right of / in front of / behind X*: the objects on that side of X by more than `MARGIN`
   (several: the nearest to X, if nearer than the next by more than `MARGIN`);
-- *between X and Y*: the objects whose centre projects inside the segment from X to Y, the nearest to it;
-  *not between*: the others;
+- *between X and Y*: the objects whose centre projects on the segment from X to Y (within `BETWEEN_ENDS` of
+  its length past either end) and lies off it by at most `BETWEEN_WIDTH` of its length, the nearest to it;
+  none fits: neither (nothing picked); *not between*: the others (all of them when none is between);
 - *next to / beside / near X*: the nearest to X;
 - *on / in / from X* (a support: an object, the stove, the cabinet's top or a drawer): those for which
   LIBERO's `On` / `In` holds (the simulator decides, `Layout.supports`);
@@ -35,6 +37,11 @@ from langgap.bddl import BddlProblem
 from langgap.goals import And, Atom, Goal, Not, Or, Then
 
 MARGIN = 0.02
+# How far past either landmark and how far off the segment joining them an object may stand and still be between
+# them, as fractions of the segment's length: a bowl level with the ramekin but 10 cm to its side (LIBERO-PRO's
+# spatial/s0 states) is beside it, not between it and the plate.
+BETWEEN_ENDS = 0.05
+BETWEEN_WIDTH = 0.25
 # How a sentence names a category besides its type's words, by type.
 NOUNS = {
     "akita_black_bowl": ("black bowl", "akita black bowl", "bowl"),
@@ -56,7 +63,9 @@ NOUNS = {
 # Viewpoint words: an adjective before the noun, or a side of a landmark.
 SIDES = {"left": ("right", -1.0), "right": ("right", 1.0), "front": ("forward", -1.0), "back": ("forward", 1.0)}
 PICK_VERBS = {"pick", "grab", "take", "lift", "get", "grasp", "fetch", "retrieve", "remove"}
-PLACE_VERBS = {"put", "place", "set", "move", "push", "drop", "bring", "stack", "position"}
+# "arrange X on Y", "have X on Y", "X belongs on Y" say where X goes as "put" does (LIBERO-Plus's rewordings).
+PLACE_VERBS = {"put", "place", "set", "move", "push", "drop", "bring", "stack", "position", "arrange", "have",
+               "belong"}  # fmt: skip
 _DRAWERS = ("top", "middle", "bottom")
 _DRAWER_WORDS = {"drawer", "layer", "shelf", "compartment"}
 
@@ -375,12 +384,11 @@ def resolve(mention: Mention, scene: BddlProblem, layout: Layout, view: View) ->
     candidates = [c for c in candidates if c not in marks]
     if mention.relation in ("between", "not between"):
         a, b = (_xy(layout, m) for m in marks)
-        inside = {c: _segment(_xy(layout, c), a, b) for c in candidates}
-        fits = [c for c, (t, _) in inside.items() if 0.0 < t < 1.0]
-        between = _nearest(fits, lambda c: inside[c][1])
+        fits = [c for c in candidates if is_between(_xy(layout, c), a, b)]
+        between = _nearest(fits, lambda c: _segment(_xy(layout, c), a, b)[1])
         if mention.relation == "between":
             return between
-        return tuple(c for c in candidates if c not in between) if len(between) == 1 else ()
+        return tuple(c for c in candidates if c not in between) if len(between) <= 1 else ()
     if mention.relation == "next to":
         return _nearest(candidates, lambda c: float(np.linalg.norm(_xy(layout, c) - _xy(layout, marks[0]))))
     side = mention.relation.removesuffix(" of")
@@ -395,6 +403,13 @@ def _segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[float, float]
     ab = b - a
     t = float((p - a) @ ab / (ab @ ab))
     return t, float(np.linalg.norm(p - (a + t * ab)))
+
+
+def is_between(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether `p` is between `a` and `b`: it projects on the segment a→b, `BETWEEN_ENDS` of its length past
+    an end at most, and lies off it by `BETWEEN_WIDTH` of its length at most."""
+    t, off = _segment(p, a, b)
+    return -BETWEEN_ENDS <= t <= 1.0 + BETWEEN_ENDS and off <= BETWEEN_WIDTH * float(np.linalg.norm(b - a))
 
 
 # -- what the goal names --------------------------------------------------------------------------------------
