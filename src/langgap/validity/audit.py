@@ -35,7 +35,7 @@ FINDINGS = {
     "starts elsewhere": "its t0 state differs from its source's on the same init state (simulator)",
     "goal holds at t0": "its goal already holds when the episode starts (simulator)",
     "duplicate goal": "another task set in the same scene has the same goal",
-    "duplicate instruction": "another variant of the same source has the same instruction",
+    "duplicate instruction": "another variant of the same source has the same instruction, compared case-insensitively",
     "instruction is a file name": "the instruction is the BDDL file's name, not the sentence its (:language) has",
     "instruction carries an id": "the instruction carries a perturbation id or a number suffix",
     "instruction is not about the task": "the instruction is an LLM's preamble or commentary, not a request",

@@ -23,6 +23,11 @@ _STYLE = (
 th, td { vertical-align: top; overflow-wrap: anywhere; }
 th { background: #f3f3f3; }
 code, .sha { font-family: ui-monospace, monospace; font-size: .85em; word-break: break-all; }
+dl.about > dt { font-weight: bold; margin-top: .5em; }
+dl.about dl { display: grid; grid-template-columns: max-content auto; gap: .1em 1em; margin: 0; }
+dl.about dl > dt { color: #555; }
+dl.about dl > dd { margin: 0; }
+dl.about ul { margin: 0; padding-left: 1.2em; }
 """
 )
 
@@ -102,6 +107,62 @@ def _anchor(name: str) -> str:
     return name.replace(" ", "-")
 
 
+# What each recorded setting of a check is, in words (`about`'s keys; others are shown as they are).
+_SETTINGS = {
+    "inits": "init states checked, from 0",
+    "seed": "seed",
+    "margin_m": "margin (m): two objects nearer than this fit a comparison equally well",
+    "between_ends": "between: how far past either landmark, in lengths of the segment joining them",
+    "between_width": "between: how far off that segment, in its lengths",
+    "viewpoints": "viewpoints",
+    "judged": "expressions judged",
+    "unread": "expressions not read",
+    "unread_examples": "expressions not read, the first",
+    "packages": "packages read",
+    "duplicate instructions": "language variants sharing a sentence with another of their source",
+    "templates": "tasks by sentence template",
+}
+# Checks whose settings are recorded per task selection (`--tasks`).
+_BY_SELECTION = ("starts", "references")
+
+
+def about_html(about: dict) -> str:
+    """How each check ran (`audit_data`'s `about`), as a definition list: per check, per task selection where
+    the check records one, each setting named in words with its value."""
+    e = html.escape
+    parts = ["<dl class='about'>"]
+    for check, how in sorted(about.items()):
+        shown = {f"tasks {selection!r}": settings for selection, settings in how.items()}
+        parts.append(f"<dt>{e(check)}</dt><dd>{_value_html(shown if check in _BY_SELECTION else how)}</dd>")
+    parts.append("</dl>")
+    return "".join(parts)
+
+
+def _value_html(value) -> str:
+    """A recorded value: a mapping as a definition list of its settings, a list as a list, else its text."""
+    e = html.escape
+    if isinstance(value, dict):
+        items = "".join(f"<dt>{e(_SETTINGS.get(k, k))}</dt><dd>{_value_html(v)}</dd>" for k, v in value.items())
+        return f"<dl>{items}</dl>"
+    if isinstance(value, list):
+        if all(not isinstance(v, dict | list) and len(str(v)) < 40 for v in value):
+            return e(", ".join(map(str, value))) or "none"
+        return "<ul>" + "".join(f"<li>{_value_html(v)}</li>" for v in value) + "</ul>"
+    return e(str(value))
+
+
+def finding_heading(name: str, rows: list[dict]) -> str:
+    """A finding's section heading: how many tasks have it, and for duplicate instructions how they were
+    compared (case-insensitively, since a runner that lowercases sends the same sentence) and how many are
+    duplicates as exact strings too."""
+    tasks = len({f["task"] for f in rows})
+    heading = f"{name}: {tasks} task(s)"
+    if name == "duplicate instruction":
+        exact = len({f["task"] for f in rows if f["detail"].startswith("same instruction as")})
+        heading += f", sentences compared case-insensitively ({exact} of them the same as exact strings too)"
+    return heading
+
+
 def _rows(rows: list[dict]) -> list[str]:
     """One table row per finding: the task, what the check found, its evidence, the command."""
     e = html.escape
@@ -128,11 +189,9 @@ def audit_page(data: dict) -> str:
         f"<p>Registry SHA-256 <span class='sha'>{e(data['catalog_hash'])}</span>. "
         f"{len(data['checked'])} tasks checked: {with_findings} with findings, "
         f"{len(data['checked']) - with_findings} with none.</p>",
-        "<h2>How the checks ran</h2><ul>",
+        "<h2>How the checks ran</h2>",
+        about_html(data["about"]),
     ]
-    for check, how in sorted(data["about"].items()):
-        parts.append(f"<li><b>{e(check)}</b>: <code>{e(json.dumps(how, sort_keys=True))}</code></li>")
-    parts.append("</ul>")
     duplicates = data["about"].get("files", {}).get("duplicate instructions")
     if duplicates:
         parts.append(f"<p>{e(duplicate_counts_text(duplicates))}.</p>")
@@ -148,7 +207,7 @@ def audit_page(data: dict) -> str:
         if not rows:
             continue
         parts.append(f"<section class='finding' data-name='{e(name)}'><h2 id='{e(_anchor(name))}'>")
-        parts.append(f"{e(name)}: {counts[name]} task(s)</h2><p class='note'>{e(meaning)}</p>")
+        parts.append(f"{e(finding_heading(name, rows))}</h2><p class='note'>{e(meaning)}</p>")
         parts.append("<input class='filter' placeholder='filter rows'><table class='tasks'><thead><tr>")
         parts.append("<th>task</th><th>what the check found</th><th>evidence</th><th>reproduce</th></tr>")
         parts.append("</thead><tbody>")
