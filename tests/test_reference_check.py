@@ -11,8 +11,8 @@ from tests.support.harness import run_cli
 LEFT_PLATE_TASK = "libero10/s4/white-mug-on-plate-1+yellow-white-mug-on-plate-2"
 
 
-def test_the_left_moka_pot_is_the_goals_only_from_the_robots_side():
-    """...and in the policy's image, which mirrors the camera's picture: only the raw render sees the other pot."""
+def test_the_left_moka_pot_is_right_but_in_the_raw_render():
+    """The policy's image mirrors the camera's picture: only the raw render has the other pot on the left."""
     result = run_cli(
         "tasks", "audit", "--catalog", "libero-pro", "--tasks", "libero10/s8/pro-task", "--references", "3"
     )
@@ -27,7 +27,8 @@ def test_the_left_moka_pot_is_the_goals_only_from_the_robots_side():
 
 
 def test_libero_s_left_plate_is_the_cameras_left_and_recording_keeps_it(tmp_path):
-    """LIBERO's own sentence is right only in the raw render: wrong for the robot and in the policy's image."""
+    """LIBERO's own sentence is right only in the raw render: wrong for the robot and in the policy's image; a
+    recorded finding is printed again from the record."""
     import shutil
 
     from tests.support.harness import REPO

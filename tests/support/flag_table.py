@@ -136,7 +136,7 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     ),
     "tasks audit --record": (ProvenBy(_AUDIT),),
     "tasks audit --references": (
-        ProvenBy("tests/test_reference_check.py::test_the_left_moka_pot_is_the_goals_only_from_the_robots_side"),
+        ProvenBy("tests/test_reference_check.py::test_the_left_moka_pot_is_right_but_in_the_raw_render"),
         Refused(("tasks", "audit", "--catalog", "libero-pro", "--references", "-1"), "--references must be 0"),
     ),
     "tasks audit --html": (ProvenBy("tests/test_audit_page.py::test_the_audit_page_in_a_real_browser"),),
