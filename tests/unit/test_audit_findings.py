@@ -282,6 +282,13 @@ def test_the_audit_text_counts_tasks_per_finding_with_examples():
         ]
     )
     assert audit_text([], ["a"]) == "1 tasks: 0 with findings, 1 with none"
+    many = [Finding("unreadable", task, "bad file") for task in "abcd"]
+    assert audit_text(many, "abcd").splitlines()[1:] == [
+        "  a: bad file",
+        "  b: bad file",
+        "  c: bad file",
+        "4 tasks: 4 with findings, 0 with none",
+    ]
     assert audit_text(findings, ["a"]).splitlines()[2:4] == [
         f"duplicate goal: 1 task(s) — {FINDINGS['duplicate goal']}",
         "  a: same goal as b",

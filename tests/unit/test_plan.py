@@ -387,3 +387,81 @@ def test_switch_episodes_that_cannot_be_planned_are_errors(catalog):
         switch_episode(EpisodeKey(task.id, 0, 0, "switch:0"), task, catalog, "libero")
     with pytest.raises(LangGapError, match=f"^switch: {lone.id} has no sibling task in its scene to start under$"):
         switch_source(lone, catalog, "libero", 0)
+
+
+def test_an_original_starts_under_a_sibling_of_another_instruction_and_another_goal_only(catalog):
+    original = catalog.get("spatial/s0/black-bowl-1-on-plate")
+    extended = catalog.get("spatial/s0/ramekin-on-plate")
+    same_sentence = dataclasses.replace(extended, instructions=original.instructions)  # another goal, its sentence
+    same_goal = dataclasses.replace(catalog.get("spatial/s0/ramekin-on-stove"), goal=original.goal)
+    # in the paper's wording only, a sibling says what the original says
+    paper_twin = dataclasses.replace(
+        catalog.get("spatial/s0/cookie-box-on-plate"),
+        instructions=extended.instructions | {"paper": original.instruction("paper")},
+    )
+    for sibling in (same_sentence, same_goal, paper_twin):
+        assert without_switch_source([original], Catalog("two", [original, sibling]), "paper") == [original.id]
+    assert without_switch_source([original], Catalog("two", [original, paper_twin])) == []  # libero: they differ
+    with pytest.raises(LangGapError, match="^switch: no selected task"):
+        build_plan(
+            [original], Catalog("two", [original, paper_twin]), episodes=1, conditions=("switch:5",), style="paper"
+        )
+
+
+def test_the_switch_sibling_is_drawn_from_the_task_and_the_seed(catalog):
+    original = catalog.get("spatial/s0/black-bowl-1-on-plate")
+    drawn = [p.started_as.split("/")[-1] for p in build_plan([original], catalog, episodes=6, conditions=("switch:5",))]
+    assert drawn == [
+        "open-cabinet-top-drawer",
+        "open-cabinet-top-drawer",
+        "open-cabinet-top-drawer",
+        "black-bowl-1-on-stove",
+        "ramekin-on-cookie-box",
+        "cookie-box-on-plate",
+    ]
+    plan = build_plan([original], catalog, episodes=3, seed=100, conditions=("switch:5",))
+    assert [p.started_as.split("/")[-1] for p in plan] == [
+        "cookie-box-on-stove",
+        "cookie-box-on-plate",
+        "ramekin-on-plate",
+    ]
+    assert [p.key.seed for p in build_plan([original], catalog, episodes=2)] == [0, 1]  # the run seed is 0 by default
+
+
+def test_the_switch_note_shows_four_tasks_and_counts_the_rest(catalog):
+    lone = [catalog.get(i) for i in without_switch_source(list(catalog), catalog)]
+    four = switch_note(lone[:4], catalog, ("switch:5",))
+    assert four.endswith(f"planned: {', '.join(t.id for t in lone[:4])}")
+    five = switch_note(lone[:5], catalog, ("switch:5",))
+    assert five.endswith(f"planned: {', '.join(t.id for t in lone[:4])}, … (1 more)")
+
+
+def test_a_shuffled_instruction_is_never_the_tasks_own_even_from_a_sibling_that_says_it(catalog):
+    original = catalog.get("spatial/s0/black-bowl-1-on-plate")
+    twin = dataclasses.replace(catalog.get("spatial/s0/ramekin-on-plate"), instructions=original.instructions)
+    other = catalog.get("spatial/s0/cookie-box-on-plate")
+    small = Catalog("three", [original, twin, other])
+    shuffled = {condition_instruction(original, small, "shuffled", "libero", k) for k in range(10)}
+    assert shuffled == {other.instruction("libero")}
+
+
+def test_the_plan_draws_each_episodes_instruction_for_its_own_init_state(catalog):
+    task = catalog.get("spatial/s0/black-bowl-2-on-plate")
+    plan = build_plan([task], catalog, episodes=4, conditions=("shuffled", "nonsense", "source"))
+    assert [p.instruction for p in plan] == [
+        condition_instruction(task, catalog, p.key.condition, "libero", p.key.init_index) for p in plan
+    ]
+    with pytest.raises(LangGapError, match=r"^unknown condition\(s\) \['loud', 'quiet'\]"):
+        build_plan([task], catalog, episodes=1, conditions=("given", "loud", "quiet"))
+
+
+def test_a_task_without_a_switch_source_keeps_the_episodes_of_its_other_conditions(catalog):
+    lone, task = catalog.get("libero10/s5/book-in-caddy-back"), catalog.get("spatial/s0/black-bowl-2-on-plate")
+    plan = build_plan([lone, task], catalog, episodes=1, conditions=("switch:5", "given", "empty"))
+    assert [(p.task_id, p.key.condition) for p in plan] == [
+        (lone.id, "given"),
+        (lone.id, "empty"),
+        (task.id, "switch:5"),
+        (task.id, "given"),
+        (task.id, "empty"),
+    ]
