@@ -13,8 +13,8 @@ import pytest
 
 from langgap.catalog import files
 from langgap.catalog.catalog import catalog_from_data, load_catalog
-from langgap.catalog.phrasing import instruction
 from langgap.errors import CatalogError, UnknownTaskError
+from langgap.generation.phrasing import instruction
 from langgap.stack import libero_root
 from tests.support.harness import REPO, run_cli
 

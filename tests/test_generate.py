@@ -8,12 +8,12 @@ import pytest
 import yaml
 
 from langgap.bddl import parse_bddl, strip_task_sections
-from langgap.catalog import affordances, files, phrasing
+from langgap.catalog import affordances, files
 from langgap.catalog.catalog import load_catalog, load_catalog_file
 from langgap.catalog.naming import task_id
-from langgap.catalog.task import GateResult
-from langgap.catalog.verdicts import record_verdicts
+from langgap.catalog.verdicts import GateResult, record_verdicts
 from langgap.cli.main import main
+from langgap.generation import phrasing
 from langgap.generation.candidates import candidate_goals
 from langgap.generation.generate import (
     FULL_CATALOG,

@@ -6,7 +6,7 @@ import dataclasses
 from dataclasses import asdict
 from pathlib import Path
 
-from langgap.catalog.task import GateResult
+from langgap.catalog.verdicts import GateResult
 from langgap.records import EpisodeRecord, Status, classify
 from langgap.store import RunStore
 from langgap.vocabulary import Outcome

@@ -7,7 +7,7 @@ from dataclasses import replace
 
 import pytest
 
-from langgap.catalog.task import GateResult
+from langgap.catalog.verdicts import GateResult
 from langgap.report import load_runs, render, summarize
 from langgap.vocabulary import Outcome
 from tests.support.harness import run_cli

@@ -8,8 +8,7 @@ import json
 import pytest
 
 from langgap.catalog.catalog import registry_path
-from langgap.catalog.task import GateResult
-from langgap.catalog.verdicts import read_verdicts, record_verdicts, verdicts_path
+from langgap.catalog.verdicts import GateResult, read_verdicts, record_verdicts, verdicts_path
 from langgap.errors import CatalogError
 from langgap.report import load_runs, summarize
 from langgap.report.formats import FORMATS

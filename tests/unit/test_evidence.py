@@ -8,8 +8,7 @@ import json
 import pytest
 
 from langgap.catalog.catalog import load_catalog, registry_path
-from langgap.catalog.task import GateResult
-from langgap.catalog.verdicts import record_verdicts
+from langgap.catalog.verdicts import GateResult, record_verdicts
 from langgap.cli.main import main
 
 DRAWER = "spatial/s2/open-cabinet-bottom-drawer"

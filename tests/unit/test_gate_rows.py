@@ -8,7 +8,7 @@ import dataclasses
 import pytest
 
 from langgap.catalog.catalog import load_catalog
-from langgap.catalog.task import SETTLE_CHECK
+from langgap.catalog.verdicts import SETTLE_CHECK
 from langgap.goals import parse_goal
 from langgap.validity.rows import SETTLE_TOLERANCE_M, goals_exclude, task_row
 from langgap.vocabulary import Verdict

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from langgap.catalog.task import GateResult
+from langgap.catalog.verdicts import GateResult
 from langgap.report import diagnosis_text, render
 from langgap.vocabulary import Outcome
 from tests.support.reports import SOURCE, beyond_episode, memoriser, reader, write_run

@@ -14,7 +14,7 @@ from langgap.catalog.switch_verdicts import (
     snapshot_switch_verdicts,
     switch_verdicts_path,
 )
-from langgap.catalog.task import GateResult
+from langgap.catalog.verdicts import GateResult
 from langgap.errors import CatalogError
 
 

@@ -13,7 +13,7 @@ import pytest
 
 import langgap.vocabulary
 from langgap import stack
-from langgap.catalog.task import GateResult
+from langgap.catalog.verdicts import GateResult
 from langgap.cli.main import build_parser, main
 from langgap.engine.spec import RunSpec
 from langgap.validity.coverage import HEADER

@@ -20,8 +20,8 @@ import yaml
 
 from langgap.catalog.naming import SUITE_SHORT
 from langgap.catalog.switch_verdicts import snapshot_switch_verdicts
-from langgap.catalog.task import DIMENSIONS, SPLITS, GateResult, Origin, Task
-from langgap.catalog.verdicts import read_verdicts, snapshot_verdicts
+from langgap.catalog.task import DIMENSIONS, SPLITS, Origin, Task
+from langgap.catalog.verdicts import GateResult, read_verdicts, snapshot_verdicts
 from langgap.errors import BddlError, CatalogError, UnknownTaskError
 from langgap.goals import goal_from_strings
 from langgap.vocabulary import TaskKind

@@ -19,8 +19,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from langgap.atomic import write_text_atomically
-from langgap.catalog.task import GateResult
-from langgap.catalog.verdicts import exclusive, read_bytes, snapshot_file
+from langgap.catalog.verdicts import GateResult, exclusive, read_bytes, snapshot_file
 from langgap.errors import CatalogError
 
 # task id -> condition (`switch:K`) -> verdict

@@ -1,4 +1,5 @@
-"""Feasibility verdicts of a catalog, kept beside its registry file as `<registry>.gate.json`.
+"""Feasibility verdicts: a verdict on one task (`GateResult`), how each reads wherever it is shown, and a catalog's
+verdicts, kept beside its registry file as `<registry>.gate.json`.
 
 A registry defines tasks; whether a scripted oracle could do them is a measurement that `langgap
 validate --record` (or `langgap generate --gate-inits K`) makes and re-makes. Keeping the two apart
@@ -8,19 +9,198 @@ definitions. A verdict names the task id it belongs to; one for an id the regist
 
 from __future__ import annotations
 
+import dataclasses
 import fcntl
 import hashlib
 import json
 import os
+from collections import Counter
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
-from dataclasses import asdict, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from langgap.atomic import write_text_atomically
-from langgap.catalog.task import GateResult
 from langgap.errors import CatalogError
+from langgap.stack import installed_differences
+from langgap.vocabulary import CEILING_TARGET, Verdict
+
+# The gate's check that a task's starts come to rest; a verdict's `reason` names the checks it failed, and one
+# that failed this one is `Verdict.UNSETTLED`.
+SETTLE_CHECK = "scene settles"
+# Why a task may take another's verdict: the gate's oracle reads the goal, never the instruction, so two tasks
+# with the same scene file outside `(:language)`, the same init states, goal and step limit get the same episodes.
+SAME_TRIAL = "the same scene file outside (:language), init states, goal and step limit"
+
+
+def unproven(successes: int, episodes: int) -> str:
+    """How a task the oracle fails, with no proof that a policy cannot do it, reads wherever it is shown."""
+    return f"{Verdict.UNPROVEN}: the oracle does not do it ({successes}/{episodes}); no proof that a policy cannot"
+
+
+def unsettled(successes: int, episodes: int) -> str:
+    """How a task rejected because its starts do not come to rest reads wherever it is shown, with what the
+    oracle did on it."""
+    return f"{Verdict.UNSETTLED}: its starts do not come to rest (the oracle did it {successes}/{episodes})"
+
+
+def infeasible(proof: str = "") -> str:
+    """How a task proven impossible reads wherever it is shown (with the proof, when given)."""
+    return f"{Verdict.INFEASIBLE}: a proof that no policy can do it" + (f": {proof}" if proof else "")
+
+
+def verdict_of(feasible: bool, proof: str, reason: str) -> Verdict:
+    """The word for a gate's decision on a task: admitted (`feasible`), rejected with a `proof`, or rejected for
+    `reason` (the checks it failed, joined by "; "): its starts do not come to rest, or anything else."""
+    if feasible:
+        return Verdict.DOABLE
+    if proof:
+        return Verdict.INFEASIBLE
+    return Verdict.UNSETTLED if SETTLE_CHECK in reason.split("; ") else Verdict.UNPROVEN
+
+
+def verdict_counts(
+    verdicts: Iterable[Verdict], always: tuple[Verdict, ...] = (Verdict.DOABLE, Verdict.UNPROVEN)
+) -> str:
+    """How many of each verdict, in `Verdict`'s order (`3 doable, 1 unproven`): those in `always`, and any other
+    that occurs."""
+    counts = Counter(verdicts)
+    return ", ".join(f"{counts[v]} {v}" for v in Verdict if v in always or counts[v])
+
+
+@dataclass(frozen=True)
+class GateResult:
+    """A feasibility gate's verdict on one task: how a scripted oracle did, and whether the task is kept.
+
+    The gate runs init states 0..`inits`-1; `failed_inits` lists those the oracle failed (None in
+    verdicts recorded before per-init results were kept), so the oracle's ceiling can be given for
+    exactly the init states a run used. `made_by` says which policy, code version and stepping ran the
+    gate for this verdict (a file mixes verdicts of several recordings when tasks are re-validated one
+    by one; empty in verdicts recorded before it was kept), and `physics` the physics stack and conventions
+    it ran on (`langgap.stack.physics_stack`, as results record it; empty: not recorded).
+
+    What a verdict shows: a task is doable when a demonstration did it — the oracle, at the gate's
+    rate, or `demonstration`, a stored replayable episode (a path relative to the registry's directory)
+    that does a task the oracle fails; it is impossible only by `proof`, an argument that holds for
+    every policy, printed with its assumptions (`langgap.validity.proofs`). A task the oracle fails without
+    either is *unproven*: nobody has shown it doable or impossible. A task whose starts do not come to
+    rest is *unsettled*, whatever the oracle did (`verdict`: the word, `langgap.vocabulary.Verdict`).
+    """
+
+    episodes: int
+    successes: int
+    feasible: bool
+    reason: str = ""
+    inits: int = 0
+    failed_inits: tuple[int, ...] | None = None
+    made_by: str = ""
+    proof: str = ""
+    demonstration: str = ""
+    demonstrated_inits: tuple[int, ...] = ()  # init states the oracle failed that a searched episode did
+    physics: dict = field(default_factory=dict)
+    # `catalog:task id` whose verdict this is, by identity (the task's `gate_from`); empty: the task's own.
+    inherited_from: str = ""
+
+    def __post_init__(self) -> None:
+        if not 0 <= self.successes <= self.episodes:
+            raise CatalogError(f"gate result: {self.successes} successes in {self.episodes} episodes")
+        if self.failed_inits is not None:
+            object.__setattr__(self, "failed_inits", tuple(self.failed_inits))  # JSON gives a list
+        object.__setattr__(self, "demonstrated_inits", tuple(self.demonstrated_inits))
+        if self.proof and self.feasible:
+            raise CatalogError("gate result: feasible, yet with a proof that the task is impossible")
+
+    @property
+    def rate(self) -> float:
+        """Oracle success rate (0 when no episode ran)."""
+        return self.successes / self.episodes if self.episodes else 0.0
+
+    def oracle_on(self, inits: list[int] | tuple[int, ...]) -> tuple[int, int]:
+        """(successes, episodes) of the oracle on the init states `inits` that the gate ran; the gate's
+        whole result when it kept no per-init results or ran none of them."""
+        covered = [i for i in inits if i < self.inits]
+        if self.failed_inits is None or not covered:
+            return self.successes, self.episodes
+        failed = set(self.failed_inits)
+        return sum(i not in failed for i in covered), len(covered)
+
+    @property
+    def verdict(self) -> Verdict:
+        """The verdict's word (`verdict_of`)."""
+        return verdict_of(self.feasible, self.proof, self.reason)
+
+    def capped_because(self, successes: int, episodes: int) -> str | None:
+        """Why the task is marked ⚠ beside a policy's results, given the oracle's `successes` in `episodes`
+        on the init states in question (None: it is not), led by its verdict's word: proven infeasible, its
+        starts do not come to rest, or an oracle below `CEILING_TARGET` — which shows only that the oracle does
+        not do it, not that no policy can (an admitted task too: the gate admits at a lower rate)."""
+        verdict = self.verdict
+        if verdict is Verdict.INFEASIBLE:
+            return infeasible()
+        if verdict is Verdict.UNSETTLED:
+            return unsettled(successes, episodes)
+        if not episodes or successes / episodes >= CEILING_TARGET:
+            return None
+        if verdict is Verdict.UNPROVEN:
+            return unproven(successes, episodes)
+        if self.demonstrated:
+            return f"{verdict} by a searched demonstration; the oracle does {successes}/{episodes} of these init states"
+        return f"{verdict}, but the oracle does only {successes}/{episodes} of these init states"
+
+    @property
+    def demonstrated(self) -> bool:
+        """True when a stored demonstration, not the oracle's rate, is what makes the task doable."""
+        return self.feasible and bool(self.demonstration)
+
+    @property
+    def evidence(self) -> str:
+        """How the verdict is shown, led by its word: by the oracle's episodes or a searched demonstration
+        (doable), a proof (infeasible), starts that do not come to rest (unsettled), or not at all (unproven);
+        an inherited verdict says whose it is."""
+        if self.inherited_from:
+            own = dataclasses.replace(self, inherited_from="").evidence
+            return f"{own} — the verdict of {self.inherited_from}: {SAME_TRIAL}"
+        verdict = self.verdict
+        if verdict is Verdict.INFEASIBLE:
+            return infeasible(self.proof)
+        if verdict is Verdict.DOABLE:
+            made_by = f"made by {self.made_by}" if self.made_by else "recorded before who made it was kept"
+            text = f"{verdict}: oracle {self.successes}/{self.episodes} init states ({made_by})"
+            if self.demonstrated:
+                shown = ", ".join(map(str, self.demonstrated_inits)) or "?"
+                text += f"; searched demonstration on init state(s) {shown}: {self.demonstration}"
+            return text
+        if verdict is Verdict.UNSETTLED:
+            text = unsettled(self.successes, self.episodes)
+        elif self.oracle_short:
+            text = unproven(self.successes, self.episodes)
+        else:
+            text = f"{verdict}: the gate's checks fail (the oracle did it {self.successes}/{self.episodes}); no proof "
+            text += "that a policy cannot"
+        if self.demonstration and self.demonstrated_inits:
+            shown = ", ".join(map(str, self.demonstrated_inits))
+            text += f"; a searched demonstration does init state(s) {shown}: {self.demonstration}"
+        if self.reason and self.reason != f"oracle {self.successes}/{self.episodes}":
+            text += f"; the gate's reason: {self.reason}"
+        return text
+
+    @property
+    def oracle_short(self) -> bool:
+        """Whether the verdict was rejected for the oracle's rate (its reason names the oracle's count; a verdict
+        rejected with no reason recorded is taken to be)."""
+        return not self.feasible and (not self.reason or any(c.startswith("oracle ") for c in self.reason.split("; ")))
+
+    @property
+    def other_stack(self) -> list[str]:
+        """How the physics stack the verdict was made on differs from the installed one (empty: it does not;
+        `langgap.stack.installed_differences`)."""
+        return installed_differences(self.physics)
+
+    @property
+    def capped(self) -> bool:
+        """True when the task is marked ⚠ on the init states the gate ran (`capped_because`)."""
+        return self.capped_because(self.successes, self.episodes) is not None
 
 
 def verdicts_path(registry: str | Path) -> Path:

@@ -9,15 +9,8 @@ from pathlib import Path
 
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
 from langgap.catalog.naming import SUITE_SHORT
-from langgap.catalog.task import (
-    DEFAULT_STYLE,
-    DIMENSIONS,
-    RUN_STYLES,
-    SAME_TRIAL,
-    SPLITS,
-    Task,
-    verdict_counts,
-)
+from langgap.catalog.task import DEFAULT_STYLE, DIMENSIONS, RUN_STYLES, SPLITS, Task
+from langgap.catalog.verdicts import SAME_TRIAL, verdict_counts
 from langgap.errors import LangGapError
 from langgap.stack import SUITES
 from langgap.vocabulary import SWITCH, TaskKind, Verdict, switch_step, words

@@ -6,7 +6,7 @@ import json
 from dataclasses import asdict
 from pathlib import Path
 
-from langgap.catalog.task import SAME_TRIAL
+from langgap.catalog.verdicts import SAME_TRIAL
 from langgap.cli.eval_cmd import add_stepping_option, print_switch_note
 from langgap.cli.execution_flags import add_execution_options, add_share_rollouts_option, execution_options
 from langgap.cli.tasks_cmd import add_catalog_option

@@ -18,11 +18,12 @@ from importlib import resources
 from pathlib import Path
 
 from langgap.bddl import BddlProblem, Predicate
-from langgap.catalog import files, phrasing
+from langgap.catalog import files
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
 from langgap.catalog.naming import SUITE_SHORT, task_id
 from langgap.catalog.task import DIMENSIONS, INSTRUCTION_STYLES, Task
 from langgap.errors import CatalogError
+from langgap.generation import phrasing
 from langgap.generation.candidates import candidate_goals, dimension, obj_of_interest
 from langgap.generation.registry_writer import registry_text
 from langgap.goals import conjunction

@@ -8,7 +8,8 @@ of a new task differ from their source's sentence only where the dimension says.
 from __future__ import annotations
 
 from langgap.bddl import BddlProblem, Predicate
-from langgap.catalog import affordances, phrasing
+from langgap.catalog import affordances
+from langgap.generation import phrasing
 
 ORDERED = "first {first}, then {then}"
 NEGATED_WHERE = "anywhere but {where}"

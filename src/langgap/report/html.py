@@ -14,9 +14,9 @@ import shutil
 import urllib.parse
 from pathlib import Path
 
-from langgap.catalog.labels import DIMENSION_LABEL, label
 from langgap.page_style import PAGE_STYLE
 from langgap.report.formats import answers
+from langgap.report.labels import DIMENSION_LABEL, label
 from langgap.report.published import Published
 from langgap.report.sections import FULL_REPORT, report_data, report_tables
 from langgap.report.summary import Summary, shown_dimensions

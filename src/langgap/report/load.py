@@ -11,8 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from langgap.catalog.switch_verdicts import SwitchVerdicts, read_switch_verdicts, snapshot_switch_gates
-from langgap.catalog.task import GateResult
-from langgap.catalog.verdicts import snapshot_gates
+from langgap.catalog.verdicts import GateResult, snapshot_gates
 from langgap.errors import LangGapError
 from langgap.records import EpisodeRecord, Privilege, privilege
 from langgap.store import PROGRESS, RunStore

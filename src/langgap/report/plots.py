@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from langgap.catalog.labels import DIMENSION_LABEL, label
+from langgap.report.labels import DIMENSION_LABEL, label
 from langgap.report.summary import RunResults, Summary, shown_dimensions
 from langgap.vocabulary import TaskKind
 

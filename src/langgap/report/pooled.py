@@ -14,9 +14,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import ClassVar
 
-from langgap.catalog.labels import SPLIT_LABEL, SPLIT_ORDER, label
 from langgap.errors import LangGapError, ParameterError
 from langgap.report.data import Spec
+from langgap.report.labels import SPLIT_LABEL, SPLIT_ORDER, label
 from langgap.report.load import load_runs
 from langgap.report.stats import Rate, permutation_floor, permutation_p
 from langgap.report.summary import RunResults, protocol_differences, results

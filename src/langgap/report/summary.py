@@ -15,14 +15,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import ClassVar
 
-from langgap.catalog.labels import (
-    EXTENDED_DIMENSIONS,
-    KNOWN_DIMENSIONS,
-    SPLIT_ORDER,
-    SUITE_ORDER,
-)
 from langgap.catalog.switch_verdicts import SwitchVerdicts, accepted
-from langgap.catalog.task import SAME_GOAL_DIMENSIONS, GateResult
+from langgap.catalog.task import SAME_GOAL_DIMENSIONS
+from langgap.catalog.verdicts import GateResult
 from langgap.engine.plan import repeat_of
 from langgap.engine.spec import spec_differences
 from langgap.errors import LangGapError
@@ -30,6 +25,12 @@ from langgap.records import JUDGED_OUTCOMES, EpisodeRecord, Privilege, achieved
 from langgap.report.answer import Answer, Switched
 from langgap.report.card import PROTOCOL_ITEMS, protocol_card
 from langgap.report.data import MERGED, Spec
+from langgap.report.labels import (
+    EXTENDED_DIMENSIONS,
+    KNOWN_DIMENSIONS,
+    SPLIT_ORDER,
+    SUITE_ORDER,
+)
 from langgap.report.load import Run
 from langgap.report.stats import PairedTest, Rate
 from langgap.stack import stack_differences

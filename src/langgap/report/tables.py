@@ -6,10 +6,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from langgap.catalog.labels import DIMENSION_LABEL, EXTENDED_DIMENSIONS, SPLIT_LABEL, SUITE_LABEL, SUITE_ORDER, label
 from langgap.records import JUDGED_OUTCOMES, Privilege
 from langgap.report.answer import percent
 from langgap.report.card import CARD_ITEMS
+from langgap.report.labels import DIMENSION_LABEL, EXTENDED_DIMENSIONS, SPLIT_LABEL, SUITE_LABEL, SUITE_ORDER, label
 from langgap.report.published import Published
 from langgap.report.stats import PairedTest, Rate
 from langgap.report.summary import (

@@ -8,7 +8,8 @@ from typing import Protocol
 import numpy as np
 
 from langgap.catalog.catalog import Catalog
-from langgap.catalog.task import SETTLE_CHECK, GateResult, Task, verdict_of
+from langgap.catalog.task import Task
+from langgap.catalog.verdicts import SETTLE_CHECK, GateResult, verdict_of
 from langgap.goals import Goal, plain_atoms
 from langgap.records import EpisodeRecord
 from langgap.vocabulary import FEASIBLE_RATE, TaskKind, Verdict

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from langgap.catalog.catalog import load_catalog, registry_path
 from langgap.catalog.switch_verdicts import SwitchVerdicts, record_switch_verdicts
-from langgap.catalog.task import GateResult, verdict_counts, verdict_of
+from langgap.catalog.verdicts import GateResult, verdict_counts, verdict_of
 from langgap.engine.evaluate import evaluate
 from langgap.engine.spec import ExecutionOptions, RunSpec
 from langgap.errors import ParameterError

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections import Counter
 from dataclasses import asdict
 
-from langgap.catalog.task import verdict_counts
+from langgap.catalog.verdicts import verdict_counts
 from langgap.validity.claims import Claim
 from langgap.validity.rows import TaskValidation
 from langgap.validity.validation import Validation
