@@ -147,6 +147,7 @@ def test_the_scenes_names_are_its_objects_fixtures_and_regions_of_a_target(sourc
     ("instruction", "names"),
     [
         ("pick up the bowl.bddl", ["instruction is a file name"]),
+        (" pick up the black bowl on the stove and place it on the plate ", ["instruction is a file name"]),
         ("put_it 3", ["instruction is a file name", "instruction carries an id"]),
         ("Here are variations of the instruction", ["instruction is not about the task"]),
     ],
