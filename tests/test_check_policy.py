@@ -68,10 +68,19 @@ def env(catalog):
             f"{SUPPORT}:ClosesOncePolicy", None, 900, "lifecycle", "close again raised RuntimeError: already closed",
             "make close() safe to call twice", id="close twice",
         ),
+        pytest.param(
+            f"{SUPPORT}:LateNanPolicy", None, 900, "whole episode",
+            "the whole episode, call 10 (step 10): policy returned a non-finite action (NaN or inf) (eval records",
+            "find where the model makes NaN or inf", id="NaN late in the episode",
+        ),
+        pytest.param(
+            f"{SUPPORT}:NonePolicy", None, 900, "actions", "call 1: policy returned None, not an action",
+            "return the action from act", id="returns None",
+        ),
     ],
 )  # fmt: skip
 def test_a_broken_policy_fails_its_check_with_a_fix_and_exit_1(env, policy, args, timeout_s, check, message, fix):
-    report = check_policy(policy, args, timeout_s=timeout_s, env=env)
+    report = check_policy(policy, args, timeout_s=timeout_s, budget_s=5, env=env)
     assert report.exit_code == 1
     (failed,) = report.failed
     assert failed.name == check and message in failed.detail and fix in failed.remedy, report.page()
@@ -119,12 +128,12 @@ def test_a_slow_policy_s_latency_gives_the_timeout_that_would_fit(env):
     """The latency verdict and the estimate come from the measured calls: 150 ms per call make a 520-step
     libero_10 episode (520 calls) take over 78 s, more than half of a 60 s timeout; the timeout it names (whole
     minutes) fits, with room for the noise of another measurement."""
-    slow = check_policy("delay", {"delay_ms": "150"}, timeout_s=60, env=env)
+    slow = check_policy("delay", {"delay_ms": "150"}, timeout_s=60, budget_s=5, env=env)
     (latency,) = [c for c in slow.checks if c.name == "latency"]
     assert "libero_10, 520 steps, 520 calls" in latency.detail
     needed = int(latency.remedy.split("--timeout ")[1].split()[0])
     assert needed % 60 == 0 and 2 * 520 * 0.15 <= needed <= 2 * 520 * 0.3 + 60
-    assert check_policy("delay", {"delay_ms": "150"}, timeout_s=1.5 * needed, env=env).exit_code == 0
+    assert check_policy("delay", {"delay_ms": "150"}, timeout_s=1.5 * needed, budget_s=5, env=env).exit_code == 0
 
 
 @pytest.mark.parametrize(
@@ -210,3 +219,54 @@ def test_eval_names_check_policy_when_its_policy_fails(short_catalog, tmp_path, 
     (error,) = capsys.readouterr().err.splitlines()
     assert error.startswith("error: stopped after 1 episodes in a row failed with: RuntimeError: model exploded")
     assert error.endswith(f"; check the policy in a minute with {command % 'RaisingPolicy'}")
+
+
+def test_the_episode_is_played_whole_and_the_page_says_how_much(env):
+    """The check plays eval's first episode to its step limit when the budget allows, else as far as it does, and
+    says which; a check that runs a while says so on stderr (`say`)."""
+    noop = check_policy("noop", env=env)
+    (whole,) = [c for c in noop.checks if c.name == "whole episode"]
+    assert whole.ok and not whole.warning
+    assert whole.detail.startswith("played to its step limit, no goal reached: 220 of its 220 steps, 220 calls")
+    said: list[str] = []
+    slow = check_policy("delay", {"delay_ms": "100"}, budget_s=2, env=env, say=said.append)
+    (whole,) = [c for c in slow.checks if c.name == "whole episode"]
+    played = int(whole.detail.split()[1])
+    assert whole.ok and 5 <= played < 220 and f"played {played} of its 220 steps" in whole.detail
+    assert f"the steps after {played} are not checked" in whole.warning and "larger --budget" in whole.warning
+    assert "[warn] whole episode" in slow.page() and slow.page().splitlines()[-1].endswith(
+        "checks passed, 1 with a warning (" + slow.page().splitlines()[-1].split("(")[-1]
+    )
+    assert any(line.startswith("note: check-policy: playing the episode whole:") for line in said)
+
+
+def test_a_silent_wait_is_broken_by_notes(env, monkeypatch):
+    import langgap.diagnostics.policy_check as policy_check
+
+    monkeypatch.setattr(policy_check, "NOTE_EVERY_S", 0.0)
+    said: list[str] = []
+    check_policy("delay", {"delay_ms": "20"}, budget_s=1, env=env, say=said.append)
+    assert "note: check-policy: the episode: 1 calls so far, the last " in said[0]
+    assert any("the whole episode: " in line for line in said)
+
+
+def test_integer_actions_pass_and_are_said_to_be_taken_as_floats(env):
+    report = check_policy(f"{SUPPORT}:IntegerPolicy", budget_s=2, env=env)
+    (actions,) = [c for c in report.checks if c.name == "actions"]
+    assert report.exit_code == 0 and "(7,) int64" in actions.detail and "integers are taken" in actions.detail
+
+
+def test_cameras_are_checked_as_the_policy_reads_them():
+    """Declared and never read: a warning that each call renders them. Read and not declared: a failure that names
+    the spec, in check-policy and in the policy's own exception."""
+    unread = check_policy(f"{SUPPORT}:UnreadCamerasPolicy", budget_s=2, timeout_s=1e6)  # renders are slow here
+    (inputs,) = [c for c in unread.checks if c.name == "inputs"]
+    assert unread.exit_code == 0 and "act never read agentview, robot0_eye_in_hand in" in inputs.warning
+    assert "declare every camera act reads in PolicySpec(cameras=...)" in inputs.warning
+    undeclared = check_policy(f"{SUPPORT}:UndeclaredCameraPolicy", budget_s=2, timeout_s=1e6)
+    (failed,) = undeclared.failed
+    assert failed.name == "actions" and failed.remedy.startswith("declare every camera act reads")
+    assert (
+        "act raised CameraNotDeclared: camera 'robot0_eye_in_hand' is not rendered: the policy's spec declares "
+        "agentview" in failed.detail
+    )

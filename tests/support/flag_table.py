@@ -225,6 +225,10 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
         ProvenBy(_CHECK_POLICY_CLI),
         Refused(("check-policy", "noop", "--timeout", "0"), "--timeout must be positive"),
     ),
+    "check-policy --budget": (
+        ProvenBy("tests/test_check_policy.py::test_the_episode_is_played_whole_and_the_page_says_how_much"),
+        Refused(("check-policy", "noop", "--budget", "0"), "--budget must be positive"),
+    ),
     # -- serve ------------------------------------------------------------------------------------------
     "serve --policy": (ProvenBy(_SERVE),),
     "serve --policy-arg": (

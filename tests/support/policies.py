@@ -352,3 +352,44 @@ class HugeImagePolicy(NoopPolicy):
     """Asks for images larger than the renderer makes."""
 
     spec = PolicySpec(cameras=("agentview",), image_size=2048)
+
+
+class LateNanPolicy(NoopPolicy):
+    """Holds still for its first 9 calls, then returns NaN: fine on a short episode, a policy error late in one."""
+
+    def reset(self, context):
+        self.calls = 0
+
+    def act(self, observation):
+        self.calls += 1
+        return np.full(7, np.nan) if self.calls >= 10 else super().act(observation)
+
+
+class NonePolicy(NoopPolicy):
+    """Forgets to return its action."""
+
+    def act(self, observation):
+        return None
+
+
+class IntegerPolicy(NoopPolicy):
+    """Returns integer actions (a discrete policy's)."""
+
+    def act(self, observation):
+        return np.array([0, 0, 0, 0, 0, 0, -1], dtype=np.int64)
+
+
+class UnreadCamerasPolicy(NoopPolicy):
+    """Declares both cameras, small, and never looks at them."""
+
+    spec = PolicySpec(cameras=("agentview", "robot0_eye_in_hand"), image_size=32, reads_instruction=False)
+
+
+class UndeclaredCameraPolicy(NoopPolicy):
+    """Declares the agentview camera and reads the wrist camera."""
+
+    spec = PolicySpec(cameras=("agentview",), image_size=32, reads_instruction=False)
+
+    def act(self, observation):
+        observation.images["robot0_eye_in_hand"]
+        return super().act(observation)

@@ -56,3 +56,21 @@ def test_declaring_a_policy_stochastic_leaves_its_config_hash_as_it_was():
     declared = NoopPolicy()
     declared.spec = dataclasses.replace(NoopPolicy.spec, stochastic=True)
     assert config_hash(policy_config(declared)) == config_hash(policy_config(NoopPolicy())) == "bcf1029da64c98fb"
+
+
+def test_a_run_of_days_on_every_core_here_passes_with_a_warning_not_an_ok():
+    """The wall time is no verdict on the policy, but "[ok]" beside 131 days misled: past LONG_RUN_S on every core
+    of this machine it warns, and says what would shorten it."""
+    from collections import Counter
+
+    from langgap.diagnostics.checks import check_lines
+    from langgap.diagnostics.policy_timing import LONG_RUN_S, wall_time_check
+
+    limits = Counter({("libero_spatial", 220): 1_000})
+    quick = wall_time_check(TIMING, limits, 50, "langgap99")
+    assert quick.ok and not quick.warning and check_lines(quick)[0].startswith("[ok  ] wall time")
+    slow = wall_time_check(dataclasses.replace(TIMING, call_s=20.0), limits, 50, "langgap99")
+    assert TIMING.episode_s(220) * 1_000 < LONG_RUN_S < dataclasses.replace(TIMING, call_s=20.0).episode_s(220) * 500
+    assert slow.ok and "even with --workers" in slow.warning and "select fewer tasks or episodes" in slow.warning
+    lines = check_lines(slow)
+    assert lines[0].startswith("[warn] wall time") and lines[-1].strip().startswith("warning: the run would take")

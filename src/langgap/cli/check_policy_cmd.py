@@ -8,13 +8,15 @@ from __future__ import annotations
 
 from langgap.cli.policy_options import add_policy_arg_option, parse_key_values
 from langgap.cli.tasks_cmd import add_catalog_options
+from langgap.diagnostics.policy_timing import WHOLE_EPISODE_BUDGET_S
 from langgap.engine.spec import DEFAULT_TIMEOUT_S, PAPER_EPISODES
 
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "check-policy",
-        help="check a policy on one short episode (spec, actions, reset/close, determinism, latency) before a run",
+        help="check a policy on a short episode and one played whole (spec, actions, reset/close, determinism, "
+        "latency) before a run",
     )
     parser.add_argument(
         "policy", metavar="POLICY", help="policy name (oracle, blind, noop, random, openpi, …) or module:Class"
@@ -41,6 +43,15 @@ def add_parser(subparsers) -> None:
         help="the run's seconds per episode, as for eval: latency fails when the longest episode would take more "
         "than half of it (default: %(default)g)",
     )
+    parser.add_argument(
+        "--budget",
+        dest="budget_s",
+        type=float,
+        default=WHOLE_EPISODE_BUDGET_S,
+        metavar="S",
+        help="seconds the episode played whole may take at the measured speed; a slower policy plays as many steps "
+        "as fit, and the page says how many (default: %(default)g)",
+    )
     parser.set_defaults(handler=run)
 
 
@@ -55,6 +66,7 @@ def run(args) -> int:
         style=args.style,
         episodes=args.episodes,
         timeout_s=args.timeout,
+        budget_s=args.budget_s,
     )
     print(report.page())
     return report.exit_code

@@ -1,17 +1,20 @@
 """`langgap check-policy`: what a long `langgap eval` run would hit late, checked on one short episode first.
 
-The policy is built as a worker builds it and run through the engine's own code for one episode
-(`execute_episode`: the rollout, its action check `as_action_chunk`, the policy-error record) on the first
-episode eval would plan for the selection (its first task, init state 0, the run's seed), with the
-environment cut to `CHECK_CALLS` policy calls. The episode runs twice, the policy reset once more in between,
-so one short run shows the spec, what the policy receives and sends, its actions, its lifecycle, whether the
-same seed gives the same actions, and its latency, from which the run's wall time is computed
-(`langgap.diagnostics.policy_timing`).
+The policy is built as a worker builds it and run through the engine's own code (`execute_episode`: the
+rollout, its action check `as_action_chunk`, the policy-error record) on the first episode eval would plan for
+the selection (its first task, init state 0, the run's seed). That episode runs twice cut to `CHECK_CALLS`
+policy calls, the policy reset once more in between, which shows the spec, what the policy receives and sends,
+its actions, its lifecycle, whether the same seed gives the same actions, and its latency, from which the
+run's wall time is computed (`langgap.diagnostics.policy_timing`). Then it is played whole, to its step limit
+or its goal, within `budget_s` at the measured speed (the page says how much of it ran): a policy that fails
+only late in an episode (a NaN from its tenth step) fails here, not in the run. A check that runs for more than
+a few seconds says on stderr what it is doing.
 """
 
 from __future__ import annotations
 
 import contextlib
+import sys
 import time
 import traceback
 from collections import Counter
@@ -27,6 +30,7 @@ from langgap.catalog.task import DEFAULT_STYLE
 from langgap.diagnostics.checks import Check, check_lines
 from langgap.diagnostics.policy_timing import (
     RETRIED,
+    WHOLE_EPISODE_BUDGET_S,
     EpisodeTimes,
     StepLimits,
     Timing,
@@ -43,20 +47,22 @@ from langgap.errors import LangGapError, SimulationError
 from langgap.policies import policy_class, policy_kwargs
 from langgap.policies.base import Policy, PolicyOutputError, PolicySpec, PolicySpecError, as_action_chunk
 from langgap.records import EpisodeRecord
-from langgap.sim.env import ACTION_LIMIT, CAMERAS, EnvOptions, Observation, TaskEnv
+from langgap.sim.env import ACTION_LIMIT, CAMERAS, CameraImages, CameraNotDeclared, EnvOptions, Observation, TaskEnv
 from langgap.vocabulary import Outcome
 
 CHECK_CALLS = 4  # policy calls per check episode: the first (often a warm-up) and three more to time
+NOTE_EVERY_S = 10.0  # a check still running says so on stderr this often
 UPRIGHT = (
     "images upright: LIBERO's render rotated 180°, the orientation of openpi's LIBERO example and of LeRobot's "
     "LIBERO pipeline"
 )
+CAMERA_REMEDY = "declare every camera act reads in PolicySpec(cameras=...), and only those: each is rendered every call"
 SPEC_REMEDY = (
     f"declare cameras LIBERO has ({', '.join(CAMERAS)}), each once, an image_size in 16..1024, 1 <= replan <= chunk"
 )
 LIFECYCLE_REMEDY = "make reset start every episode afresh: clear what the last episode left in the policy"
 # The checks after the spec's, in the order shown; each needs the ones before it to have run.
-EPISODE_CHECKS = ("inputs", "actions", "lifecycle", "determinism", "latency", "wall time")
+EPISODE_CHECKS = ("inputs", "actions", "lifecycle", "determinism", "whole episode", "latency", "wall time")
 
 
 @dataclass
@@ -80,8 +86,11 @@ class PolicyCheck:
     def page(self) -> str:
         """The one page `langgap check-policy` prints."""
         skipped = sum(c.ok is None for c in self.checks)
+        warned = sum(bool(c.ok and c.warning) for c in self.checks)
         ran = len(self.checks) - skipped
         verdict = f"{len(self.failed)} of {ran} checks failed" if self.failed else f"all {ran} checks passed"
+        if warned:
+            verdict += f", {warned} with a warning"
         if skipped:
             verdict += f", {skipped} not run"
         lines = [*self.heading, *(line for check in self.checks for line in check_lines(check))]
@@ -97,10 +106,13 @@ def check_policy(
     style: str = DEFAULT_STYLE,
     episodes: int = PAPER_EPISODES,
     timeout_s: float = DEFAULT_TIMEOUT_S,
+    budget_s: float = WHOLE_EPISODE_BUDGET_S,
     env: TaskEnv | None = None,
+    say: Callable[[str], None] | None = None,
 ) -> PolicyCheck:
     """Check policy `name`, built with `policy_args`, for `langgap eval --catalog catalog --tasks tasks
-    --episodes episodes --timeout timeout_s` (see the module docstring).
+    --episodes episodes --timeout timeout_s` (see the module docstring); the whole episode may take `budget_s`
+    at the measured speed. `say` gets the lines of a check that takes a while (default: stderr).
 
     Bad input raises a `LangGapError`: an unknown policy or argument, a selection or episode count eval
     refuses, a timeout that is not positive, a constructor that raises one (no checkpoint, no server).
@@ -109,8 +121,9 @@ def check_policy(
     open. An exception the engine raises outside the policy propagates.
     """
     began = time.perf_counter()
-    if timeout_s <= 0:
-        raise SpecParameterError("{timeout_s} must be positive, got {got:g}", got=timeout_s)
+    for parameter, value in (("timeout_s", timeout_s), ("budget_s", budget_s)):
+        if value <= 0:
+            raise SpecParameterError(f"{{{parameter}}} must be positive, got {{got:g}}", got=value)
     loaded = load_catalog(catalog)
     plan = build_plan(loaded.select(tasks), loaded, episodes=episodes, style=style)
     heading = [f"langgap check-policy {name}"]
@@ -125,7 +138,7 @@ def check_policy(
         checks = [Check("build", False, raised_at("the constructor", exc), "fix the exception in the constructor")]
         return PolicyCheck(heading, checks, time.perf_counter() - began)
     heading[0] += f": {_class_name(policy)}, built in {duration(time.perf_counter() - began)}"
-    checker = _Checker(policy, name, loaded, plan, style, timeout_s)
+    checker = _Checker(policy, name, loaded, plan, style, timeout_s, budget_s, say or _to_stderr)
     try:
         checks = checker.run(env)
     finally:
@@ -135,6 +148,10 @@ def check_policy(
     if checker.ran:
         heading.append(checker.episode_line())
     return PolicyCheck(heading, checks, time.perf_counter() - began)
+
+
+def _to_stderr(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)
 
 
 def raised_at(where: str, exc: BaseException) -> str:
@@ -161,26 +178,69 @@ class _Call:
     output: Any
 
 
-class _Watched:
-    """A policy as the engine sees it, each call timed and each output kept, and an exception it raised
-    remembered with the method that raised it (so the check tells the policy's failures from the engine's)."""
+class _ReadImages(CameraImages):
+    """An observation's images that remember which cameras the policy read."""
 
-    def __init__(self, policy: Policy):
+    def __init__(self, images: dict, read: set[str]):
+        super().__init__(images)
+        self._read = read
+
+    def __getitem__(self, camera):
+        self._read.add(camera)
+        return super().__getitem__(camera)
+
+    def get(self, camera, default=None):
+        self._read.add(camera)
+        return super().get(camera, default)
+
+    def __iter__(self):
+        self._read.update(self.keys())
+        return super().__iter__()
+
+    def values(self):
+        self._read.update(self.keys())
+        return super().values()
+
+    def items(self):
+        self._read.update(self.keys())
+        return super().items()
+
+
+class _Watched:
+    """A policy as the engine sees it, each call timed and each output kept, the cameras it reads noted, and an
+    exception it raised remembered with the method that raised it (so the check tells the policy's failures
+    from the engine's). A call that ends more than `NOTE_EVERY_S` after the last line `say` got says so."""
+
+    def __init__(self, policy: Policy, say: Callable[[str], None]):
         self.policy = policy
         self.spec: PolicySpec = policy.spec
         self.calls: list[_Call] = []
         self.first_observation: Observation | None = None
         self.raised: tuple[str, Exception] | None = None
+        self.cameras_read: set[str] = set()
+        self.total_calls = 0  # over every episode of the check
+        self.activity = ""  # what the check is running, for its notes
+        self._say = say
+        self.quiet_since = time.perf_counter()  # the last note, or the start of what is running
+
+    def note(self, line: str) -> None:
+        """Say `line` (on stderr) and start counting the silence again."""
+        self._say(f"note: check-policy: {line}")
+        self.quiet_since = time.perf_counter()
 
     def reset(self, context) -> None:
         self._guarded("reset", self.policy.reset, context)
 
     def act(self, observation: Observation):
+        observation = replace(observation, images=_ReadImages(observation.images, self.cameras_read))
         if self.first_observation is None:
             self.first_observation = observation
         started = time.perf_counter()
         output = self._guarded("act", self.policy.act, observation)
         self.calls.append(_Call(started, time.perf_counter() - started, output))
+        self.total_calls += 1
+        if time.perf_counter() - self.quiet_since > NOTE_EVERY_S:
+            self.note(f"{self.activity}: {len(self.calls)} calls so far, the last {duration(self.calls[-1].seconds)}")
         return output
 
     def _guarded(self, method: str, call: Callable, argument):
@@ -228,12 +288,20 @@ class _Checker:
     """One policy's checks, in the order `run` shows them."""
 
     def __init__(
-        self, policy: Policy, name: str, catalog: Catalog, plan: list[PlannedEpisode], style: str, timeout_s: float
+        self,
+        policy: Policy,
+        name: str,
+        catalog: Catalog,
+        plan: list[PlannedEpisode],
+        style: str,
+        timeout_s: float,
+        budget_s: float,
+        say: Callable[[str], None],
     ):
         self.policy, self.catalog, self.plan = policy, catalog, plan
         # As eval's first worker runs it, but with no config hash: no record of the check is stored.
         self.settings = EpisodeSettings(policy_name=name, policy_hash="", style=style)
-        self.timeout_s = timeout_s
+        self.timeout_s, self.budget_s, self.say = timeout_s, budget_s, say
         self.planned = plan[0]
         self.task = catalog.get(self.planned.key.task_id)
         self.watched: _Watched  # once the policy is known to have a spec (`run`)
@@ -245,7 +313,7 @@ class _Checker:
         interface = self._interface()
         if not interface.ok:
             return [interface]
-        self.watched = _Watched(self.policy)
+        self.watched = _Watched(self.policy, self.say)
         spec, options = self._spec()
         checks = [interface, spec, self._privileges()]
         if options is None:
@@ -323,33 +391,66 @@ class _Checker:
 
     def _episodes(self, env: TaskEnv) -> list[Check]:
         try:
-            first = self._episode(env, "the episode")
+            first = self._episode(env, "the episode", "actions")
         except _Failed as failed:
             found = {failed.check.name: failed.check}
             if self.watched.first_observation is not None:
                 found["inputs"] = self._inputs()
             reason = f"not run: {failed.check.name} failed"
             return [found.get(name) or Check(name, None, reason) for name in EPISODE_CHECKS]
-        checks = [self._inputs(), self._actions(first)]
+        actions = self._actions(first)
         lifecycle, second = self._lifecycle(env)
-        checks.append(lifecycle)
+        determinism = self._determinism(first, second)
         episodes = [first] if second is None else [first, second]
-        checks.append(self._determinism(first, second))
         timing = Timing.measured([episode.times() for episode in episodes])
+        whole = self._whole_episode(env, timing) if second is not None else Check("whole episode", None, "not run")
         limits: StepLimits = Counter()
         for planned in self.plan:
             task = self.catalog.get(planned.key.task_id)
             limits[task.suite, task.max_steps] += 1
         tasks = len({planned.key.task_id for planned in self.plan})
-        checks += [
+        return [
+            self._inputs(timing),
+            actions,
+            lifecycle,
+            determinism,
+            whole,
             latency_check(timing, limits, self.timeout_s),
             wall_time_check(timing, limits, tasks, self.catalog.name),
         ]
-        return checks
 
-    def _episode(self, env: TaskEnv, which: str) -> _Episode:
-        """Run the planned episode through the engine; raises `_Failed` when the policy failed it."""
+    def _whole_episode(self, env: TaskEnv, timing: Timing) -> Check:
+        """Play the episode to its step limit or its goal, or as far as `budget_s` allows at the measured speed."""
+        limit = self.task.max_steps
+        steps = max((n for n in range(1, limit + 1) if timing.episode_s(n) <= self.budget_s), default=1)
+        expected = f"about {duration(timing.episode_s(steps))} at the measured speed"
+        self.watched.note(f"playing the episode whole: {steps} of its {limit} steps ({expected})")
+        env.switch_task(replace(self.task, max_steps=steps))
+        try:
+            episode = self._episode(env, "the whole episode", "whole episode")
+        except _Failed as failed:
+            return failed.check
+        record = episode.record
+        seconds = duration(episode.ended - episode.began)
+        played = f"{record.steps} of its {limit} steps, {len(episode.calls)} calls, in {seconds}"
+        if record.success:
+            return Check("whole episode", True, f"played to the goal: {played}")
+        if steps == limit:
+            return Check("whole episode", True, f"played to its step limit, no goal reached: {played}")
+        return Check(
+            "whole episode",
+            True,
+            f"played {played}: as many as --budget {self.budget_s:g} s allows at the measured speed",
+            warning=f"the steps after {record.steps} are not checked: give check-policy a larger --budget to play "
+            "the whole episode",
+        )
+
+    def _episode(self, env: TaskEnv, which: str, check: str) -> _Episode:
+        """Run the planned episode through the engine; raises `_Failed` (named `check`) when the policy failed it:
+        a lifecycle failure when the check is the lifecycle's, or when a reset raised."""
         self.watched.calls = []
+        self.watched.activity = which
+        self.watched.quiet_since = time.perf_counter()
         began = time.perf_counter()
         try:
             record = execute_episode(self.planned, self.task, self.catalog, env, self.watched, self.settings)
@@ -358,22 +459,26 @@ class _Checker:
             if raised is None or raised[1] is not exc:
                 raise  # the engine's failure, not the policy's
             method = raised[0]
-            name = "actions" if method == "act" and which == "the episode" else "lifecycle"
-            detail = raised_at(f"{which}: {method}" if name == "lifecycle" else method, exc)
-            raise _Failed(Check(name, False, detail, f"fix the exception: {RETRIED}")) from None
+            name = check if method == "act" else "lifecycle"
+            detail = raised_at(f"{which}: {method}" if which != "the episode" else method, exc)
+            remedy = CAMERA_REMEDY if isinstance(exc, CameraNotDeclared) else f"fix the exception: {RETRIED}"
+            raise _Failed(Check(name, False, detail, remedy)) from None
         episode = _Episode(record, self.watched.calls, began, time.perf_counter())
         error = episode.policy_error(self.policy.spec)
         if error is not None:
             where = f"call {len(episode.calls)}" if which == "the episode" else f"{which}, call {len(episode.calls)}"
-            name = "actions" if which == "the episode" else "lifecycle"
-            remedy = error.remedy if which == "the episode" else LIFECYCLE_REMEDY
-            raise _Failed(Check(name, False, f"{where}: {error} (eval records a policy_error)", remedy))
+            where += f" (step {record.steps + 1})" if check == "whole episode" else ""
+            remedy = LIFECYCLE_REMEDY if check == "lifecycle" else error.remedy
+            raise _Failed(Check(check, False, f"{where}: {error} (eval records a policy_error)", remedy))
         return episode
 
-    def _inputs(self) -> Check:
+    def _inputs(self, timing: Timing | None = None) -> Check:
+        """What the policy receives (and, for a policy that shows it, sends); with the episodes' `timing`, a warning
+        for declared cameras that act never read, since each is rendered every call."""
+        unread = [c for c in self.policy.spec.cameras if c not in self.watched.cameras_read]
         observation = self.watched.first_observation
         received = [f"state {_described(observation.state)}"]
-        received += [f"{camera} {_described(image)}" for camera, image in observation.images.items()]
+        received += [f"{camera} {_described(image)}" for camera, image in dict.items(observation.images)]
         received.append(
             f"instruction {_quoted(observation.instruction)}" if observation.instruction else "no instruction"
         )
@@ -386,17 +491,27 @@ class _Checker:
         if callable(model_inputs):
             sent = model_inputs(observation)
             lines.append("sends " + ", ".join(f"{key} {_described(value)}" for key, value in sent.items()))
-        return Check("inputs", True, "\n".join(lines))
+        warning = ""
+        if unread and timing is not None:
+            warning = (
+                f"act never read {', '.join(unread)} in {self.watched.total_calls} calls, yet every call renders "
+                f"the declared cameras (a simulator step here takes {duration(timing.step_s)}, renders included): "
+                f"{CAMERA_REMEDY}"
+            )
+        return Check("inputs", True, "\n".join(lines), warning=warning)
 
     def _actions(self, episode: _Episode) -> Check:
         spec = self.policy.spec
         chunks = [as_action_chunk(call.output, spec) for call in episode.calls]
-        shapes = Counter(f"{np.shape(c.output)} {np.asarray(c.output).dtype}" for c in episode.calls)
+        dtypes = [np.asarray(c.output).dtype for c in episode.calls]
+        shapes = Counter(f"{np.shape(c.output)} {dtype}" for c, dtype in zip(episode.calls, dtypes, strict=True))
         values = np.concatenate(chunks)
         largest = float(np.abs(values).max())
         outside = int((np.abs(values) > ACTION_LIMIT).sum())
         shown = ", ".join(f"{shape} ×{n}" if len(shapes) > 1 else shape for shape, n in shapes.items())
         detail = f"{len(chunks)} calls returned {shown}: finite, largest |value| {largest:.3g}"
+        if any(dtype.kind in "iub" for dtype in dtypes):
+            detail += "; integers are taken as the same numbers in float64, as eval takes them"
         fewest = min(len(chunk) for chunk in chunks)
         if fewest < spec.replan:
             detail += f"; {fewest} action(s) in a call, fewer than replan={spec.replan}: it is asked again sooner"
@@ -417,7 +532,7 @@ class _Checker:
         try:
             context = planned_context(self.planned, self.task, self.catalog, self.settings.style)
             self.watched.reset(context.for_policy(self.policy.spec))  # twice in a row: the episode resets again
-            second = self._episode(env, "the second episode")
+            second = self._episode(env, "the second episode", "lifecycle")
         except _Failed as failed:
             return failed.check, None
         except Exception as exc:

@@ -29,6 +29,10 @@ RETRIED = (
 StepLimits = Counter[tuple[str, int]]
 
 
+LONG_RUN_S = 3 * 24 * 3600  # a run longer than this on every core here is worth a warning
+WHOLE_EPISODE_BUDGET_S = 45.0  # what check-policy's whole episode may take at the measured speed: about a minute
+
+
 @dataclass(frozen=True)
 class EpisodeTimes:
     """One check episode, measured."""
@@ -134,4 +138,10 @@ def wall_time_check(timing: Timing, limits: StepLimits, tasks: int, catalog: str
         "sooner); N workers take about 1/N of it while each has a core and the policy's device keeps up (here "
         f"{cores} core(s): --workers {cores} ≈ {duration(total / cores)})",
     ]
-    return Check("wall time", True, "\n".join(lines))
+    warning = ""
+    if total / cores > LONG_RUN_S:
+        warning = (
+            f"the run would take {duration(total / cores)} even with --workers {cores}: select fewer tasks or "
+            "episodes, run on more cores or a faster device, or make act faster"
+        )
+    return Check("wall time", True, "\n".join(lines), warning=warning)

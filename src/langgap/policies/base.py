@@ -231,6 +231,11 @@ def as_action_chunk(output, spec: PolicySpec) -> np.ndarray:
     misconfigured (its chunk or replan was meant otherwise), and executing a silently chosen prefix
     would evaluate a policy other than the one described by its stored spec.
     """
+    if output is None:
+        raise PolicyOutputError(
+            "policy returned None, not an action",
+            f"return the action from act: a NumPy array of shape ({ACTION_DIM},) or (k, {ACTION_DIM})",
+        )
     try:
         actions = np.asarray(output, dtype=np.float64)
     except (TypeError, ValueError) as exc:

@@ -100,6 +100,24 @@ class EnvOptions:
         return bool(self.cameras)
 
 
+class CameraNotDeclared(KeyError):
+    """A policy read a camera its spec does not declare: only declared cameras are rendered."""
+
+    def __str__(self) -> str:
+        return str(self.args[0])  # KeyError quotes its argument, which is a sentence here
+
+
+class CameraImages(dict):
+    """An observation's images by camera; reading a camera that is not there names the spec that leaves it out."""
+
+    def __missing__(self, camera: str):
+        declared = ", ".join(self) or "none"
+        raise CameraNotDeclared(
+            f"camera {camera!r} is not rendered: the policy's spec declares {declared}; declare every camera act "
+            "reads in PolicySpec(cameras=...)"
+        )
+
+
 @dataclass
 class Observation:
     """What the environment shows a policy at one step.
@@ -448,7 +466,7 @@ class TaskEnv:
         missing = [c for c in wanted if c not in self.options.cameras]
         if missing:
             raise SimulationError(f"camera(s) {missing} were not enabled for this env")
-        images = {c: self.render(c) for c in wanted}
+        images = CameraImages({c: self.render(c) for c in wanted})
         privileged = None
         if self.options.privileged:
             from langgap.sim.privileged import privileged_state
