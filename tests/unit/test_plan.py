@@ -189,6 +189,12 @@ def test_a_spec_resolves_its_selection_and_records_what_determines_results():
         ({"tasks": "spatial&libero10"}, LangGapError, "selection 'spatial&libero10' matches no task"),
         ({"catalog": "langgap100"}, LangGapError, "langgap100"),
         ({"policy": "levitate"}, LangGapError, "unknown policy 'levitate'"),
+        (
+            {"policy": "my_policy.MyPolicy"},
+            LangGapError,
+            "unknown policy 'my_policy.MyPolicy'; a policy of your own is named module:Class, with a colon: "
+            "my_policy:MyPolicy",
+        ),
         ({"policy_args": {"speed": "2"}}, LangGapError, "policy 'random' has no argument 'speed'"),
         ({"policy_args": {"scale": "fast"}}, LangGapError, "policy 'random' argument scale"),
         ({"stepping": "robosuite"}, SpecError, "unknown stepping 'robosuite' \\(known: exact, fast\\)"),

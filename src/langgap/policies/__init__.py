@@ -38,6 +38,9 @@ def policy_class(name: str) -> type:
     if target is None:
         close = difflib.get_close_matches(name, REGISTRY, n=3)
         hint = f"; did you mean {', '.join(close)}?" if close else f" (known: {', '.join(sorted(REGISTRY))})"
+        module, dot, attr = name.rpartition(".")
+        if dot and module and attr[:1].isupper():  # `my_policy.MyPolicy`: a class path written as an import
+            hint = f"; a policy of your own is named module:Class, with a colon: {module}:{attr}"
         raise UnknownPolicyError(f"unknown policy {name!r}{hint}")
     module_name, _, attr = target.partition(":")
     if name not in REGISTRY and os.getcwd() not in sys.path:
