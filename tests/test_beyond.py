@@ -13,11 +13,11 @@ import pytest
 from langgap.bddl import parse_bddl, strip_task_sections
 from langgap.catalog import files
 from langgap.catalog.catalog import load_catalog
-from langgap.catalog.task import BEYOND_DIMENSIONS
 from langgap.generation.beyond import generate_beyond
 from langgap.generation.generate import BEYOND_CATALOG, GENERATED, default_registry_path
 from langgap.generation.registry_writer import registry_text
 from langgap.goals import Then, holds_now, plain_atoms, witness
+from langgap.vocabulary import BEYOND_DIMENSIONS
 
 # The counts docs/catalogs.md gives ("The catalog" of langgap-beyond), per suite and dimension.
 COUNTS = {

@@ -1,5 +1,6 @@
-"""LangGap's words, defined once: the kinds of task, the language conditions, the outcomes of an episode, the
-steppings and seed schemes of its physics, the gate's verdicts, and the rates behind them.
+"""LangGap's words, defined once: the kinds of task, their dimensions (in groups) and splits, the instruction
+styles, the language conditions, the outcomes of an episode, the steppings and seed schemes of its physics, the
+gate's verdicts, and the rates behind them.
 
 The ground floor: it imports nothing from LangGap, so every layer takes its words from here, and a word
 read in a table, a report or a JSON file is the same word everywhere. Each enumeration is a `str` enum
@@ -29,6 +30,83 @@ class TaskKind(StrEnum):
 
     ORIGINAL = "original"
     EXTENDED = "extended"
+
+
+class Dimension(StrEnum):
+    """What a task changes of its source (`langgap.catalog.task`), in three groups: the paper's
+    (`PAPER_DIMENSIONS`), those of LangGap's `langgap-beyond` catalog (`BEYOND_DIMENSIONS`) and the perturbations
+    of the field's benchmarks read from their packages (`EXTERNAL_DIMENSIONS`). An original's is its kind's word.
+
+    Attributes:
+        ORIGINAL: An original task's (it changes nothing).
+        CHANGE_OBJECT: Another object to move (the paper's).
+        CHANGE_TARGET: Another place to put it (the paper's).
+        SPATIAL_DESCRIPTION: An object told apart by where it stands (the paper's).
+        DRAWER_ACTION: Another drawer action (the paper's).
+        ORDERING: Two sub-goals in a stated order (beyond).
+        NEGATION: An object told apart by what it is not next to or between (beyond).
+        PARAPHRASE: The source's own goal in other words (beyond).
+        ATTRIBUTE_REFERENCE: An object told apart by an attribute (beyond).
+        TASK: Another goal on the same scene (LIBERO-PRO's *task*).
+        LANGUAGE: A reworded instruction (LIBERO-PRO's *lan*, LIBERO-Plus's language).
+    """
+
+    ORIGINAL = "original"
+    CHANGE_OBJECT = "change_object"
+    CHANGE_TARGET = "change_target"
+    SPATIAL_DESCRIPTION = "spatial_description"
+    DRAWER_ACTION = "drawer_action"
+    ORDERING = "ordering"
+    NEGATION = "negation"
+    PARAPHRASE = "paraphrase"
+    ATTRIBUTE_REFERENCE = "attribute_reference"
+    TASK = "task"
+    LANGUAGE = "language"
+
+
+# The paper's four dimensions, then the four of the `langgap-beyond` catalog (`generation/beyond.py`).
+PAPER_DIMENSIONS = (
+    Dimension.CHANGE_OBJECT,
+    Dimension.CHANGE_TARGET,
+    Dimension.SPATIAL_DESCRIPTION,
+    Dimension.DRAWER_ACTION,
+)
+BEYOND_DIMENSIONS = (Dimension.ORDERING, Dimension.NEGATION, Dimension.PARAPHRASE, Dimension.ATTRIBUTE_REFERENCE)
+# The perturbations of the field's benchmarks read from their packages (`generation/external.py`).
+EXTERNAL_DIMENSIONS = (Dimension.TASK, Dimension.LANGUAGE)
+# Dimensions whose tasks ask for their source's own goal in other words: a policy that ignores its instruction
+# does them as well as their sources, so they alone cannot show whether it reads.
+SAME_GOAL_DIMENSIONS = (Dimension.PARAPHRASE, Dimension.LANGUAGE)
+
+
+class Split(StrEnum):
+    """Which part of a catalog's tasks a task belongs to (a task's own `split` field; `langgap.catalog.splits`
+    holds split *files*, selections made over these).
+
+    Attributes:
+        ORIGINAL: An original task's (its kind's word).
+        TRAIN: An extended task a policy may be trained on.
+        HELDOUT: An extended task held out of training.
+    """
+
+    ORIGINAL = "original"
+    TRAIN = "train"
+    HELDOUT = "heldout"
+
+
+class InstructionStyle(StrEnum):
+    """The sentence of a task a policy is sent (`langgap.catalog.task.Task.instruction`).
+
+    Attributes:
+        LIBERO: LIBERO's phrasing (the default).
+        PAPER: The paper's phrasing.
+        PACKAGE: What the runner of the package a task was read from sends (`langgap.catalog.runner_sentences`):
+            only tasks read from a package, and their catalogs' originals, have it.
+    """
+
+    LIBERO = "libero"
+    PAPER = "paper"
+    PACKAGE = "package"
 
 
 class Condition(StrEnum):

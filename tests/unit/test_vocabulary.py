@@ -18,12 +18,18 @@ from langgap.cli.main import build_parser, main
 from langgap.engine.spec import RunSpec
 from langgap.validity.coverage import HEADER
 from langgap.vocabulary import (
+    BEYOND_DIMENSIONS,
     CEILING_TARGET,
+    EXTERNAL_DIMENSIONS,
     FEASIBLE_RATE,
+    PAPER_DIMENSIONS,
     SWITCH_RATE,
     Condition,
+    Dimension,
+    InstructionStyle,
     Outcome,
     SeedScheme,
+    Split,
     Stepping,
     TaskKind,
     Verdict,
@@ -95,9 +101,22 @@ def test_the_core_words_are_the_strings_registries_and_stores_hold():
     ]  # fmt: skip
     assert [str(s) for s in Stepping] == ["exact", "fast", "robosuite"]
     assert [str(s) for s in SeedScheme] == ["per-episode", "openpi"]
+    assert [str(s) for s in Split] == ["original", "train", "heldout"]
+    assert [str(s) for s in InstructionStyle] == ["libero", "paper", "package"]
+    # an original's dimension is its kind's word; the others fall in three groups, each once
+    groups = (PAPER_DIMENSIONS, BEYOND_DIMENSIONS, EXTERNAL_DIMENSIONS)
+    assert [Dimension.ORIGINAL, *(d for group in groups for d in group)] == list(Dimension)
+    assert [str(d) for d in PAPER_DIMENSIONS] == [
+        "change_object",
+        "change_target",
+        "spatial_description",
+        "drawer_action",
+    ]
+    assert Dimension.ORIGINAL == Split.ORIGINAL == TaskKind.ORIGINAL
 
 
-_WORDS = {str(w) for words in (TaskKind, Condition, Outcome, Stepping, SeedScheme) for w in words}
+_ENUMS = (TaskKind, Condition, Outcome, Stepping, SeedScheme, Dimension, Split, InstructionStyle)
+_WORDS = {str(w) for words in _ENUMS for w in words}
 # Fields whose own words share a core word's string: an `Origin`'s `init_runs` is `own` or `source` (its file).
 _OTHER_WORDS = {"init_runs"}
 
@@ -107,8 +126,11 @@ def _field(node: ast.expr) -> str | None:
 
 
 def _literal_words(node: ast.expr) -> set[str]:
+    """The words written as strings in `node`: a string, or a collection of strings that are all words (one that
+    holds other strings too, `("train", "eval")`, is a set of keys of its own)."""
     items = node.elts if isinstance(node, ast.Tuple | ast.List | ast.Set) else [node]
-    return {i.value for i in items if isinstance(i, ast.Constant) and i.value in _WORDS}
+    strings = {i.value for i in items if isinstance(i, ast.Constant) and isinstance(i.value, str)}
+    return strings if strings and strings <= _WORDS else set()
 
 
 def test_no_module_compares_with_a_word_written_as_a_string():

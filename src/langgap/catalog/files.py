@@ -23,7 +23,7 @@ from langgap.catalog.cache import cache_dir
 from langgap.catalog.task import Task
 from langgap.errors import BddlError
 from langgap.goals import atoms, conjunction
-from langgap.vocabulary import TaskKind
+from langgap.vocabulary import InstructionStyle, TaskKind
 
 
 def scene_bddl_path(task: Task) -> Path:
@@ -66,7 +66,7 @@ def task_bddl_text(task: Task) -> str:
     if task.origin is not None:
         text = packages.checked_bytes(task.origin).decode("utf-8")
         shipped = parse_bddl(text, source=task.origin.file)
-        if conjunction(shipped.goal) != task.goal or shipped.language != task.instruction("paper"):
+        if conjunction(shipped.goal) != task.goal or shipped.language != task.instruction(InstructionStyle.PAPER):
             raise BddlError(f"task {task.id}: registry goal or instruction differs from {task.origin.file}")
         return text
     source_text = _read_text(scene_bddl_path(task))
@@ -79,7 +79,10 @@ def task_bddl_text(task: Task) -> str:
         # Atoms only the goal language reads (an `Or`'s other parts, a `Not`) must name the scene's things too.
         parse_bddl(source_text).check_goal(atoms(task.goal))
         return rewrite_task_sections(
-            source_text, language=task.instruction("paper"), obj_of_interest=task.obj_of_interest, goal=task.bddl_goal
+            source_text,
+            language=task.instruction(InstructionStyle.PAPER),
+            obj_of_interest=task.obj_of_interest,
+            goal=task.bddl_goal,
         )
     except BddlError as exc:
         raise BddlError(f"task {task.id}: {exc}") from None

@@ -26,6 +26,7 @@ from dataclasses import asdict, dataclass, field
 from importlib import resources
 from pathlib import Path
 
+from langgap import vocabulary
 from langgap.atomic import write_text_atomically
 from langgap.catalog.catalog import Catalog, catalog_hash, load_catalog
 from langgap.catalog.task import DEFAULT_STYLE, Task
@@ -167,8 +168,8 @@ def generate(
     tasks = catalog.select(selection)
     rng = random.Random(seed)
     if kind == "instruction":
-        held = [t for t in tasks if t.split == "heldout"]
-        train = [t for t in tasks if t.split == "train"]
+        held = [t for t in tasks if t.split == vocabulary.Split.HELDOUT]
+        train = [t for t in tasks if t.split == vocabulary.Split.TRAIN]
     elif kind in ("compositional", "novel-word"):
         if heldout <= 0 or heldout >= len(tasks):
             raise CatalogParameterError(
@@ -266,14 +267,16 @@ def check(split: Split) -> list[str]:
         previous = ids
     train = [catalog.get(i) for i in split.train]
     for task in map(catalog.get, split.heldout):
-        if split.kind == "instruction" and task.split != "heldout":
+        if split.kind == "instruction" and task.split != vocabulary.Split.HELDOUT:
             problems.append(f"{task.id}: the catalog's split is {task.split}, not heldout")
         elif split.kind == "compositional" and (why := compositional_problem(task, train, split.style)):
             problems.append(f"{task.id}: {why}")
         elif split.kind == "novel-word" and not novel_words(task, train, split.style):
             problems.append(f"{task.id}: every word of its sentence is in a training sentence")
     if split.kind == "instruction":
-        problems += [f"{t.id}: the catalog's split is {t.split}, not train" for t in train if t.split != "train"]
+        problems += [
+            f"{t.id}: the catalog's split is {t.split}, not train" for t in train if t.split != vocabulary.Split.TRAIN
+        ]
     return problems
 
 

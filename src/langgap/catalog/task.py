@@ -8,26 +8,17 @@ from langgap.bddl import Predicate
 from langgap.catalog.verdicts import GateResult
 from langgap.errors import CatalogError
 from langgap.goals import Goal, goal_strings, witness
-from langgap.vocabulary import TaskKind
+from langgap.vocabulary import Dimension, InstructionStyle, Split, TaskKind, words
 
-# The paper's four dimensions, then the four of the `langgap-beyond` catalog (`generation/beyond.py`).
-PAPER_DIMENSIONS = ("change_object", "change_target", "spatial_description", "drawer_action")
-BEYOND_DIMENSIONS = ("ordering", "negation", "paraphrase", "attribute_reference")
-# The perturbations of the field's benchmarks read from their packages (`generation/external.py`): another goal on
-# the same scene (LIBERO-PRO's *task*), and a reworded instruction (LIBERO-PRO's *lan*, LIBERO-Plus's language).
-EXTERNAL_DIMENSIONS = ("task", "language")
-# An original task's dimension and split are its kind's word.
-DIMENSIONS = (TaskKind.ORIGINAL.value, *PAPER_DIMENSIONS, *BEYOND_DIMENSIONS, *EXTERNAL_DIMENSIONS)
-# Dimensions whose tasks ask for their source's own goal in other words: a policy that ignores its instruction
-# does them as well as their sources, so they alone cannot show whether it reads.
-SAME_GOAL_DIMENSIONS = ("paraphrase", "language")
-SPLITS = (TaskKind.ORIGINAL.value, "train", "heldout")
-INSTRUCTION_STYLES = ("libero", "paper")
-DEFAULT_STYLE = "libero"
-# The sentence the task's own package's runner sends (`langgap.catalog.runner_sentences`): a style only tasks
-# read from a package, and their catalogs' originals, have.
-PACKAGE_STYLE = "package"
-RUN_STYLES = (*INSTRUCTION_STYLES, PACKAGE_STYLE)
+# The words of `langgap.vocabulary` as the plain strings a task's fields, a spec and argparse's choices hold. An
+# original task's dimension and split are its kind's word.
+DIMENSIONS = words(Dimension)
+SPLITS = words(Split)
+# The styles every task has a sentence in; `package` only tasks read from a package have.
+INSTRUCTION_STYLES = words((InstructionStyle.LIBERO, InstructionStyle.PAPER))
+DEFAULT_STYLE = InstructionStyle.LIBERO.value
+PACKAGE_STYLE = InstructionStyle.PACKAGE.value
+RUN_STYLES = words(InstructionStyle)
 
 
 @dataclass(frozen=True)

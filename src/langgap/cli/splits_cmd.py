@@ -14,8 +14,9 @@ from langgap.catalog.splits import (
     novel_words,
     save_split,
 )
-from langgap.catalog.task import INSTRUCTION_STYLES
+from langgap.catalog.task import DEFAULT_STYLE, INSTRUCTION_STYLES
 from langgap.errors import LangGapError
+from langgap.vocabulary import Split
 
 
 def add_parser(subparsers) -> None:
@@ -32,7 +33,10 @@ def add_parser(subparsers) -> None:
     make.add_argument("--heldout", type=int, default=0, help="how many tasks to hold out (compositional, novel-word)")
     make.add_argument("--seed", type=int, default=0, help="orders candidates and training tasks (default: 0)")
     make.add_argument(
-        "--style", choices=INSTRUCTION_STYLES, default="libero", help="sentences the word rules read (default: libero)"
+        "--style",
+        choices=INSTRUCTION_STYLES,
+        default=DEFAULT_STYLE,
+        help="sentences the word rules read (default: %(default)s)",
     )
     make.add_argument("--subsets", metavar="K,K,...", help="sizes of nested training subsets to store (e.g. 1,3,6)")
     make.set_defaults(handler=run_generate)
@@ -95,7 +99,7 @@ def run_show(args) -> int:
     for part, ids in (("train", split.train), ("heldout", split.heldout)):
         print(f"\n{part} ({len(ids)}):")
         for task in map(catalog.get, ids):
-            unseen = sorted(novel_words(task, train, split.style)) if part == "heldout" else []
+            unseen = sorted(novel_words(task, train, split.style)) if part == Split.HELDOUT else []
             note = f"   [unseen: {', '.join(unseen)}]" if unseen else ""
             print(f"  {task.id:50} {task.instruction(split.style)}{note}")
     for size, ids in sorted(split.subsets.items()):

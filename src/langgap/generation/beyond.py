@@ -28,14 +28,14 @@ from dataclasses import replace
 from langgap.bddl import BddlProblem, Predicate
 from langgap.catalog import affordances, files
 from langgap.catalog.naming import SUITE_SHORT, goal_slug
-from langgap.catalog.task import BEYOND_DIMENSIONS, INSTRUCTION_STYLES, Task
+from langgap.catalog.task import INSTRUCTION_STYLES, Task
 from langgap.generation import rewording
 from langgap.generation.candidates import obj_of_interest
 from langgap.generation.generate import BEYOND_CATALOG, source_tasks
 from langgap.generation.identity import original_in, same_trial
 from langgap.goals import And, Atom, Goal, Not, Or, Then, atoms, plain_atoms
 from langgap.stack import SUITES
-from langgap.vocabulary import TaskKind
+from langgap.vocabulary import BEYOND_DIMENSIONS, Dimension, Split, TaskKind
 
 # The negation variants: which part of a pick-and-place goal the sentence negates.
 NEGATED_PARTS = {"not-where": "where", "not-what": "what"}
@@ -88,7 +88,7 @@ def _task(
         suite=source.suite,
         kind=TaskKind.EXTENDED.value,
         dimension=dimension,
-        split="heldout",
+        split=Split.HELDOUT.value,
         source=source.id,
         scene_task=source.scene_task,
         scene_index=source.scene_index,
@@ -159,7 +159,7 @@ def _ordering(source: Task, scene: BddlProblem, sources: list[Task], max_steps: 
             for style in INSTRUCTION_STYLES
         }
         slug = f"first-{goal_slug((a,), scene)}-then-{goal_slug((b,), scene)}"
-        out.append(_task(source, scene, "ordering", slug, Then((Atom(a), Atom(b))), sentences, max_steps))
+        out.append(_task(source, scene, Dimension.ORDERING.value, slug, Then((Atom(a), Atom(b))), sentences, max_steps))
     return out
 
 
@@ -201,7 +201,9 @@ def _negation(source: Task, scene: BddlProblem) -> list[Task]:
         goal = negation_goal(predicate, scene, part)
         sentences = {s: rewording.negated(s, source.suite, predicate, scene, part) for s in INSTRUCTION_STYLES}
         if goal is not None and all(sentences.values()):
-            out.append(_task(source, scene, "negation", f"{_source_slug(source)}~{variant}", goal, sentences))
+            out.append(
+                _task(source, scene, Dimension.NEGATION.value, f"{_source_slug(source)}~{variant}", goal, sentences)
+            )
     return out
 
 
@@ -217,7 +219,11 @@ def _paraphrase(source: Task, scene: BddlProblem) -> list[Task]:
             for s in INSTRUCTION_STYLES
         }
         if all(sentences.values()):
-            out.append(_task(source, scene, "paraphrase", f"{_source_slug(source)}~{name}", source.goal, sentences))
+            out.append(
+                _task(
+                    source, scene, Dimension.PARAPHRASE.value, f"{_source_slug(source)}~{name}", source.goal, sentences
+                )
+            )
     return out
 
 
@@ -229,4 +235,4 @@ def _attribute(source: Task, scene: BddlProblem) -> list[Task]:
     if not all(sentences.values()):
         return []
     slug = f"{_source_slug(source)}~by-attribute"
-    return [_task(source, scene, "attribute_reference", slug, source.goal, sentences)]
+    return [_task(source, scene, Dimension.ATTRIBUTE_REFERENCE.value, slug, source.goal, sentences)]

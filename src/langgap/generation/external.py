@@ -44,7 +44,7 @@ from langgap.validity.audit import (
     runner_findings,
     scene_findings,
 )
-from langgap.vocabulary import TaskKind
+from langgap.vocabulary import Dimension, InstructionStyle, Split, TaskKind
 
 PRO_CATALOG = "libero-pro"
 PLUS_CATALOG = "libero-plus-language"
@@ -59,7 +59,7 @@ EXTERNAL = {
     ),
 }
 # LIBERO-PRO's folder suffix (`libero_goal_task`) -> the dimension it perturbs.
-PRO_FOLDERS = {"task": "task", "lan": "language"}
+PRO_FOLDERS = {"task": Dimension.TASK.value, "lan": Dimension.LANGUAGE.value}
 _PRO_ROOT = "libero/libero"
 _PLUS_ROOT = "liberoplus/liberoplus"
 
@@ -88,11 +88,15 @@ def _variant(catalog: str, source: Task, task_id: str, dimension: str, origin: O
             catalog=catalog,
             kind=TaskKind.EXTENDED.value,
             dimension=dimension,
-            split="heldout",
+            split=Split.HELDOUT.value,
             source=source.id,
             goal=conjunction(problem.goal),
             obj_of_interest=problem.obj_of_interest,
-            instructions={"libero": problem.language, "paper": problem.language, PACKAGE_STYLE: sent},
+            instructions={
+                InstructionStyle.LIBERO.value: problem.language,
+                InstructionStyle.PAPER.value: problem.language,
+                PACKAGE_STYLE: sent,
+            },
             paper_id=None,
             notes=(),
             in_langgap99=False,
@@ -172,7 +176,12 @@ def generate_plus() -> Generated:
                 registered=runner_sentences.is_plus_registered(source.suite, name),
             )
             _variant(
-                PLUS_CATALOG, source, f"{_scene_prefix(source)}/plus-language-{number}", "language", origin, generated
+                PLUS_CATALOG,
+                source,
+                f"{_scene_prefix(source)}/plus-language-{number}",
+                Dimension.LANGUAGE.value,
+                origin,
+                generated,
             )
     return generated
 
@@ -215,7 +224,7 @@ def files_findings(catalog: Catalog, tasks: list[Task]) -> list[Finding]:
         source = catalog.get(task.source)
         found += scene_findings(task.id, task.dimension, text, files.task_bddl_text(source))
         found += goal_findings(task.id, text)
-        found += instruction_findings(task.id, task.instruction("paper"), task.origin.file)
+        found += instruction_findings(task.id, task.instruction(InstructionStyle.PAPER), task.origin.file)
         found += runner_findings(task)
         found += init_findings(task, files.init_states(source))
     ids = {t.id for t in checked}

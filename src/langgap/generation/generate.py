@@ -28,7 +28,7 @@ from langgap.generation.candidates import candidate_goals, dimension, obj_of_int
 from langgap.generation.registry_writer import registry_text
 from langgap.goals import conjunction
 from langgap.stack import SUITES
-from langgap.vocabulary import TaskKind
+from langgap.vocabulary import InstructionStyle, Split, TaskKind
 
 FULL_CATALOG = "full"
 FULL_DESCRIPTION = "Every candidate same-scene task of LIBERO's scenes, generated from their BDDL (langgap generate)."
@@ -99,7 +99,7 @@ def _extended_task(source: Task, goal: tuple[Predicate, ...], scene: BddlProblem
         suite=source.suite,
         kind=TaskKind.EXTENDED.value,
         dimension=dimension(goal[0], source.bddl_goal, scene),
-        split="heldout",
+        split=Split.HELDOUT.value,
         source=source.id,
         scene_task=source.scene_task,
         scene_index=source.scene_index,
@@ -117,7 +117,10 @@ def _as_published(task: Task, paper_task: Task) -> Task:
         notes += (f"the dimension rule gives {task.dimension}; the paper's label {paper_task.dimension} is kept",)
     return dataclasses.replace(
         task,
-        instructions={"libero": task.instruction("libero"), "paper": paper_task.instruction("paper")},
+        instructions={
+            InstructionStyle.LIBERO.value: task.instruction(InstructionStyle.LIBERO),
+            InstructionStyle.PAPER.value: paper_task.instruction(InstructionStyle.PAPER),
+        },
         dimension=paper_task.dimension,
         split=paper_task.split,
         paper_id=paper_task.paper_id,

@@ -9,6 +9,7 @@ from langgap.catalog.catalog import DEFAULT_CATALOG
 from langgap.catalog.files import task_bddl_text
 from langgap.catalog.task import Task
 from langgap.validity.audit import scene_findings
+from langgap.vocabulary import Dimension
 
 
 def original_in(source: Task, catalog: str) -> Task:
@@ -26,7 +27,8 @@ def same_trial(task: Task, source: Task, text: str, *, starts_from_source: bool)
         and task.goal == source.goal
         and task.max_steps == source.max_steps
         and not any(
-            f.name == "changes the scene" for f in scene_findings(task.id, "language", text, task_bddl_text(source))
+            f.name == "changes the scene"
+            for f in scene_findings(task.id, Dimension.LANGUAGE, text, task_bddl_text(source))
         )
     )
     return f"{DEFAULT_CATALOG}:{source.id}" if same else None

@@ -21,6 +21,7 @@ from langgap.bddl import BddlProblem, Predicate
 from langgap.catalog import affordances
 from langgap.catalog.task import INSTRUCTION_STYLES
 from langgap.errors import CatalogError
+from langgap.vocabulary import InstructionStyle
 
 # How each suite names object categories (default: the category with spaces).
 _NOUNS = {
@@ -133,10 +134,10 @@ def _spatial_where(obj: str, scene: BddlProblem, style: str) -> str:
     audit's reference check found "the black bowl next to the ramekin" fitting both bowls of spatial/s0 on 27
     of 50 init states. Such an object is told apart by the other's place, negated ("not between X and Y")."""
     relation, place = _init_place(obj, scene)
-    table = _SPATIAL_TABLE_REGIONS | (_PAPER_SPATIAL_TABLE_REGIONS if style == "paper" else {})
+    table = _SPATIAL_TABLE_REGIONS | (_PAPER_SPATIAL_TABLE_REGIONS if style == InstructionStyle.PAPER else {})
     if place in table:
         where = table[place]
-        if style == "libero" and where.startswith("next to "):
+        if style == InstructionStyle.LIBERO and where.startswith("next to "):
             landmark = where.removeprefix("next to ")
             category = scene.objects[obj]
             for other in (o for o, c in scene.objects.items() if c == category and o != obj):
@@ -147,7 +148,7 @@ def _spatial_where(obj: str, scene: BddlProblem, style: str) -> str:
     if relation == "in":
         return f"in the {_drawer_level(place, scene)} drawer of the wooden cabinet"
     # Described as a place the object stands on, in the suite's libero words ("on the wooden cabinet").
-    return _target("libero_spatial", "libero", place, scene)
+    return _target("libero_spatial", InstructionStyle.LIBERO, place, scene)
 
 
 def _subject(suite: str, obj: str, scene: BddlProblem, style: str) -> str:
@@ -167,7 +168,7 @@ def _subject(suite: str, obj: str, scene: BddlProblem, style: str) -> str:
 
 def _target(suite: str, style: str, target: str, scene: BddlProblem) -> str:
     kind = affordances.receiver_kind(target, scene)
-    table = _TARGETS[suite] | (_PAPER_TARGETS.get(suite, {}) if style == "paper" else {})
+    table = _TARGETS[suite] | (_PAPER_TARGETS.get(suite, {}) if style == InstructionStyle.PAPER else {})
     phrase = table.get(kind) or (table.get("object") if target in scene.objects else None)
     if phrase is None:
         raise CatalogError(f"no {suite} phrasing for placing something at {target!r}")
@@ -213,7 +214,7 @@ def _placement(suite: str, style: str, predicate: Predicate, scene: BddlProblem)
         verb = "push" if affordances.is_push(predicate, scene) else "put"
         return f"{verb} {subject} {_target(suite, style, target, scene)}"
     if suite == "libero_object":
-        verb = "Pick" if style == "paper" else "pick up"
+        verb = "Pick" if style == InstructionStyle.PAPER else "pick up"
         return f"{verb} {subject} and place it {_target(suite, style, target, scene)}"
     # libero_10: LIBERO-90's verbs differ by scene: basket scenes "pick up ... and put it in",
     # the study scene "pick up ... and place it", kitchens and plates "put ...".

@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-from langgap.catalog.task import BEYOND_DIMENSIONS, PAPER_DIMENSIONS, SPLITS
-from langgap.vocabulary import TaskKind
+from langgap.vocabulary import BEYOND_DIMENSIONS, PAPER_DIMENSIONS, Dimension, Split
 
 # The paper's Table VI order (not LIBERO's suite order).
 SUITE_ORDER = ("libero_spatial", "libero_goal", "libero_object", "libero_10")
@@ -13,26 +12,26 @@ SUITE_LABEL = {"libero_spatial": "Spatial", "libero_goal": "Goal", "libero_objec
 EXTENDED_DIMENSIONS = PAPER_DIMENSIONS
 ALL_EXTENDED_DIMENSIONS = (*PAPER_DIMENSIONS, *BEYOND_DIMENSIONS)
 DIMENSION_LABEL = {
-    TaskKind.ORIGINAL: "Original",
-    "change_object": "Change Object",
-    "change_target": "Change Target",
-    "spatial_description": "Spatial Description",
-    "drawer_action": "Drawer Action",
-    "ordering": "Ordering",
-    "negation": "Negation",
-    "paraphrase": "Paraphrase",
-    "attribute_reference": "Attribute Reference",
-    "task": "Task (LIBERO-PRO)",
-    "language": "Language",
+    Dimension.ORIGINAL: "Original",
+    Dimension.CHANGE_OBJECT: "Change Object",
+    Dimension.CHANGE_TARGET: "Change Target",
+    Dimension.SPATIAL_DESCRIPTION: "Spatial Description",
+    Dimension.DRAWER_ACTION: "Drawer Action",
+    Dimension.ORDERING: "Ordering",
+    Dimension.NEGATION: "Negation",
+    Dimension.PARAPHRASE: "Paraphrase",
+    Dimension.ATTRIBUTE_REFERENCE: "Attribute Reference",
+    Dimension.TASK: "Task (LIBERO-PRO)",
+    Dimension.LANGUAGE: "Language",
 }
 # Every extended dimension reports name, in table order: LangGap's, then other catalogs' (libero-pro's).
-KNOWN_DIMENSIONS = tuple(d for d in DIMENSION_LABEL if d != TaskKind.ORIGINAL)
+KNOWN_DIMENSIONS = tuple(d for d in DIMENSION_LABEL if d is not Dimension.ORIGINAL)
 
-SPLIT_ORDER = SPLITS
+SPLIT_ORDER = tuple(Split)
 SPLIT_LABEL = {
-    TaskKind.ORIGINAL: "Original tasks",
-    "train": "Extended, training split",
-    "heldout": "Extended, held-out",
+    Split.ORIGINAL: "Original tasks",
+    Split.TRAIN: "Extended, training split",
+    Split.HELDOUT: "Extended, held-out",
 }
 
 

@@ -16,7 +16,6 @@ from pathlib import Path
 from typing import ClassVar
 
 from langgap.catalog.switch_verdicts import SwitchVerdicts, accepted
-from langgap.catalog.task import SAME_GOAL_DIMENSIONS
 from langgap.catalog.verdicts import GateResult
 from langgap.engine.plan import repeat_of
 from langgap.engine.spec import spec_differences
@@ -34,7 +33,7 @@ from langgap.report.labels import (
 from langgap.report.load import Run
 from langgap.report.stats import PairedTest, Rate
 from langgap.stack import stack_differences
-from langgap.vocabulary import SWITCH, Condition, Outcome, TaskKind, switch_step
+from langgap.vocabulary import SAME_GOAL_DIMENSIONS, SWITCH, Condition, Outcome, TaskKind, switch_step
 
 
 def oracle_ceiling(records: Iterable[EpisodeRecord], gates: Mapping[str, GateResult]) -> tuple[int, int]:

@@ -21,7 +21,17 @@ from langgap.report.summary import (
     TaskRow,
     shown_dimensions,
 )
-from langgap.vocabulary import CEILING_TARGET, FEASIBLE_RATE, SWITCH, SWITCH_RATE, Condition, Outcome, TaskKind, Verdict
+from langgap.vocabulary import (
+    CEILING_TARGET,
+    FEASIBLE_RATE,
+    SWITCH,
+    SWITCH_RATE,
+    Condition,
+    Dimension,
+    Outcome,
+    TaskKind,
+    Verdict,
+)
 
 # A section's heading with its fields filled (`Section.title`): `run=` the run's label, and whatever else it names.
 Title = Callable[..., str]
@@ -337,7 +347,7 @@ def outcome_table(run: RunResults, title: Title) -> Table:
     """What the policy did instead, per dimension (`did source task` is the default-task rate). `wrong order`
     is shown for runs with ordered tasks (or any episode in that outcome); `persisted` never (the table holds
     `given` episodes: only a switch's persist, in `switch_table`)."""
-    ordered = any(o.group == "ordering" or o.shares[Outcome.WRONG_ORDER] for o in run.outcomes)
+    ordered = any(o.group == Dimension.ORDERING or o.shares[Outcome.WRONG_ORDER] for o in run.outcomes)
     hidden = {Outcome.PERSISTED, *(() if ordered else (Outcome.WRONG_ORDER,))}
     shown = [o for o in JUDGED_OUTCOMES if o not in hidden]
     headers = ["Dimension", "Episodes", *(OUTCOME_LABEL[o] for o in shown), "Gaps"]

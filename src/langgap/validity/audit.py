@@ -23,6 +23,7 @@ from langgap.bddl import PREDICATE_ARITY, parse_bddl, read_tree, section_texts, 
 from langgap.catalog import packages
 from langgap.catalog.task import PACKAGE_STYLE, Task
 from langgap.errors import CatalogError
+from langgap.vocabulary import Dimension, InstructionStyle
 
 # Every finding a check can make, with what it means (the audit prints these).
 FINDINGS = {
@@ -62,7 +63,7 @@ CHECKS = {
     "references": _REFERENCES,
 }
 # Sections a variant may change, by dimension; every other byte must be its source's.
-MAY_CHANGE = {"language": (":language",), "task": (":language", ":obj_of_interest", ":goal")}
+MAY_CHANGE = {Dimension.LANGUAGE: (":language",), Dimension.TASK: (":language", ":obj_of_interest", ":goal")}
 # Predicates LIBERO evaluates (libero/envs/predicates) that LangGap's goal language does not judge.
 _LIBERO_ONLY = {"up", "true", "false", "printjointstate"}
 
@@ -96,11 +97,11 @@ def scene_findings(task_id: str, dimension: str, text: str, source_text: str) ->
     elif strip_sections(text) != strip_sections(source_text):
         found.append(Finding("changes the scene", task_id, "differs from its source outside its sections"))
     parsed, source = parse_bddl(text), parse_bddl(source_text)
-    if dimension == "language" and parsed.language == source.language:
+    if dimension == Dimension.LANGUAGE and parsed.language == source.language:
         found.append(Finding("not a perturbation", task_id, "its instruction is its source's"))
-    if dimension == "task" and set(parsed.goal) == set(source.goal):
+    if dimension == Dimension.TASK and set(parsed.goal) == set(source.goal):
         found.append(Finding("not a perturbation", task_id, "its goal is its source's"))
-    elif dimension == "task" and set(parsed.goal) < set(source.goal):
+    elif dimension == Dimension.TASK and set(parsed.goal) < set(source.goal):
         # A policy that ignores its instruction and does the source task succeeds: it asks nothing new.
         left = " ".join(str(p) for p in source.goal if p not in parsed.goal)
         found.append(Finding("done by its source task", task_id, f"its goal is its source's without {left}"))
@@ -191,7 +192,7 @@ def runner_findings(task: Task) -> list[Finding]:
     found = []
     if task.origin.registered is False:
         found.append(Finding("runner does not reach it", task.id, f"{task.origin.file} is not in its task map"))
-    sent, own = task.instruction(PACKAGE_STYLE), task.instruction("paper")
+    sent, own = task.instruction(PACKAGE_STYLE), task.instruction(InstructionStyle.PAPER)
     if sent.split() == own.lower().split() and sent != own:
         found.append(Finding("runner changes its case", task.id, f"it sends {sent!r}"))
     elif sent != own:
@@ -215,11 +216,15 @@ def duplicate_findings(tasks: Iterable[Task], scene_of) -> list[Finding]:
                 found.append(Finding("duplicate goal", task.id, f"same goal as {', '.join(others)}"))
     by_sentence: dict[tuple, list[Task]] = {}
     for task in tasks:
-        if task.dimension == "language":
-            by_sentence.setdefault((task.source, task.instruction("paper").lower()), []).append(task)
+        if task.dimension == Dimension.LANGUAGE:
+            by_sentence.setdefault((task.source, task.instruction(InstructionStyle.PAPER).lower()), []).append(task)
     for group in by_sentence.values():
         for task in group:
-            exact = [o.id for o in group if o.id != task.id and o.instruction("paper") == task.instruction("paper")]
+            exact = [
+                o.id
+                for o in group
+                if o.id != task.id and o.instruction(InstructionStyle.PAPER) == task.instruction(InstructionStyle.PAPER)
+            ]
             cased = [o.id for o in group if o.id != task.id and o.id not in exact]
             if exact:
                 found.append(Finding("duplicate instruction", task.id, f"same instruction as {', '.join(exact)}"))
@@ -237,8 +242,8 @@ def duplicate_counts(tasks: Iterable[Task]) -> dict[str, dict[str, int]]:
     for how, key in (("exact", str), ("case-insensitive", str.lower)):
         groups: dict[tuple, int] = {}
         for task in tasks:
-            if task.dimension == "language":
-                sentence = (task.source, key(task.instruction("paper")))
+            if task.dimension == Dimension.LANGUAGE:
+                sentence = (task.source, key(task.instruction(InstructionStyle.PAPER)))
                 groups[sentence] = groups.get(sentence, 0) + 1
         shared = [n for n in groups.values() if n > 1]
         counts[how] = {"variants": sum(shared), "sentences": len(shared)}
@@ -258,9 +263,11 @@ def duplicate_counts_text(counts: dict[str, dict[str, int]]) -> str:
 def _language_pair(a: Task, b: Task) -> bool:
     """Whether `a` and `b` share their goal by design: one is a language variant of the other, or both are
     language variants of one source."""
-    if a.dimension == "language" and b.dimension == "language":
+    if a.dimension == Dimension.LANGUAGE and b.dimension == Dimension.LANGUAGE:
         return a.source == b.source
-    return (a.dimension == "language" and a.source == b.id) or (b.dimension == "language" and b.source == a.id)
+    return (a.dimension == Dimension.LANGUAGE and a.source == b.id) or (
+        b.dimension == Dimension.LANGUAGE and b.source == a.id
+    )
 
 
 def init_findings(task: Task, source_states: np.ndarray) -> list[Finding]:

@@ -16,6 +16,7 @@ from langgap.catalog.catalog import Catalog
 from langgap.catalog.task import PACKAGE_STYLE, Task
 from langgap.page_style import PAGE_STYLE
 from langgap.validity.audit import CHECKS, FINDINGS, Finding, duplicate_counts_text
+from langgap.vocabulary import InstructionStyle
 
 _STYLE = (
     PAGE_STYLE
@@ -63,7 +64,7 @@ def _evidence(task: Task | None) -> dict[str, str]:
     """The files and sentences behind a task's findings (empty for a task left out of the catalog)."""
     if task is None:
         return {}
-    evidence = {"sentence": task.instruction("paper")}
+    evidence = {"sentence": task.instruction(InstructionStyle.PAPER)}
     if PACKAGE_STYLE in task.instructions:
         evidence["runner sends"] = task.instruction(PACKAGE_STYLE)
     if task.origin is not None:

@@ -17,6 +17,7 @@ from langgap.catalog import affordances
 from langgap.catalog.task import Task
 from langgap.goals import And, Atom, Not, Or, Then, plain_atoms
 from langgap.validity.audit import Finding
+from langgap.vocabulary import Dimension
 
 
 @dataclass(frozen=True)
@@ -90,7 +91,7 @@ _NEGATION_VARIANTS = ("not-where", "not-what")
 def template_of(task: Task, scene: BddlProblem) -> str:
     """The template `task`'s sentence follows (a key of `TEMPLATES`)."""
     variant = task.id.rpartition("~")[2]
-    if task.dimension == "negation" and variant in _NEGATION_VARIANTS:
+    if task.dimension == Dimension.NEGATION and variant in _NEGATION_VARIANTS:
         return variant
     if isinstance(task.goal, Then):
         return "ordering"
