@@ -22,6 +22,8 @@ _FACTS = """(() => {
     sections: Object.fromEntries(sections.map(s => [s.dataset.name, rows(s)])),
     summary: [...document.querySelectorAll("table.summary tbody tr")].map(r => [...r.cells].map(c => c.textContent)),
     data: JSON.parse(document.getElementById("audit-data").textContent),
+    about: Object.fromEntries([...document.querySelectorAll("dl.about > dt")]
+      .map(dt => [dt.textContent, dt.nextElementSibling.innerText])),
   };
 })()"""
 
@@ -43,6 +45,10 @@ def test_the_audit_page_in_a_real_browser(tmp_path):
             (f.name, f.task, f.detail) for f in recorded
         )
         assert facts["data"]["catalog_hash"] == catalog_hash("libero-pro")
+        # How the checks ran: each check's settings in words, not JSON.
+        assert set(facts["about"]) == {"files", "starts", "references"}
+        assert not any("{" in text for text in facts["about"].values())
+        assert "expressions judged" in facts["about"]["references"] and "policy image" in facts["about"]["references"]
         shown = {name: len(rows) for name, rows in facts["sections"].items()}
         assert shown == {name: sum(f.name == name for f in recorded) for name in {f.name for f in recorded}}
         assert {row[0]: int(row[1]) for row in facts["summary"]} == {

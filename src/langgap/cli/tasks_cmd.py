@@ -134,8 +134,9 @@ def add_parser(subparsers) -> None:
         type=int,
         default=0,
         metavar="K",
-        help="also resolve each sentence's referring expressions on init states 0..K-1, from the robot's and the "
-        "camera's viewpoint (does it pick the goal's objects?); without it, the recorded findings are shown",
+        help="also resolve each sentence's referring expressions on init states 0..K-1, from the robot's viewpoint, "
+        "the camera's (its raw render) and in the policy's image (does it pick the goal's objects?); without it, "
+        "the recorded findings are shown",
     )
     audit.add_argument("--examples", type=int, default=3, metavar="N", help="examples shown per finding")
     audit.add_argument("--record", action="store_true", help="record the checks that ran beside the registry")
