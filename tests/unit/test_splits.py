@@ -9,7 +9,8 @@ import json
 import pytest
 
 from langgap.catalog.catalog import catalog_hash, load_catalog
-from langgap.catalog.splits import available_splits, check, generate, load_split, save_split
+from langgap.catalog.split_files import available_splits, load_split, save_split
+from langgap.catalog.splits import check, generate
 from langgap.catalog.words import words
 from langgap.cli.main import main
 from langgap.errors import CatalogError

@@ -19,10 +19,11 @@ from pathlib import Path
 import yaml
 
 from langgap.catalog.naming import SUITE_SHORT
+from langgap.catalog.split_files import load_split
 from langgap.catalog.switch_verdicts import snapshot_switch_verdicts
 from langgap.catalog.task import DIMENSIONS, SPLITS, Origin, Task
 from langgap.catalog.verdicts import GateResult, read_verdicts, snapshot_verdicts
-from langgap.errors import BddlError, CatalogError, UnknownTaskError
+from langgap.errors import BddlError, CatalogError, CatalogParameterError, UnknownTaskError
 from langgap.goals import goal_from_strings
 from langgap.vocabulary import TaskKind
 
@@ -152,9 +153,7 @@ class Catalog:
         if term == "all":
             return set(self._by_id)
         if term.startswith("split:"):
-            from langgap.catalog.splits import split_tasks  # splits read catalogs: imported where used
-
-            return split_tasks(self, term)
+            return self._split_term(term)
         if term in ("feasible", "rejected"):
             # may be empty (a catalog whose every task passed): `feasible&!rejected` still means something
             return {t.id for t in self.tasks if t.feasible == (term == "feasible")}
@@ -176,6 +175,26 @@ class Catalog:
             return {t.id for t in self.tasks if fnmatch.fnmatchcase(t.id, term)} or self._no_match(term)
         self.get(term)  # raises with suggestions
         return set()
+
+    def _split_term(self, term: str) -> set[str]:
+        """The task ids of the selection term `split:NAME:PART`: the split must be of this catalog, unchanged since it
+        was made."""
+        name, _, part = term.removeprefix("split:").rpartition(":")
+        if not name:
+            raise CatalogError(f"{term!r}: a split term reads split:NAME:train, split:NAME:heldout or split:NAME:K")
+        split = load_split(name)
+        if split.catalog != self.name:
+            raise CatalogParameterError(
+                "split {name} is of catalog {of}, not {this}: pass {catalog} {of}",
+                name=split.name,
+                of=split.catalog,
+                this=self.name,
+            )
+        if catalog_hash(split.catalog) != split.catalog_sha256:
+            raise CatalogError(
+                f"split {split.name}: catalog {split.catalog} changed since it was made: generate it again"
+            )
+        return set(split.part(part))
 
     def _no_match(self, term: str) -> set[str]:
         raise UnknownTaskError(f"selection term {term!r} matches no task in catalog {self.name} ({_KEYWORDS_HELP})")

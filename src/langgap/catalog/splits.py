@@ -19,67 +19,15 @@ one's own is given by its path. Select a split's tasks anywhere a selection is t
 
 from __future__ import annotations
 
-import json
 import random
 from collections.abc import Iterable
-from dataclasses import asdict, dataclass, field
-from importlib import resources
-from pathlib import Path
 
 from langgap import vocabulary
-from langgap.atomic import write_text_atomically
 from langgap.catalog.catalog import Catalog, catalog_hash, load_catalog
+from langgap.catalog.split_files import SPLIT_KINDS, Split
 from langgap.catalog.task import DEFAULT_STYLE, Task
 from langgap.catalog.words import words
 from langgap.errors import CatalogError, CatalogParameterError
-
-SPLIT_KINDS = ("instruction", "compositional", "novel-word")
-PARTS = ("train", "heldout")
-
-
-@dataclass(frozen=True)
-class Split:
-    """A named selection of catalog `catalog`'s tasks (its registry's SHA-256 `catalog_sha256` when made) into
-    `train` and `heldout` task ids, made by `rule` (the generator's inputs: selection, seed, sizes, style).
-    `subsets` maps a size k to the nested subset of k training tasks (each a prefix of the next)."""
-
-    name: str
-    kind: str
-    catalog: str
-    catalog_sha256: str
-    train: tuple[str, ...]
-    heldout: tuple[str, ...]
-    rule: dict = field(default_factory=dict)
-    subsets: dict[int, tuple[str, ...]] = field(default_factory=dict)
-
-    def __post_init__(self) -> None:
-        if self.kind not in SPLIT_KINDS:
-            raise CatalogError(f"split {self.name}: kind {self.kind!r} is not one of {', '.join(SPLIT_KINDS)}")
-        object.__setattr__(self, "train", tuple(self.train))
-        object.__setattr__(self, "heldout", tuple(self.heldout))
-        object.__setattr__(self, "subsets", {int(k): tuple(v) for k, v in self.subsets.items()})
-
-    @property
-    def style(self) -> str:
-        """The instruction style whose sentences the split's word rules read."""
-        return self.rule.get("style", DEFAULT_STYLE)
-
-    def part(self, part: str) -> tuple[str, ...]:
-        """The task ids of `part`: `train`, `heldout`, or a number k (the nested subset of k training tasks)."""
-        if part in PARTS:
-            return getattr(self, part)
-        if part.isdigit() and int(part) in self.subsets:
-            return self.subsets[int(part)]
-        sizes = ", ".join(map(str, sorted(self.subsets))) or "none stored"
-        raise CatalogError(f"split {self.name} has no part {part!r} (train, heldout, or a subset size: {sizes})")
-
-    def to_dict(self) -> dict:
-        """The split's JSON form (as stored)."""
-        data = asdict(self)
-        data["train"], data["heldout"] = list(self.train), list(self.heldout)
-        data["subsets"] = {str(k): list(v) for k, v in sorted(self.subsets.items())}
-        return data
-
 
 # -- the parts of a task ------------------------------------------------------------------------------------
 
@@ -278,60 +226,3 @@ def check(split: Split) -> list[str]:
             f"{t.id}: the catalog's split is {t.split}, not train" for t in train if t.split != vocabulary.Split.TRAIN
         ]
     return problems
-
-
-# -- storage ------------------------------------------------------------------------------------------------
-
-
-def shipped_dir() -> Path:
-    """Where the splits that ship with LangGap are stored."""
-    return Path(str(resources.files("langgap.catalog") / "registry" / "splits"))
-
-
-def available_splits() -> list[str]:
-    """Names of the shipped splits."""
-    return sorted(p.stem for p in shipped_dir().glob("*.json"))
-
-
-def split_path(name: str) -> Path:
-    """The file of split `name`: a shipped split's name, or the path of a split file (`.json`, or holding `/`)."""
-    if name.endswith(".json") or "/" in name:
-        return Path(name)
-    if name not in available_splits():
-        raise CatalogError(f"unknown split {name!r} (shipped: {', '.join(available_splits())}; or a split file)")
-    return shipped_dir() / f"{name}.json"
-
-
-def load_split(name: str) -> Split:
-    """The split `name` (a shipped name or a file's path), read from its JSON file."""
-    path = split_path(name)
-    try:
-        return Split(**json.loads(path.read_text(encoding="utf-8")))
-    except (OSError, json.JSONDecodeError, TypeError) as exc:
-        raise CatalogError(f"cannot read split {path}: {exc}") from None
-
-
-def save_split(split: Split, path: str | Path) -> Path:
-    """Write `split` as JSON to `path` (atomically)."""
-    path = Path(path)
-    write_text_atomically(path, json.dumps(split.to_dict(), indent=1) + "\n")
-    return path
-
-
-def split_tasks(catalog: Catalog, term: str) -> set[str]:
-    """The task ids of the selection term `split:NAME:PART` in `catalog` (`Catalog.select`): the split must be
-    of this catalog, unchanged since it was made."""
-    name, _, part = term.removeprefix("split:").rpartition(":")
-    if not name:
-        raise CatalogError(f"{term!r}: a split term reads split:NAME:train, split:NAME:heldout or split:NAME:K")
-    split = load_split(name)
-    if split.catalog != catalog.name:
-        raise CatalogParameterError(
-            "split {name} is of catalog {of}, not {this}: pass {catalog} {of}",
-            name=split.name,
-            of=split.catalog,
-            this=catalog.name,
-        )
-    if catalog_hash(split.catalog) != split.catalog_sha256:
-        raise CatalogError(f"split {split.name}: catalog {split.catalog} changed since it was made: generate it again")
-    return set(split.part(part))

@@ -5,15 +5,8 @@ from __future__ import annotations
 import json
 
 from langgap.catalog.catalog import DEFAULT_CATALOG, catalog_hash, load_catalog
-from langgap.catalog.splits import (
-    SPLIT_KINDS,
-    available_splits,
-    check,
-    generate,
-    load_split,
-    novel_words,
-    save_split,
-)
+from langgap.catalog.split_files import SPLIT_KINDS, available_splits, load_split, save_split
+from langgap.catalog.splits import check, generate, novel_words
 from langgap.catalog.task import DEFAULT_STYLE, INSTRUCTION_STYLES
 from langgap.errors import LangGapError
 from langgap.vocabulary import Split
