@@ -118,3 +118,16 @@ def test_unknown_experiment_policy_or_tuning_is_an_error(tmp_path):
     ):
         result = run_cli("experiment", "run", "exp1", "--out", str(tmp_path / "o"), "--dry-run", *args)
         assert result.returncode == 2 and result.stderr.startswith(message), result.stderr
+
+
+def test_originals_from_a_local_lerobot_libero_copy_replace_the_originals_group(tmp_path):
+    """`--originals DIR`: the originals are not collected; the merge takes DIR beside the extended tasks' export."""
+    originals = tmp_path / "lerobot_libero"
+    (originals / "meta").mkdir(parents=True)
+    (originals / "meta" / "info.json").write_text("{}")
+    out = tmp_path / "out"
+    result = run_cli("experiment", "run", "exp3", "--out", str(out), "--dry-run", "--originals", str(originals))
+    assert result.returncode == 0, result.stderr
+    assert "train: original: 40 tasks x 44 demonstrations = 1760 (from --originals)" in result.stdout
+    assert "collect original" not in result.stdout and "] collect paper:40" in result.stdout
+    assert f"langgap merge-lerobot {out}/data/train {originals} {out}/data/group1/lerobot" in result.stdout
