@@ -7,13 +7,18 @@ episode is the oracle's, whatever the worker count or `replan` (the records are 
 printed and fails the run).
 
 For each `replan` and worker count it runs a real evaluation (`langgap.engine.evaluate`, worker processes, a
-real store) and prints steps/s, episodes/h and where a step's time goes, measured inside every worker by timers
-around the functions that do each part (each is timed exclusive of the parts nested in it):
-physics (MuJoCo's `mj_*` calls of the stepping), the arm's controller and robosuite's step loop, render (MuJoCo's
-offscreen render and read-back), image copy and flip, observation assembly, the policy call, goal watching,
-episode start (reset, init state), the store (in the driver) and the rest of the harness. Beside them, the
-machine's own ceilings, each measured in 1 and in N processes at once: raw physics (`mj_step` x 25 from a
-mid-episode state), render alone (both cameras), and the two together.
+real store; `bench_harness.timed_run`) and prints steps/s, episodes/h and where a step's time goes inside
+episodes, from the standard library's profiler (cProfile) run in every worker: physics (MuJoCo's `mj_*` calls of the
+stepping), the arm's controller and robosuite's step loop, render (MuJoCo's offscreen render and read-back), image
+copy and flip, observation assembly, the policy call, goal watching, episode start (reset, init state), the store
+(in the driver) and the rest of the harness. Each part starts at named functions (`_parts`). A function's own
+time (cProfile's exclusive time) counts with the part of the nearest part-starting function above it, so a part is
+exclusive of the parts nested in it; a function called under several parts is divided among them in proportion to
+its time under each caller (cProfile keeps callers one level up; further up, the same proportion by inclusive time
+is assumed). Time outside episodes (start-up, environment builds) is left out. The profiler slows every Python call
+a little: its estimated cost, which the times above include, is the table's last line. Beside them, the machine's
+own ceilings, each measured in 1 and in N processes at once (`bench_harness.in_processes`): raw physics
+(`mj_step` x 25 from a mid-episode state), render alone (both cameras), and the two together.
 
 It runs unchanged on any machine: software GL (llvmpipe) here, EGL on a GPU box (MUJOCO_GL decides).
 
@@ -23,11 +28,11 @@ It runs unchanged on any machine: software GL (llvmpipe) here, EGL on a GPU box 
 from __future__ import annotations
 
 import argparse
-import functools
+import cProfile
 import hashlib
 import json
-import multiprocessing as mp
 import os
+import pstats
 import statistics
 import tempfile
 import time
@@ -60,7 +65,9 @@ DEFAULT_TASKS = ",".join(
     )
 )
 POLICY = "bench.bench_box:StoredChunks"
-PROBE_ENV = "LANGGAP_BENCH_PROBE"  # a folder: every process that builds the policy writes its timers there
+PROFILE_ENV = "LANGGAP_BENCH_PROFILE"  # a folder: every process that builds the policy writes its profile there
+HARNESS = "harness (the rest)"
+PROFILER_COST = "the profiler's own cost (within the lines above)"
 CEILING_SECONDS = 4.0  # how long each ceiling loop runs in each process
 TARGET_OVERHEAD = 1.25  # all-in per step at 1 worker vs (physics + render)
 TARGET_SCALING = 0.9  # N workers vs the machine's N-process ceiling
@@ -85,23 +92,26 @@ class StoredChunks:
         self.spec = PolicySpec(cameras=CAMERAS, image_size=size, chunk=replan, replan=replan)
         self._episode: np.ndarray | None = None
         self._next = 0
-        if os.environ.get(PROBE_ENV):
-            Probe.install(Path(os.environ[PROBE_ENV]))
+        self._profile_folder = os.environ.get(PROFILE_ENV)
+        self._profile = cProfile.Profile() if self._profile_folder else None
+        if self._profile is not None:  # built in a worker, before its first episode: profile all it runs
+            self._profile.enable()
 
     def reset(self, context: TaskContext) -> None:
         self._episode = self._stored[actions_key(context.instruction, context.init_index)]
         self._next = 0
 
     def act(self, observation: Observation) -> np.ndarray:
-        with Probe.section("policy call"):
-            start = self._next
-            self._next = min(start + self.spec.replan, len(self._episode))
-            if start >= len(self._episode):  # the oracle's episode ended here: the goal holds, nothing is asked
-                raise RuntimeError("stored actions ran out: the replayed episode departed from the oracle's")
-            return self._episode[start : self._next]
+        start = self._next
+        self._next = min(start + self.spec.replan, len(self._episode))
+        if start >= len(self._episode):  # the oracle's episode ended here: the goal holds, nothing is asked
+            raise RuntimeError("stored actions ran out: the replayed episode departed from the oracle's")
+        return self._episode[start : self._next]
 
     def close(self) -> None:
-        Probe.dump()
+        if self._profile is not None:
+            self._profile.disable()
+            self._profile.dump_stats(Path(self._profile_folder) / f"worker-{os.getpid()}-{id(self)}.prof")
 
 
 def actions_key(instruction: str, init_index: int) -> str:
@@ -109,105 +119,96 @@ def actions_key(instruction: str, init_index: int) -> str:
     return hashlib.sha256(f"{instruction}\n{init_index}".encode()).hexdigest()[:24]
 
 
-# -- timers ----------------------------------------------------------------------------------
+# -- where the time goes ---------------------------------------------------------------------
 
 
-class Probe:
-    """Exclusive-time timers around named functions, in one process (installed once)."""
+def _key(function) -> tuple[str, int, str]:
+    """cProfile's name of a Python function."""
+    code = function.__code__
+    return code.co_filename, code.co_firstlineno, code.co_name
 
-    folder: Path | None = None
-    totals: dict[str, float] = defaultdict(float)
-    counts: dict[str, int] = defaultdict(int)
-    stack: list[str] = []
-    last = 0.0
 
-    @classmethod
-    def enter(cls, label: str) -> None:
-        now = time.perf_counter()
-        if cls.stack:
-            cls.totals[cls.stack[-1]] += now - cls.last
-        cls.stack.append(label)
-        cls.counts[label] += 1
-        cls.last = now
+def _parts() -> tuple[dict[tuple, str], set[tuple]]:
+    """The functions each part of a step starts at (cProfile's names -> the part), and those an episode starts at."""
+    from robosuite.utils.binding_utils import MjSim
 
-    @classmethod
-    def leave(cls) -> None:
-        now = time.perf_counter()
-        cls.totals[cls.stack.pop()] += now - cls.last
-        cls.last = now
+    from langgap.engine import episode, rollout, watch
+    from langgap.goals import GoalProgress
+    from langgap.policies import policy_class
+    from langgap.sim import env, resting
 
-    @classmethod
-    @functools.cache
-    def section(cls, label: str):
-        """A context manager timing its body as `label` (when no probe is installed, it times nothing)."""
+    episodes = (episode.execute_episode, episode.execute_shared)
+    starts = {
+        # TaskEnv.step's own bookkeeping counts with the harness
+        HARNESS: (*episodes, env.TaskEnv.step),
+        "controller and robosuite's step loop": (env.TaskEnv._step_sim,),
+        "render": (MjSim.render,),
+        "image copy and flip": (env.TaskEnv._render_now,),
+        "observation assembly": (env.TaskEnv.observe, rollout.observation_for, rollout.as_action_chunk),
+        "episode start (reset, init state)": (env.TaskEnv.reset,),
+        "goal watching": (env.TaskEnv.predicate_holds, resting.Placements.observe, GoalProgress.observe,
+                          watch.SceneWatch.observe),
+        "policy call": (policy_class(POLICY).act,),  # as the workers load it, not as this script's __main__
+    }  # fmt: skip
+    parts = {_key(function): part for part, functions in starts.items() for function in functions}
+    parts |= {("~", 0, f"<built-in method mujoco._functions.{name}>"): "physics" for name in PHYSICS}
+    return parts, {_key(function) for function in episodes}
 
-        class _Section:
-            def __enter__(self):
-                if cls.folder is not None and cls.stack:
-                    cls.enter(label)
-                    self.on = True
-                else:
-                    self.on = False
 
-            def __exit__(self, *exc):
-                if self.on:
-                    cls.leave()
+def attribute(stats: dict, parts: dict[tuple, str], episodes: set[tuple]) -> tuple[dict[str, float], float]:
+    """Seconds of each part inside episodes in cProfile's `stats` (see the module's docstring), and how many calls
+    were profiled inside episodes."""
+    shares: dict[tuple, dict[str, float]] = {}
 
-        return _Section()
+    def under(function: tuple) -> dict[str, float]:
+        """How `function`'s time divides over the parts it ran under inside episodes (the rest ran outside)."""
+        if function in shares:
+            return shares[function]
+        shares[function] = {}  # a cycle of calls: what loops back adds nothing
+        part = parts.get(function)
+        if function in episodes:
+            found = {part: 1.0}
+        else:
+            callers = stats[function][4] if function in stats else {}
+            weights = {caller: edge[3] for caller, edge in callers.items()}
+            if not sum(weights.values()):
+                weights = {caller: edge[1] for caller, edge in callers.items()}
+            total = sum(weights.values())
+            found = defaultdict(float)
+            for caller, weight in weights.items():
+                for above, share in under(caller).items():
+                    found[above] += share * weight / total
+            if part is not None:
+                found = {part: sum(found.values())}
+        shares[function] = dict(found)
+        return shares[function]
 
-    @classmethod
-    def wrap(cls, owner, name: str, label: str, *, outermost: bool = False) -> None:
-        """Time `owner.name` as `label`; `outermost`: it starts the timed region (an episode)."""
-        function = getattr(owner, name)
+    seconds: dict[str, float] = defaultdict(float)
+    calls = 0.0
+    for function, (_, count, own, _, _) in stats.items():
+        split = under(function)
+        calls += count * sum(split.values())
+        for part, share in split.items():
+            seconds[part] += own * share
+    return dict(seconds), calls
 
-        @functools.wraps(function)
-        def timed(*args, **kwargs):
-            if not cls.stack and not outermost:
-                return function(*args, **kwargs)
-            if not cls.stack:
-                cls.last = time.perf_counter()
-            cls.enter(label)
-            try:
-                return function(*args, **kwargs)
-            finally:
-                cls.leave()
 
-        setattr(owner, name, timed)
+def _profiler_cost_per_call() -> float:
+    """Seconds the profiler adds to one call (a no-op called in a loop, with and without it)."""
 
-    @classmethod
-    def install(cls, folder: Path) -> None:
-        """Put the timers around the functions each part of a step runs (see the module's docstring)."""
-        if cls.folder is not None:
-            return
-        cls.folder = folder
-        import mujoco
-        from robosuite.utils.binding_utils import MjSim
+    def nothing() -> None:
+        pass
 
-        from langgap.engine import episode, rollout, runner, watch
-        from langgap.goals import GoalProgress
-        from langgap.sim import env, resting
+    def calls() -> None:
+        for _ in range(200_000):
+            nothing()
 
-        cls.wrap(runner, "execute_episode", "harness (the rest)", outermost=True)
-        for name in PHYSICS:
-            cls.wrap(mujoco, name, "physics")
-        cls.wrap(env.TaskEnv, "_step_sim", "controller and robosuite's step loop")
-        cls.wrap(MjSim, "render", "render")
-        cls.wrap(env.TaskEnv, "_render_now", "image copy and flip")
-        cls.wrap(env.TaskEnv, "observe", "observation assembly")
-        cls.wrap(rollout, "observation_for", "observation assembly")
-        cls.wrap(rollout, "as_action_chunk", "observation assembly")
-        cls.wrap(env.TaskEnv, "reset", "episode start (reset, init state)")
-        for owner, name in ((env.TaskEnv, "predicate_holds"), (resting.Placements, "observe"),
-                            (GoalProgress, "observe"), (watch.SceneWatch, "observe")):  # fmt: skip
-            cls.wrap(owner, name, "goal watching")
-        cls.wrap(env.TaskEnv, "step", "harness (the rest)")  # its own bookkeeping: counted with the harness
-        del episode  # imported so that `runner` has resolved its names before they are wrapped
-
-    @classmethod
-    def dump(cls) -> None:
-        if cls.folder is not None:
-            path = cls.folder / f"worker-{os.getpid()}.json"
-            path.write_text(json.dumps({"totals": cls.totals, "counts": cls.counts}))
+    start = time.perf_counter()
+    calls()
+    plain = time.perf_counter() - start
+    start = time.perf_counter()
+    cProfile.Profile().runcall(calls)
+    return max(0.0, time.perf_counter() - start - plain) / 200_000
 
 
 # -- recording the oracle's actions ------------------------------------------------------------
@@ -249,7 +250,7 @@ def record_actions(tasks: str, episodes: int, cache: Path) -> Path:
 # -- the machine's ceilings ----------------------------------------------------------------------
 
 
-def _ceiling_process(task_id: str, size: int, until: float, seconds: float, out) -> None:
+def _ceiling_process(task_id: str, size: int, until: float, seconds: float) -> dict[str, float]:
     """In one process: ms per raw physics step (25 mj_step), per render of both cameras, and per both together."""
     import mujoco
 
@@ -287,23 +288,15 @@ def _ceiling_process(task_id: str, size: int, until: float, seconds: float, out)
                 work()
                 count += 1
             results[name] = (time.perf_counter() - start) / count
-    out.put(results)
+    return results
 
 
 def ceilings(task_id: str, size: int, processes: int) -> dict[str, float]:
     """Median ms per step of each ceiling loop over `processes` processes running at once."""
-    context = mp.get_context("spawn")
-    out = context.Queue()
+    from bench_harness import in_processes  # bench/ is on the path when this file runs as a script
+
     until = time.time() + 20.0  # after every process has built its environment
-    workers = [
-        context.Process(target=_ceiling_process, args=(task_id, size, until, CEILING_SECONDS, out))
-        for _ in range(processes)
-    ]
-    for worker in workers:
-        worker.start()
-    results = [out.get() for _ in workers]
-    for worker in workers:
-        worker.join()
+    results = in_processes(_ceiling_process, (task_id, size, until, CEILING_SECONDS), processes)
     return {name: statistics.median(r[name] for r in results) * 1e3 for name in results[0]}
 
 
@@ -311,52 +304,31 @@ def ceilings(task_id: str, size: int, processes: int) -> dict[str, float]:
 
 
 def timed_eval(actions: Path, tasks: str, episodes: int, replan: int, size: int, workers: int) -> dict:
-    """One fresh evaluation with worker processes, timed and probed; its records' identity and the probe's totals."""
-    from langgap.engine.evaluate import evaluate
-    from langgap.engine.spec import ExecutionOptions, RunSpec
+    """One fresh evaluation with worker processes, timed and profiled; its records' identity and each part's time."""
+    from bench_harness import timed_run  # bench/ is on the path when this file runs as a script
+
     from langgap.store import RunStore
 
     policy_args = {"actions": str(actions), "replan": str(replan), "size": str(size)}
-    spec = RunSpec.create(POLICY, policy_args=policy_args, tasks=tasks, episodes=episodes)
-    with tempfile.TemporaryDirectory() as tmp:
-        probe = Path(tmp) / "probe"
-        probe.mkdir()
-        os.environ[PROBE_ENV] = str(probe)
-        store_time = [0.0]
-        write = RunStore.write
-
-        def timed_write(self, record) -> None:
-            started = time.perf_counter()
-            write(self, record)
-            store_time[0] += time.perf_counter() - started
-
-        RunStore.write = timed_write
+    driver = cProfile.Profile()
+    with tempfile.TemporaryDirectory() as profiles:
+        os.environ[PROFILE_ENV] = profiles
         try:
-            start = time.perf_counter()
-            evaluate(spec, Path(tmp) / "run", ExecutionOptions(workers=workers, progress=False))
-            wall = time.perf_counter() - start
+            run = driver.runcall(timed_run, POLICY, tasks, episodes, policy_args, workers=workers)
         finally:
-            RunStore.write = write
-            del os.environ[PROBE_ENV]
-        with RunStore.open(Path(tmp) / "run") as store:
-            records = store.records()
-        totals: dict[str, float] = defaultdict(float)
-        counts: dict[str, int] = defaultdict(int)
-        for path in probe.glob("worker-*.json"):
-            dumped = json.loads(path.read_text())
-            for label, seconds in dumped["totals"].items():
-                totals[label] += seconds
-            for label, count in dumped["counts"].items():
-                counts[label] += count
-    steps = sum(r.steps for r in records)
-    totals["store (driver)"] = store_time[0]
+            del os.environ[PROFILE_ENV]
+        found = [str(path) for path in Path(profiles).glob("worker-*.prof")]
+        totals, calls = attribute(pstats.Stats(*found).stats if found else {}, *_parts())
+    store = pstats.Stats(driver).stats.get(_key(RunStore.write))
+    totals["store (driver)"] = store[3] if store else 0.0  # its inclusive time
+    records = run.records
     return {
-        "wall": wall,
-        "steps": steps,
+        "wall": run.wall_s,
+        "steps": sum(r.steps for r in records),
         "episodes": len(records),
-        "in_episodes": sum(r.wall_time_s for r in records),
-        "totals": dict(totals),
-        "calls": sum(counts.values()),
+        "in_episodes": sum(run.busy_s.values()),
+        "totals": totals,
+        "calls": calls,
         **compared(records),
     }
 
@@ -374,28 +346,6 @@ def same_records(run: dict, reference: dict) -> bool:
     """Whether a timed run (`timed_eval`) stored the records whose identity (`compared`) is `reference`, and no
     gap."""
     return run["identity"] == reference and run["gaps"] == 0
-
-
-def _probe_cost_per_call() -> float:
-    """Seconds one timed call adds (a wrapped no-op, timed)."""
-    saved = (Probe.folder, Probe.stack)
-    Probe.folder, Probe.stack = Path("."), ["x"]
-
-    class Target:
-        def nothing(self) -> None:
-            pass
-
-    plain = Target()
-    Probe.wrap(Target, "nothing", "y")
-    n = 200_000
-    start = time.perf_counter()
-    for _ in range(n):
-        plain.nothing()
-    cost = (time.perf_counter() - start) / n
-    Probe.folder, Probe.stack = saved
-    Probe.totals.clear()
-    Probe.counts.clear()
-    return cost
 
 
 # -- main ------------------------------------------------------------------------------------
@@ -447,13 +397,13 @@ def _print_runs(runs: dict[tuple[int, int], dict], ceiling: dict[int, dict[str, 
 
 def _print_breakdown(runs: dict[tuple[int, int], dict], per_call: float) -> None:
     labels = sorted({label for run in runs.values() for label in run["totals"]})
-    print("\nwhere a step's time goes, ms per policy step (the timers' own cost is in the harness line):")
+    print("\nwhere a step's time goes inside episodes, ms per policy step (cProfile; see the module's docstring):")
     print("| part | " + " | ".join(f"replan {r}, {n} w" for r, n in runs) + " |")
     print("|---|" + "---|" * len(runs))
-    for label in [*labels, "the timers' own cost"]:
+    for label in [*labels, PROFILER_COST]:
         cells = []
         for run in runs.values():
-            seconds = run["calls"] * per_call if label == "the timers' own cost" else run["totals"].get(label, 0.0)
+            seconds = run["calls"] * per_call if label == PROFILER_COST else run["totals"].get(label, 0.0)
             cells.append(f"{seconds / run['steps'] * 1e3:.2f}")
         print(f"| {label} | " + " | ".join(cells) + " |")
 
@@ -471,7 +421,7 @@ def main() -> None:
     first_task = args.tasks.split(",")[0]
     ceiling = {n: ceilings(first_task, args.size, n) for n in sorted({1, *counts})}
     _print_ceilings(ceiling, args.size)
-    per_call = _probe_cost_per_call()
+    per_call = _profiler_cost_per_call()
     runs = {(r, n): timed_eval(actions, args.tasks, args.episodes, r, args.size, n) for r in replans for n in counts}
     episodes = len(next(iter(runs.values()))["identity"])
     print(f"\n{episodes} episodes ({args.tasks.count(',') + 1} tasks x {args.episodes} init states), both cameras at "

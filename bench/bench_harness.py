@@ -19,8 +19,10 @@ import multiprocessing as mp
 import os
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeVar
 
 import mujoco
 import numpy as np
@@ -38,6 +40,7 @@ SAMPLE_TASKS = (
     "spatial/s0/black-bowl-1-on-plate,spatial/s0/ramekin-on-plate,goal/s7/turn-on-stove,"
     "object/s0/alphabet-soup-in-basket"
 )
+T = TypeVar("T")
 
 
 @dataclass
@@ -204,13 +207,15 @@ def _physics_rate(seconds: float) -> float:
         env.close()
 
 
+def in_processes(measure: Callable[..., T], args: tuple, processes: int) -> list[T]:
+    """`measure(*args)` in `processes` fresh processes at once (spawned: nothing inherited); their results."""
+    with mp.get_context("spawn").Pool(processes) as pool:
+        return pool.starmap(measure, [args] * processes)
+
+
 def machine_ceiling(seconds: float = 20.0) -> float:
     """How much two processes of raw physics get done against one, on this machine (its own scaling)."""
-    context = mp.get_context("spawn")
-    with context.Pool(1) as pool:
-        one = pool.apply(_physics_rate, (seconds,))
-    with context.Pool(2) as pool:
-        two = sum(pool.map(_physics_rate, [seconds, seconds]))
+    one, two = (sum(in_processes(_physics_rate, (seconds,), n)) for n in (1, 2))
     return two / one
 
 
