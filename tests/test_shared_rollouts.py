@@ -9,7 +9,8 @@ import sqlite3
 
 import pytest
 
-from tests.support.harness import REPO, TINY_TASK, run_cli, store_rows
+from tests.support.catalogs import cut_down_catalog
+from tests.support.harness import TINY_TASK, run_cli, store_rows
 
 # Measured, not results: how long it took, when it ended, which worker ran it.
 MEASURED = {"wall_time_s", "finished_at", "worker"}
@@ -25,17 +26,7 @@ BLIND = ("--policy", "blind", "--episodes", "2", "--condition", "given", "--cond
 @pytest.fixture(scope="module")
 def scene_catalog(tmp_path_factory):
     """Three tasks of one scene (spatial/s0, the source among them) with a 90-step limit."""
-    import yaml
-
-    source = yaml.safe_load((REPO / "src/langgap/catalog/registry/langgap99.yaml").read_text())
-    data = {
-        "catalog": "scene",
-        "max_steps": {"libero_spatial": STEPS},
-        "tasks": [t for t in source["tasks"] if t["id"] in SCENE_TASKS],
-    }
-    path = tmp_path_factory.mktemp("catalog") / "scene.yaml"
-    path.write_text(yaml.safe_dump(data))
-    return str(path)
+    return str(cut_down_catalog(tmp_path_factory.mktemp("catalog") / "scene.yaml", SCENE_TASKS, steps=STEPS))
 
 
 @pytest.fixture(scope="module")

@@ -9,6 +9,7 @@ import pytest
 
 from langgap.policies.text import Vocabulary, words
 from tests.support.harness import TINY_TASK, run_cli, store_rows
+from tests.support.small_checkpoints import trained_checkpoint
 
 torch = pytest.importorskip("torch", reason="small-bc needs PyTorch (pip install 'langgap[train]')")
 
@@ -40,13 +41,7 @@ def test_words_and_vocabulary():
 @pytest.fixture(scope="module")
 def checkpoint(tiny_collection, tmp_path_factory):
     out = tmp_path_factory.mktemp("bc") / "tiny.safetensors"
-    result = run_cli(
-        "train", "small-bc", "--data", str(tiny_collection), "--out", str(out), "--steps", "20", "--batch-size", "32",
-        "--threads", "1",
-    )  # fmt: skip
-    assert result.returncode == 0, result.stderr
-    assert "trained on 2 demonstrations" in result.stdout
-    return out
+    return trained_checkpoint("small-bc", tiny_collection, out, steps=20, batch_size=32)
 
 
 def test_training_is_deterministic_and_checkpoint_round_trips(tiny_collection, checkpoint, tmp_path):

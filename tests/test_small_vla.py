@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from tests.support.harness import TINY_TASK, run_cli, store_rows
+from tests.support.small_checkpoints import trained_checkpoint
 
 torch = pytest.importorskip("torch", reason="small-vla needs PyTorch (pip install 'langgap[train]')")
 
@@ -33,13 +34,7 @@ def collection(tiny_collection, tmp_path_factory):
 @pytest.fixture(scope="module")
 def checkpoint(collection, tmp_path_factory):
     out = tmp_path_factory.mktemp("vla-ckpt") / "tiny.safetensors"
-    result = run_cli(
-        "train", "small-vla", "--data", str(collection), "--out", str(out), "--steps", "8", "--batch-size", "16",
-        "--threads", "1",
-    )  # fmt: skip
-    assert result.returncode == 0, result.stderr
-    assert "trained on 2 demonstrations" in result.stdout
-    return out
+    return trained_checkpoint("small-vla", collection, out, steps=8, batch_size=16)
 
 
 def test_images_are_exported_at_the_asked_size(collection):

@@ -8,10 +8,10 @@ import shutil
 from pathlib import Path
 
 import pytest
-import yaml
 
 from langgap.catalog.switch_verdicts import read_switch_verdicts, switch_verdicts_path
-from tests.support.harness import REPO, run_cli
+from tests.support.catalogs import cut_down_catalog
+from tests.support.harness import run_cli
 
 EXTENDED = "spatial/s0/black-bowl-2-on-plate"  # starts under its source's "black bowl 1 on the plate"
 
@@ -20,12 +20,9 @@ EXTENDED = "spatial/s0/black-bowl-2-on-plate"  # starts under its source's "blac
 def two_task_catalog(tmp_path_factory) -> Path:
     """The extended task and its source, at the full step limit (220): the oracle does the task after a switch
     at step 5, not after one at step 200 (it has put bowl 1 on the plate by then; 20 steps are too few)."""
-    source = yaml.safe_load((REPO / "src/langgap/catalog/registry/langgap99.yaml").read_text())
-    keep = {EXTENDED, "spatial/s0/black-bowl-1-on-plate"}
-    data = {**source, "catalog": "two", "tasks": [t for t in source["tasks"] if t["id"] in keep]}
-    path = tmp_path_factory.mktemp("catalog") / "two.yaml"
-    path.write_text(yaml.safe_dump(data))
-    return path
+    return cut_down_catalog(
+        tmp_path_factory.mktemp("catalog") / "two.yaml", {EXTENDED, "spatial/s0/black-bowl-1-on-plate"}
+    )
 
 
 def _copy(catalog: Path, tmp_path: Path) -> Path:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 
 import pytest
-import yaml
 
 from langgap.bddl import Predicate
 from langgap.catalog.catalog import load_catalog_file
@@ -15,39 +14,28 @@ from langgap.stack import physics_stack
 from langgap.validity.rows import goals_exclude
 from langgap.validity.validation import validate
 from langgap.version import code_version
-from tests.support.harness import REPO, run_cli
+from tests.support.catalogs import cut_down_catalog
+from tests.support.harness import run_cli
 
 IN_PROCESS = ExecutionOptions(workers=0, progress=False)
+RAMEKIN = "spatial/s0/ramekin-on-plate"
+PROBE_TASKS = ("spatial/s0/black-bowl-1-on-plate", RAMEKIN)
+# a copy of the ramekin's task whose goal holds at t0
+PLATE_ON_ITS_SPOT = {"id": "spatial/s0/plate-on-plate-spot", "goal": ["(On plate_1 main_table_plate_region)"]}
 
 
 @pytest.fixture(scope="module")
 def probe_registry(tmp_path_factory):
     """spatial/s0 with its original, one extended task, and a task whose goal holds at t0 (the plate on its own
     spot); 12-step limit, so the gate runs in seconds."""
-    source = yaml.safe_load((REPO / "src/langgap/catalog/registry/langgap99.yaml").read_text())
-    keep = [
-        t for t in source["tasks"] if t["id"] in {"spatial/s0/black-bowl-1-on-plate", "spatial/s0/ramekin-on-plate"}
-    ]
-    already = dict(
-        keep[1],
-        id="spatial/s0/plate-on-plate-spot",
-        goal=["(On plate_1 main_table_plate_region)"],
-        dimension="change_object",
+    already = PLATE_ON_ITS_SPOT | {"dimension": "change_object"}
+    return cut_down_catalog(
+        tmp_path_factory.mktemp("gate") / "probe.yaml", PROBE_TASKS, steps=12, copies=[(RAMEKIN, already)]
     )
-    path = tmp_path_factory.mktemp("gate") / "probe.yaml"
-    path.write_text(
-        yaml.safe_dump({"catalog": "probe", "max_steps": {"libero_spatial": 12}, "tasks": [*keep, already]})
-    )
-    return path
 
 
 def test_gate_with_the_oracle_passes_doable_tasks_and_rejects_a_goal_true_at_t0(tmp_path):
-    source = yaml.safe_load((REPO / "src/langgap/catalog/registry/langgap99.yaml").read_text())
-    wanted = {"spatial/s0/black-bowl-1-on-plate", "spatial/s0/ramekin-on-plate"}
-    keep = [t for t in source["tasks"] if t["id"] in wanted]
-    already = dict(keep[1], id="spatial/s0/plate-on-plate-spot", goal=["(On plate_1 main_table_plate_region)"])
-    path = tmp_path / "probe.yaml"
-    path.write_text(yaml.safe_dump({"catalog": "probe", "max_steps": source["max_steps"], "tasks": [*keep, already]}))
+    path = cut_down_catalog(tmp_path / "probe.yaml", PROBE_TASKS, copies=[(RAMEKIN, PLATE_ON_ITS_SPOT)])
     selection = "spatial/s0/ramekin-on-plate,spatial/s0/plate-on-plate-spot"
     rows = {r.id: r for r in validate(str(path), selection, inits=2, options=IN_PROCESS).rows}
     doable = rows["spatial/s0/ramekin-on-plate"]
