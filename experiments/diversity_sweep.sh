@@ -21,7 +21,8 @@
 # (a cap on every policy's steps, for a quick try; default none), KS (the subsets, default "1 3 6 12 24"), WIDTHS
 # (d_model of each width, default "64 128"; a multiple of the model's 4 heads), SEEDS (training seeds, default
 # "0 1 2"; seed 0 writes k<K>-d<W>.safetensors and runs/k<K>-d<W>-<set>, seed N k<K>-d<W>-seedN.*), EPISODES (per
-# task, default 10), WORKERS (default 2), THREADS (training threads, default 1).
+# task, default 10), WORKERS (default 2), THREADS (training threads, default 1). With LANGGAP_SMOKE set (every
+# command shrunk: langgap.cli.smoke), the sweep runs the first K, width and seed only, on that subset's tasks.
 # Every step's wall time is appended to OUT/times.tsv. The results: OUT/pooled-<set>.md (`langgap report --pool`
 # of each set: compositional, novel-word, trained; .json beside), OUT/sweep.md (each set's success against K per
 # width, every split group of a run counted together) and OUT/sweep.png (experiments/diversity_plot.py).
@@ -55,6 +56,13 @@ for width in $WIDTHS; do
 done
 for seed in $SEEDS; do [[ "$seed" =~ ^[0-9]+$ ]] || fail "SEEDS: '$seed' is not a whole number"; done
 [[ "$NOISE" =~ ^[0-9]*\.?[0-9]+$ ]] || fail "NOISE: '$NOISE' is not a number"
+POOL="split:$COMPOSITIONAL:train"  # the tasks collected: every K-task subset's
+if [ -n "${LANGGAP_SMOKE:-}" ]; then  # every command shrinks itself; so does the sweep
+    echo "note: LANGGAP_SMOKE is set, so this script is shrunk: KS '$KS' -> '${KS%% *}', WIDTHS '$WIDTHS' ->" \
+        "'${WIDTHS%% *}', SEEDS '$SEEDS' -> '${SEEDS%% *}', and it collects that subset's tasks only" >&2
+    KS="${KS%% *}" WIDTHS="${WIDTHS%% *}" SEEDS="${SEEDS%% *}"
+    POOL="split:$COMPOSITIONAL:$KS"  # a shrunk collection keeps its selection's first tasks: the subset's
+fi
 mkdir -p "$OUT"
 
 timed() {  # timed STEP COMMAND...: run it, then append "STEP<TAB>seconds" to OUT/times.tsv
@@ -69,7 +77,7 @@ timed() {  # timed STEP COMMAND...: run it, then append "STEP<TAB>seconds" to OU
 if [ ! -f "$OUT/demos/collection.json" ]; then
     # Exit code 1: written, but some tasks kept fewer than DEMOS (listed in collection.json); the sweep trains on
     # what there is.
-    timed "collect" langgap collect --catalog full --tasks "split:$COMPOSITIONAL:train" --demos "$DEMOS" \
+    timed "collect" langgap collect --catalog full --tasks "$POOL" --demos "$DEMOS" \
         --noise "$NOISE" --out "$OUT/demos" --workers "$WORKERS" --seed 1000 --format compact --no-progress \
         || [ $? -eq 1 ]
 fi
