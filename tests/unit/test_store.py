@@ -199,3 +199,37 @@ def test_the_table_columns_are_derived_from_the_records_fields():
     assert columns["failure_kind"] == (str, True) and columns["video"] == (str, True)
     assert columns["reached"] == (dict, False) and columns["instructions"] == (list, False)
     assert columns["cameras"] == (list, False) and columns["physics"] == (dict, False)
+
+
+def test_a_store_that_cannot_be_opened_says_why_in_one_line(tmp_path):
+    missing = tmp_path / "none"
+    with pytest.raises(StoreError) as info:
+        RunStore.open(missing)
+    assert str(info.value) == f"no run store at {missing} (expected {missing / 'episodes.sqlite'})"
+    (tmp_path / "bad").mkdir()
+    (tmp_path / "bad" / "episodes.sqlite").write_text("not a database, just text" * 100)
+    with pytest.raises(StoreError) as info:
+        RunStore.open(tmp_path / "bad")
+    assert (
+        str(info.value) == f"{tmp_path / 'bad' / 'episodes.sqlite'} is not a LangGap run store (file is not a database)"
+    )
+    _schema_1_store(tmp_path / "old")
+    with pytest.raises(StoreError) as info:
+        RunStore.open(tmp_path / "old", write=True)
+    assert str(info.value) == (
+        f"{tmp_path / 'old' / 'episodes.sqlite'} has run store schema 1, written by an older LangGap: reports read "
+        f"it, but it cannot be resumed (this LangGap writes schema {SCHEMA_VERSION}); start a new run"
+    )
+
+
+@pytest.mark.parametrize(("version", "shown"), [("abc", "abc"), (None, "none")])
+def test_a_schema_version_that_is_no_number_or_missing_is_unsupported(tmp_path, version, shown):
+    _schema_1_store(tmp_path / "odd", version=version or "1")
+    db = sqlite3.connect(tmp_path / "odd" / "episodes.sqlite")
+    with db:
+        if version is None:
+            db.execute("DELETE FROM meta WHERE key = 'schema_version'")
+    db.close()
+    with pytest.raises(StoreError) as info:
+        RunStore.open(tmp_path / "odd")
+    assert str(info.value) == f"{tmp_path / 'odd' / 'episodes.sqlite'}: unsupported run store schema {shown}"
