@@ -36,6 +36,8 @@ _EXPORTS = {
     "EpisodeRecord": "langgap.records",
     "Outcome": "langgap.vocabulary",
     "load_runs": "langgap.report",
+    "validate": "langgap.validity.validation",
+    "audit": "langgap.validity.audit_run",
     "LangGapError": "langgap.errors",
 }
 

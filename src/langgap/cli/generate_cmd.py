@@ -133,8 +133,9 @@ def run(args) -> int:
 def _run_external(args) -> int:
     """Read the catalog from its package, write it, run the file checks and record their findings beside it."""
     from langgap.catalog.catalog import load_catalog_file
-    from langgap.generation.external import GENERATORS, files_about, files_findings, write_external
+    from langgap.generation.external import GENERATORS, write_external
     from langgap.validity.audit import audit_text, duplicate_counts_text, record_audit
+    from langgap.validity.audit_run import files_about, files_findings
 
     if args.gate_inits or args.suites != list(SUITES):
         raise LangGapError(

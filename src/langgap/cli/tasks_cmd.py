@@ -330,120 +330,47 @@ def _switch_gate_counts(args, tasks: list[Task]) -> int:
 
 
 def run_audit(args) -> int:
-    from langgap.catalog.catalog import registry_path
-    from langgap.errors import CatalogError
-    from langgap.generation.external import files_about, files_findings
-    from langgap.validity.audit import CHECKS, audit_text, duplicate_counts_text, read_audit, record_audit
+    from langgap.validity.audit import audit_text, duplicate_counts_text
+    from langgap.validity.audit_run import audit
 
-    catalog = load_catalog(args.catalog)
-    selected = catalog.select(args.tasks)
-    tasks = [t for t in selected if t.origin is not None]
-    # A catalog of LangGap's own sentences (LIBERO's originals and generated tasks) gets the sentence check; a
-    # package's catalog, the checks of its files (its originals are LIBERO's, checked with langgap99).
-    own = [] if any(t.origin is not None for t in catalog) else selected
-    for flag, value in (("--starts", args.starts), ("--references", args.references)):
-        if value < 0:
-            raise CatalogError(f"{flag} must be 0 (recorded findings) or a number of init states")
-    if not tasks and not own:
-        raise CatalogError(f"catalog {catalog.name}: no selected task was read from a package; nothing to audit")
-    if not tasks and args.starts:
-        raise CatalogError(f"catalog {catalog.name}: --starts checks tasks read from a package; none is selected")
-    registry = registry_path(args.catalog)
-    about, recorded = read_audit(registry)
-    ids = [t.id for t in tasks]
-    findings, ran = _sentence_check(own) if own else ([], {})
-    if tasks:
-        findings += files_findings(catalog, tasks) + [f for f in recorded if f.name == "unreadable"]
-        ran["files"] = files_about(catalog)
-        findings += _starts_check(args, catalog, tasks, about, recorded, ran)
-    findings += _references_check(args, tasks + own, about, recorded, ran)
-    unreadable = [f.task for f in findings if f.name == "unreadable"]
-    own_ids = [t.id for t in own]
-    print(audit_text(findings, ids + unreadable + own_ids, examples=args.examples))
-    if tasks:
-        print(duplicate_counts_text(ran["files"]["duplicate instructions"]))
+    found = audit(
+        args.catalog,
+        args.tasks,
+        starts=args.starts,
+        references=args.references,
+        record=args.record,
+        progress=lambda line: print(line, flush=True),
+    )
+    print(audit_text(list(found.findings), found.checked, examples=args.examples))
+    if found.package_ids:
+        print(duplicate_counts_text(found.ran["files"]["duplicate instructions"]))
     if args.html:
-        print(f"wrote {_write_audit_page(args, catalog, findings, ids + unreadable + own_ids, about | ran)}")
-    if args.record:
-        checked = {"files": ids + unreadable, "starts": ids, "sentence": own_ids, "references": ids + own_ids}
-        for check, how in ran.items():
-            mine = [f for f in findings if f.name in CHECKS[check]]
-            path = record_audit(registry, check, how, mine, checked[check])
-        print(f"recorded findings in {path}")
+        print(f"wrote {_write_audit_page(args, found)}")
+    if found.recorded is not None:
+        print(f"recorded findings in {found.recorded}")
     return 0
 
 
-def _write_audit_page(args, catalog, findings: list, checked: list[str], about: dict) -> Path:
-    """Write the audit page (`--html DIR`) and return its path."""
+def _write_audit_page(args, found) -> Path:
+    """Write the audit page (`--html DIR`) of `found` (an `AuditResult`) and return its path."""
     from langgap.atomic import write_text_atomically
     from langgap.catalog.catalog import catalog_hash
     from langgap.validity.audit_page import audit_data, audit_page
 
-    data = audit_data(catalog, args.catalog, catalog_hash(args.catalog), findings, checked, about)
+    data = audit_data(
+        found.catalog,
+        args.catalog,
+        catalog_hash(args.catalog),
+        list(found.findings),
+        found.checked,
+        found.about | found.ran,
+    )
     path = Path(args.html) / "index.html"
     try:
         write_text_atomically(path, audit_page(data))
     except OSError as exc:
         raise LangGapError(f"cannot write {path}: {exc.strerror}") from None
     return path
-
-
-def _starts_check(args, catalog, tasks: list[Task], about: dict, recorded: list, ran: dict) -> list:
-    """The simulator checks' findings on package tasks: run now (`--starts K`, added to `ran`), else as recorded."""
-    from langgap.validity.audit import CHECKS
-
-    if args.starts:
-        from langgap.validity.starts import SEED, starts_findings
-
-        found = starts_findings(catalog, tasks, args.starts, progress=lambda line: print(line, flush=True))
-        ran["starts"] = {args.tasks: {"inits": args.starts, "seed": SEED}}
-        print(f"starts: checked on init states 0..{args.starts - 1} (seed {SEED})")
-        return found
-    if "starts" in about:
-        for selection, how in about["starts"].items():
-            print(f"starts: recorded for tasks {selection!r} on init states 0..{how['inits'] - 1} (rerun: --starts K)")
-        chosen = {t.id for t in tasks}
-        return [f for f in recorded if f.name in CHECKS["starts"] and f.task in chosen]
-    print(f"starts: not checked (langgap tasks audit --catalog {args.catalog} --starts 50)")
-    return []
-
-
-def _references_check(args, tasks: list[Task], about: dict, recorded: list, ran: dict) -> list:
-    """The reference check's findings: run now (`--references K`, added to `ran`), else as recorded."""
-    from langgap.validity.audit import CHECKS
-
-    if args.references:
-        from langgap.validity.reference_check import VIEWS, reference_findings
-        from langgap.validity.references import BETWEEN_ENDS, BETWEEN_WIDTH, MARGIN
-        from langgap.validity.starts import SEED
-
-        found, checked = reference_findings(tasks, args.references, progress=lambda line: print(line, flush=True))
-        unread = [f"{task}: {phrase}" for task, phrases in sorted(checked.unread.items()) for phrase in phrases]
-        how = {"inits": args.references, "seed": SEED, "margin_m": MARGIN, "judged": checked.judged_count}
-        how |= {"between_ends": BETWEEN_ENDS, "between_width": BETWEEN_WIDTH, "viewpoints": list(VIEWS)}
-        ran["references"] = {args.tasks: how | {"unread": len(unread), "unread_examples": unread[:10]}}
-        print(f"references: {checked.judged_count} expression(s) judged on init states 0..{args.references - 1} "
-              f"from the robot's viewpoint, the camera's (raw render) and in the policy's image (seed {SEED}); "
-              f"{len(unread)} expression(s) not read")  # fmt: skip
-        return found
-    for selection, how in about.get("references", {}).items():
-        print(f"references: recorded for tasks {selection!r} on init states 0..{how['inits'] - 1}, "
-              f"{how['judged']} expression(s) judged, {how['unread']} not read (rerun: --references K)")  # fmt: skip
-    chosen = {t.id for t in tasks}
-    return [f for f in recorded if f.name in CHECKS["references"] and f.task in chosen]
-
-
-def _sentence_check(tasks: list[Task]) -> tuple[list, dict]:
-    """The sentence check over `tasks` (LangGap's own sentences): its findings, and how many tasks each
-    template phrased (printed with what each template's sentence allows and its goal checks)."""
-    from langgap.catalog import files
-    from langgap.validity.sentences import sentence_findings, template_counts, templates_text
-
-    counts = template_counts(tasks, files.scene_problem)
-    print(f"sentence: {len(tasks)} task(s) by template")
-    print(templates_text(counts))
-    findings = [f for t in tasks for f in sentence_findings(t, files.scene_problem(t))]
-    return findings, {"sentence": {"templates": counts}}
 
 
 def _gate_lines(gate) -> list[str]:

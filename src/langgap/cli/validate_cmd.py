@@ -75,11 +75,6 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(handler=run, smoke=("tasks", "inits", "workers"))
 
 
-def _check_resume(args) -> None:
-    if args.resume and args.run is None:
-        raise LangGapError("--resume needs --run (the directory of the validation to continue)")
-
-
 def run_gate(
     args,
     catalog: str,
@@ -89,18 +84,11 @@ def run_gate(
     blind: bool = False,
     recording: bool = False,
     share_rollouts: bool = False,
+    record: bool = False,
 ):
     """Run the feasibility gate with the options of `add_gate_options`; returns its `Validation`. Searched
-    demonstrations go beside the catalog's registry when `recording` (the verdicts will name them);
+    demonstrations go beside the catalog's registry when `recording` or `record` (which records the verdicts);
     `share_rollouts`: an instruction-blind policy's episodes (`blind`'s) share rollouts."""
-    _check_resume(args)
-    budget = args.search_budget
-    if budget is not None and budget < 0:
-        raise LangGapError(f"--search-budget must be >= 0, got {budget}")
-    if budget and policy != "oracle":
-        raise LangGapError(f"--search-budget varies the oracle's plan; --policy {policy} has none to vary")
-    if budget is None:
-        budget = BUDGET if policy == "oracle" else 0
     from langgap.validity.recording import demonstrations_dir
     from langgap.validity.validation import validate
 
@@ -114,29 +102,28 @@ def run_gate(
         policy=policy,
         blind=blind,
         stepping=args.stepping,
-        search_budget=budget,
+        search_budget=args.search_budget,
         demonstrations=demonstrations_dir(catalog) if recording else None,
+        record=record,
     )
 
 
 def run(args) -> int:
-    from langgap.validity.recording import prove_rejected, record
     from langgap.validity.text import table_text
 
     if args.claims_only:
         return _claims_only(args)
     if args.condition:
         return _switch_gate(args)
-    policy = args.policy or DEFAULT_POLICY
     found = run_gate(
         args,
         args.catalog,
         args.tasks,
         args.inits,
-        policy,
+        args.policy or DEFAULT_POLICY,
         blind=args.blind,
-        recording=args.record,
         share_rollouts=args.share_rollouts,
+        record=args.record,
     )
     if found.inherited:
         print(
@@ -147,14 +134,11 @@ def run(args) -> int:
         return 0
     print(table_text(found.rows))
     _print_claims(found, args.out)
-    if args.record:
-        proofs = prove_rejected(args.catalog, found.rows, args.inits)
+    if found.recorded is not None:
         for row in found.rows:
             if not row.feasible:
-                print(f"{row.id}: {row.verdict(args.inits, proof=proofs.get(row.id, '')).evidence}")
-        options = dict(inits=args.inits, policy=policy, stepping=args.stepping, proofs=proofs)
-        path = record(args.catalog, found.rows, **options)
-        print(f"recorded verdicts in {path}")
+                print(f"{row.id}: {row.verdict(args.inits, proof=found.proofs.get(row.id, '')).evidence}")
+        print(f"recorded verdicts in {found.recorded}")
     return 0 if found.passed else 1
 
 
@@ -163,6 +147,7 @@ def _switch_gate(args) -> int:
     the plain gate's episodes are refused."""
     from langgap.catalog.catalog import load_catalog
     from langgap.validity.switch_gate import record_switch, switch_conditions, switch_table_text, validate_switch
+    from langgap.validity.validation import check_resume
 
     plain_only = {
         "--blind": args.blind,
@@ -172,7 +157,7 @@ def _switch_gate(args) -> int:
     given = [flag for flag, present in plain_only.items() if present]
     if given:
         raise LangGapError(f"--condition runs the switch gate, which has no {' or '.join(given)}")
-    _check_resume(args)
+    check_resume(args.resume, args.run)
     policy = args.policy or DEFAULT_POLICY
     conditions = switch_conditions(args.condition)
     print_switch_note(args.catalog, [t.id for t in load_catalog(args.catalog).select(args.tasks)], conditions)

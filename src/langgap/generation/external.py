@@ -11,7 +11,8 @@ Each variant keeps its package's BDDL file unchanged (a run reads it, checked by
 that file's `(:language)`, its goal the file's goal read by LangGap's goal language; its `package` instruction
 is what its package's runner sends instead (`catalog/runner_sentences`), and a LIBERO-Plus origin says whether
 that runner reaches it (`registered`). A file that does not
-parse is left out, as an `unreadable` finding. `files_findings` runs LangGap's file checks (`validity/audit`).
+parse is left out, as an `unreadable` finding; LangGap's file checks of them are `langgap.validity.audit_run`'s
+`files_findings`.
 """
 
 from __future__ import annotations
@@ -26,7 +27,6 @@ import numpy as np
 from langgap import stack
 from langgap.bddl import parse_bddl
 from langgap.catalog import files, packages, runner_sentences
-from langgap.catalog.catalog import Catalog
 from langgap.catalog.naming import SUITE_SHORT
 from langgap.catalog.task import PACKAGE_STYLE, Origin, Task
 from langgap.errors import BddlError, CatalogError
@@ -34,16 +34,7 @@ from langgap.generation.generate import source_tasks
 from langgap.generation.identity import original_in, same_trial
 from langgap.generation.registry_writer import registry_text
 from langgap.goals import conjunction
-from langgap.validity.audit import (
-    Finding,
-    duplicate_counts,
-    duplicate_findings,
-    goal_findings,
-    init_findings,
-    instruction_findings,
-    runner_findings,
-    scene_findings,
-)
+from langgap.validity.audit import Finding
 from langgap.vocabulary import Dimension, InstructionStyle, Split, TaskKind
 
 PRO_CATALOG = "libero-pro"
@@ -198,36 +189,3 @@ def write_external(generated: Generated, path: str | Path, catalog: str) -> Path
     except OSError as exc:
         raise CatalogError(f"cannot write registry {path}: {exc.strerror}") from None
     return path
-
-
-# -- the file checks ---------------------------------------------------------------------------------------
-
-
-def files_about(catalog: Catalog) -> dict:
-    """How the file checks ran: the packages and versions whose files were read; and how many language variants
-    share a sentence, exact and case-insensitively (`duplicate_counts`)."""
-    read = sorted({(t.origin.package, t.origin.version) for t in catalog if t.origin is not None})
-    return {
-        "packages": [f"{package}=={version}" for package, version in read],
-        "duplicate instructions": duplicate_counts(catalog),
-    }
-
-
-def files_findings(catalog: Catalog, tasks: list[Task]) -> list[Finding]:
-    """LangGap's file checks on `tasks` (read from packages) of `catalog`: each one's BDDL against its source's,
-    its goal, its instruction, the init states it ships; then duplicates among all of the catalog's tasks of
-    their scenes."""
-    found: list[Finding] = []
-    checked = [t for t in tasks if t.origin is not None]
-    for task in checked:
-        text = packages.checked_bytes(task.origin).decode("utf-8")
-        source = catalog.get(task.source)
-        found += scene_findings(task.id, task.dimension, text, files.task_bddl_text(source))
-        found += goal_findings(task.id, text)
-        found += instruction_findings(task.id, task.instruction(InstructionStyle.PAPER), task.origin.file)
-        found += runner_findings(task)
-        found += init_findings(task, files.init_states(source))
-    ids = {t.id for t in checked}
-    scenes = {t.id: files.scene_key(t) for t in catalog}
-    found += [f for f in duplicate_findings(catalog, lambda t: scenes[t.id]) if f.task in ids]
-    return found

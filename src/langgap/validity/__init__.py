@@ -5,7 +5,8 @@ The gate (`validation` runs it: the oracle's episodes, the search, the probes; `
 gate per switch step K; `recording` writes the verdicts beside a registry; `text` renders it all), the
 search for demonstrations where the oracle fails (`search`) and the stored demonstrations it finds
 (`demonstrations`: saved, replayed, verified), proofs of impossibility (`proofs`), the audits of a catalog's
-tasks (`audit`: findings and their storage; `sentences`: a sentence against its goal; `starts`: the
+tasks (`audit_run`: `audit`, every check run over a selection, or read as recorded; `audit`: findings and
+their storage; `sentences`: a sentence against its goal; `starts`: the
 simulator checks of tasks read from packages; `references`: a sentence's referring expressions read and
 resolved on a scene's layout; `reference_check`: that resolution on every init state, in the simulator;
 `audit_page`: the audit as one HTML page) and the verdicts counted (`coverage`).

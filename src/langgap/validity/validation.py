@@ -28,15 +28,17 @@ from langgap.catalog.catalog import load_catalog
 from langgap.engine.evaluate import evaluate
 from langgap.engine.pools import backend_session
 from langgap.engine.spec import ExecutionOptions, RunSpec
+from langgap.errors import ParameterError
 from langgap.records import EpisodeRecord
 from langgap.stack import DEFAULT_STEPPING
 from langgap.store import RunStore
 from langgap.validity.claims import Claim, benchmark_claims
 from langgap.validity.demonstrations import stored_demonstrations
 from langgap.validity.probes import settle_drifts
-from langgap.validity.recording import beside_registry
+from langgap.validity.recording import beside_registry, demonstrations_dir, prove_rejected
+from langgap.validity.recording import record as record_verdicts
 from langgap.validity.rows import FULL_INITS, TaskValidation, task_row
-from langgap.validity.search import demonstrate
+from langgap.validity.search import BUDGET, demonstrate
 
 
 @dataclass
@@ -46,10 +48,18 @@ class Validation:
     rows: list[TaskValidation]
     claims: list[Claim]
     inherited: list[str] = field(default_factory=list)  # selected tasks that take another task's verdict
+    proofs: dict[str, str] = field(default_factory=dict)  # recorded proofs of impossibility: task id -> its text
+    recorded: Path | None = None  # the verdict file written
 
     @property
     def passed(self) -> bool:
         return all(r.feasible for r in self.rows) and all(c.holds for c in self.claims)
+
+
+def check_resume(resume: bool, run: str | Path | None) -> None:
+    """Refuse `resume` without `run`, the directory of the validation to continue (a `ParameterError`)."""
+    if resume and run is None:
+        raise ParameterError("{resume} needs {run} (the directory of the validation to continue)")
 
 
 def validate(
@@ -63,20 +73,53 @@ def validate(
     policy: str = "oracle",
     blind: bool = False,
     stepping: str = DEFAULT_STEPPING,
-    search_budget: int = 0,
+    search_budget: int | None = 0,
     demonstrations: str | Path | None = None,
+    record: bool = False,
 ) -> Validation:
-    """Run the gate on the selected tasks and check the benchmark's claims on its episodes; with
-    `blind`, the `blind` policy runs the same episodes too (kept in `run`-blind when `run` is given).
-
-    With a `search_budget`, each init state the oracle fails gets a search for a demonstration
-    (`langgap.validity.search`, that many candidate episodes); those found are stored under `demonstrations`
-    (a directory; the run's, or a temporary one, when None), replayed from there and counted.
+    """Run the gate on the selected tasks and check the benchmark's claims on its episodes.
 
     Every part (the episodes, the searches, the settle probes) is work for the engine's scheduler, run
     as `options` say (backend, workers, retries, timeouts, progress), all on one connection to the backend
     (one local Ray instance). A task with `gate_from` takes that task's verdict (its trial would repeat that
-    one's exactly) and is not run: it is listed in `inherited`."""
+    one's exactly) and is not run: it is listed in `inherited`.
+
+    Args:
+        catalog_name: A shipped catalog's name, or the path of a registry file.
+        selection: The tasks (a selection, as `Catalog.select` reads it; None: the default selection).
+        inits: The init states each task runs on: 0..`inits`-1.
+        options: How the work runs (None: `ExecutionOptions()`).
+        run: The run directory that keeps the episodes (None: a temporary one).
+        resume: Continue the interrupted validation kept in `run`.
+        policy: The scripted policy that proves tasks.
+        blind: Also run the `blind` policy on the same episodes (kept in `run`-blind when `run` is given) and
+            check its claims.
+        stepping: How the simulator steps (`langgap.vocabulary.Stepping`).
+        search_budget: Candidate episodes searched for a demonstration on each init state the oracle fails
+            (`langgap.validity.search`); those found are replayed and counted (0: no search; None: `BUDGET` for
+            the oracle, else 0).
+        demonstrations: The directory the searched demonstrations are stored in (None: beside the registry with
+            `record`, else the run's, or a temporary one).
+        record: Record the verdicts beside the catalog's registry, with the proofs of impossibility found for
+            the tasks the oracle did below the gate's rate.
+
+    Returns:
+        A row per task, the claims, the tasks that take another's verdict; with `record`, the proofs and the
+        verdict file written.
+
+    Raises:
+        ParameterError: `resume` without `run`, a negative `search_budget`, or a search for a policy other
+            than the oracle.
+    """
+    check_resume(resume, run)
+    if search_budget is not None and search_budget < 0:
+        raise ParameterError("{search_budget} must be >= 0, got {budget}", budget=search_budget)
+    if search_budget and policy != "oracle":
+        raise ParameterError("{search_budget} varies the oracle's plan; {policy} {name} has none to vary", name=policy)
+    if search_budget is None:
+        search_budget = BUDGET if policy == "oracle" else 0
+    if record and demonstrations is None:
+        demonstrations = demonstrations_dir(catalog_name)
     catalog = load_catalog(catalog_name)
     selected = catalog.select(selection)
     tasks = [t for t in selected if t.gate_from is None]
@@ -120,4 +163,9 @@ def validate(
         if row.demonstrated_inits:
             row.demonstration = beside_registry(where / task.id, catalog_name)
         rows.append(row)
-    return Validation(rows, benchmark_claims(catalog, records, blind_records), inherited)
+    claims = benchmark_claims(catalog, records, blind_records)
+    if not record:
+        return Validation(rows, claims, inherited)
+    proofs = prove_rejected(catalog_name, rows, inits)
+    path = record_verdicts(catalog_name, rows, inits=inits, policy=policy, stepping=stepping, proofs=proofs)
+    return Validation(rows, claims, inherited, proofs, path)
