@@ -498,8 +498,11 @@ def proof_problem(test: str, option: str) -> str | None:
     if name not in functions:
         return f"{path} has no {name}"
     test_function = functions[name]
-    called = {n.func.id for n in ast.walk(test_function) if isinstance(n, ast.Call) and isinstance(n.func, ast.Name)}
     fixtures = {a.arg for a in test_function.args.args}
+    # What the test and its module's fixtures call: a fixture may build its output through a helper.
+    callers = [test_function, *(functions[f] for f in fixtures if f in functions)]
+    calls = [n for f in callers for n in ast.walk(f) if isinstance(n, ast.Call)]
+    called = {n.func.id for n in calls if isinstance(n.func, ast.Name)}
     # The test with its parametrisation, the fixtures it takes and the helpers it calls (its module's own, and
     # those of tests/support).
     texts = [ast.get_source_segment(source, d) or "" for d in test_function.decorator_list]
