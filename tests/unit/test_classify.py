@@ -169,3 +169,8 @@ def test_classify_a_switch(success, reached, outcome):
     assert classify(TASK, "extended", SOURCE, success, reached, switched=(SOURCE, 20)) == outcome
     if outcome is Outcome.PERSISTED:  # without the switch the same episode did its source task
         assert classify(TASK, "extended", SOURCE, success, reached) == Outcome.DID_SOURCE_TASK
+
+
+def test_a_switch_at_the_first_step_persisted_only_if_the_first_goal_was_reached():
+    assert classify(TASK, "extended", SOURCE, False, {}, switched=(SOURCE, 1)) == Outcome.NO_GOAL_REACHED
+    assert classify(TASK, "extended", SOURCE, False, {SOURCE: 1}, switched=(SOURCE, 1)) == Outcome.PERSISTED

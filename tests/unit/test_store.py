@@ -233,3 +233,17 @@ def test_a_schema_version_that_is_no_number_or_missing_is_unsupported(tmp_path, 
     with pytest.raises(StoreError) as info:
         RunStore.open(tmp_path / "odd")
     assert str(info.value) == f"{tmp_path / 'odd' / 'episodes.sqlite'}: unsupported run store schema {shown}"
+
+
+def test_a_store_opens_with_its_directory_and_schema_and_is_created_in_an_empty_directory(tmp_path):
+    (tmp_path / "run").mkdir()
+    RunStore.create(tmp_path / "run", {}).close()  # an existing empty directory is fine
+    with RunStore.open(tmp_path / "run") as store:
+        assert (store.directory, store.schema) == (tmp_path / "run", SCHEMA_VERSION)
+    _schema_1_store(tmp_path / "old")
+    with RunStore.open(tmp_path / "old") as store:
+        assert (store.directory, store.schema) == (tmp_path / "old", 1)
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(StoreError) as info:
+        RunStore.create(tmp_path / "file", {})
+    assert str(info.value) == f"run {tmp_path / 'file'} is a file, not a directory"
