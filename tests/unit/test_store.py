@@ -247,3 +247,14 @@ def test_a_store_opens_with_its_directory_and_schema_and_is_created_in_an_empty_
     with pytest.raises(StoreError) as info:
         RunStore.create(tmp_path / "file", {})
     assert str(info.value) == f"run {tmp_path / 'file'} is a file, not a directory"
+
+
+def test_creating_a_store_makes_its_parents_holds_the_writer_lock_and_refuses_an_existing_run(tmp_path):
+    run = tmp_path / "runs" / "deep" / "run"
+    with RunStore.create(run, {}), pytest.raises(StoreError, match="is being written by another process"):
+        RunStore.open(run, write=True)
+    with pytest.raises(StoreError) as info:
+        RunStore.create(run, {})
+    assert str(info.value).startswith(f"run {run} already exists")
+    with RunStore.open(run, write=True) as store:  # the refused create let its lock go
+        store.write(record())
