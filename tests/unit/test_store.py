@@ -258,3 +258,14 @@ def test_creating_a_store_makes_its_parents_holds_the_writer_lock_and_refuses_an
     assert str(info.value).startswith(f"run {run} already exists")
     with RunStore.open(run, write=True) as store:  # the refused create let its lock go
         store.write(record())
+
+
+def test_a_sqlite_file_of_something_else_is_not_a_run_store(tmp_path):
+    (tmp_path / "other").mkdir()
+    db = sqlite3.connect(tmp_path / "other" / "episodes.sqlite")
+    db.execute("CREATE TABLE notes (text TEXT)")
+    db.close()
+    with pytest.raises(StoreError) as info:
+        RunStore.open(tmp_path / "other")
+    path = tmp_path / "other" / "episodes.sqlite"
+    assert str(info.value) == f"{path} is not a LangGap run store (no such table: meta)"
