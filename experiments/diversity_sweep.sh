@@ -65,14 +65,8 @@ if [ -n "${LANGGAP_SMOKE:-}" ]; then  # every command shrinks itself; so does th
 fi
 mkdir -p "$OUT"
 
-timed() {  # timed STEP COMMAND...: run it, then append "STEP<TAB>seconds" to OUT/times.tsv
-    local step="$1" start status=0
-    shift
-    start=$(date +%s)
-    "$@" || status=$?
-    printf '%s\t%s\n' "$step" "$(($(date +%s) - start))" >> "$OUT/times.tsv"
-    return "$status"
-}
+# shellcheck source=experiments/timed.sh
+source "$(dirname "$0")/timed.sh"  # timed STEP COMMAND...: run it, then append "STEP<TAB>seconds" to OUT/times.tsv
 
 if [ ! -f "$OUT/demos/collection.json" ]; then
     # Exit code 1: written, but some tasks kept fewer than DEMOS (listed in collection.json); the sweep trains on

@@ -53,14 +53,8 @@ if [ -n "${LANGGAP_SMOKE:-}" ] && [ "$SEEDS" != "${SEEDS%% *}" ]; then  # every 
 fi
 mkdir -p "$OUT"
 
-timed() {  # timed STEP COMMAND...: run it, then append "STEP<TAB>seconds" to OUT/times.tsv
-    local step="$1" start status=0
-    shift
-    start=$(date +%s)
-    "$@" || status=$?
-    printf '%s\t%s\n' "$step" "$(($(date +%s) - start))" >> "$OUT/times.tsv"
-    return "$status"
-}
+# shellcheck source=experiments/timed.sh
+source "$(dirname "$0")/timed.sh"  # timed STEP COMMAND...: run it, then append "STEP<TAB>seconds" to OUT/times.tsv
 
 collect() {  # collect DIR SELECTION DEMOS
     [ -f "$1/collection.json" ] && return
