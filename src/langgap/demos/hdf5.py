@@ -39,11 +39,11 @@ from langgap.catalog import files
 from langgap.catalog.catalog import load_catalog
 from langgap.catalog.task import Task
 from langgap.demos.compact import HDF5_DIR, DemoFileError, demo_files, read_manifest
-from langgap.demos.export import FPS
 from langgap.demos.record import Demo
 from langgap.demos.render import IMAGE_ORIENTATION, IMAGE_SIZE, iter_demos
 from langgap.errors import DependencyNotInstalled, LangGapError, ParameterError
 from langgap.version import code_version
+from langgap.video import CONTROL_HZ
 
 # LangGap camera -> LIBERO's observation key.
 IMAGE_KEYS = {"agentview": "agentview_rgb", "robot0_eye_in_hand": "eye_in_hand_rgb"}
@@ -217,7 +217,7 @@ def _write_task(
         "domain_name": "robosuite",
         "language_instruction": instruction,
     }
-    env_kwargs: dict = {"robots": [ROBOT], "controller": CONTROLLER, "control_freq": FPS}
+    env_kwargs: dict = {"robots": [ROBOT], "controller": CONTROLLER, "control_freq": CONTROL_HZ}
     if image_size:
         env_kwargs.update(
             camera_names=list(IMAGE_KEYS), camera_heights=image_size, camera_widths=image_size, use_camera_obs=True
