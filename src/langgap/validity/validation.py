@@ -151,8 +151,8 @@ def validate(
             )
         drift_by_scene = settle_drifts(catalog_name, tasks, options)
     by_task: dict[str, list[EpisodeRecord]] = {}
-    for record in records:
-        by_task.setdefault(record.task_id, []).append(record)
+    for episode in records:  # not `record`: that is the parameter saying whether to record the verdicts
+        by_task.setdefault(episode.task_id, []).append(episode)
     rows = []
     for task in tasks:
         drift = drift_by_scene[(task.suite, task.scene_task)]
