@@ -16,8 +16,9 @@ import torch
 
 from langgap.demos.compact import load_demos
 from langgap.demos.record import Demo
+from langgap.policies.chunk_transformer import save_checkpoint
 from langgap.policies.small_bc import features
-from langgap.policies.small_bc.model import ModelConfig, Normalizer, SmallBC, save_checkpoint
+from langgap.policies.small_bc.model import ModelConfig, Normalizer, SmallBC
 from langgap.policies.text import Vocabulary
 from langgap.training.loop import TrainConfig, chunk_loss, chunk_targets, optimise, selected, training_facts
 

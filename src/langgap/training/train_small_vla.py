@@ -15,7 +15,8 @@ import numpy as np
 import torch
 
 from langgap.errors import ParameterError
-from langgap.policies.small_vla.model import SmallVLA, StateNormalizer, VisionConfig, save_checkpoint
+from langgap.policies.chunk_transformer import save_checkpoint
+from langgap.policies.small_vla.model import SmallVLA, StateNormalizer, VisionConfig
 from langgap.training.image_demos import ImageDemo, load_image_demos
 from langgap.training.loop import TrainConfig, chunk_loss, chunk_targets, optimise, selected, training_facts
 

@@ -6,21 +6,21 @@
   so what the network extracts depends on what it was asked. The last map's cells become tokens (with their
   position and camera), and each token attends to the instruction's words (cross-attention).
 * A transformer over [action query, state, pooled instruction, image tokens]; the query's output is decoded into
-  `chunk` 7-D actions.
+  `chunk` 7-D actions (the chunk transformer small-bc shares: `langgap.policies.chunk_transformer`).
 
 Saved as one safetensors file (weights + JSON metadata: config, vocabulary, state normalisation).
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from langgap.policies.checkpoints import load_model, save_model
+from langgap.policies.chunk_transformer import ChunkTransformer, Statistics, TrunkConfig, feature_mlp, mean_and_std
 from langgap.policies.text import Vocabulary
-from langgap.policies.word_encoding import encode_words, nn, torch, transformer_layer
+from langgap.policies.word_encoding import nn, torch
 from langgap.sim.env import CAMERAS
 
 FORMAT = "langgap-small-vla/1"
@@ -29,17 +29,11 @@ CAMERA_COUNT = len(CAMERAS)  # agentview and the wrist camera, in that order
 
 
 @dataclass(frozen=True)
-class VisionConfig:
+class VisionConfig(TrunkConfig):
     """The model's sizes. `image_size` is the cameras' (square) size in pixels: the policy asks for it."""
 
     image_size: int = 96
     channels: tuple[int, ...] = (32, 64, 64, 128)  # one stride-2 stage each: 96 px -> a 6 x 6 map
-    d_model: int = 64
-    heads: int = 4
-    layers: int = 2
-    text_layers: int = 1
-    chunk: int = 8
-    max_words: int = 24
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "channels", tuple(self.channels))  # JSON gives a list back
@@ -54,7 +48,7 @@ class VisionConfig:
 
 
 @dataclass
-class StateNormalizer:
+class StateNormalizer(Statistics):
     """Mean and std of the 8-D state over the training frames."""
 
     state_mean: list[float]
@@ -62,7 +56,7 @@ class StateNormalizer:
 
     @classmethod
     def fit(cls, states: np.ndarray) -> StateNormalizer:
-        return cls(states.mean(0).tolist(), (states.std(0) + 1e-3).tolist())
+        return cls(*mean_and_std(states))
 
 
 class FilmStage(nn.Module):
@@ -81,66 +75,46 @@ class FilmStage(nn.Module):
         return nn.functional.gelu(self.norm(self.conv(x)) * (1 + scale) + shift)
 
 
-class SmallVLA(nn.Module):
+class SmallVLA(ChunkTransformer):
+    """Both cameras, the 8-D state and the instruction -> a chunk of actions."""
+
+    FORMAT = FORMAT
+    NAME = "small-vla"
+    config_type = VisionConfig
+    statistics_type = StateNormalizer
+
     def __init__(self, config: VisionConfig, vocab_size: int, normalizer: StateNormalizer):
-        super().__init__()
-        self.config = config
+        super().__init__(config)
         d = config.d_model
-        self.words = nn.Embedding(vocab_size, d, padding_idx=0)
-        self.word_position = nn.Embedding(config.max_words, d)
-        self.text = nn.TransformerEncoder(
-            transformer_layer(d, config.heads), config.text_layers, enable_nested_tensor=False
-        )
+        self.add_words(vocab_size)
+        self.add_text_encoder()
         widths = (3, *config.channels)
         self.stages = nn.ModuleList(FilmStage(a, b, d) for a, b in zip(widths, widths[1:], strict=False))
         self.project = nn.Linear(config.channels[-1], d)
         self.cell = nn.Parameter(torch.zeros(config.grid * config.grid, d))  # where a token is in its image
         self.camera = nn.Embedding(CAMERA_COUNT, d)
-        self.kind = nn.Embedding(4, d)  # query, state, instruction, image
-        self.query = nn.Parameter(torch.zeros(d))
-        self.state = nn.Sequential(nn.Linear(STATE_DIM, d), nn.GELU(), nn.Linear(d, d))
-        self.ground = nn.MultiheadAttention(d, config.heads, batch_first=True)
-        self.encoder = nn.TransformerEncoder(
-            transformer_layer(d, config.heads), config.layers, enable_nested_tensor=False
-        )
-        self.head = nn.Sequential(nn.LayerNorm(d), nn.Linear(d, d), nn.GELU(), nn.Linear(d, config.chunk * 7))
+        self.add_token_kinds()  # query, state, instruction, image
+        self.state = feature_mlp(STATE_DIM, d)
+        self.add_trunk(normalizer)
         nn.init.normal_(self.cell, std=0.02)
-        for name, values in asdict(normalizer).items():
-            self.register_buffer(name, torch.tensor(values, dtype=torch.float32))
 
     def forward(self, images: torch.Tensor, state: torch.Tensor, instruction: torch.Tensor) -> torch.Tensor:
         """images (B, 2, H, W, 3) uint8 (agentview, wrist), state (B, 8), instruction (B, L) word ids
         -> actions (B, chunk, 7)."""
         batch = state.shape[0]
-        sentences, which = torch.unique(instruction, dim=0, return_inverse=True)  # each sentence encoded once
-        words, pooled = encode_words(self.words, self.word_position, self.text, sentences)
-        words, pooled, word_pad = words[which], pooled[which], (sentences == 0)[which]
+        words, pooled, word_pad = self.encode_instruction(instruction)
         pixels = images.flatten(0, 1).permute(0, 3, 1, 2).float() / 255.0 - 0.5  # (B * 2, 3, H, W)
         sentence = pooled.repeat_interleave(CAMERA_COUNT, dim=0)
         for stage in self.stages:
             pixels = stage(pixels, sentence)
         tokens = self.project(pixels.flatten(2).transpose(1, 2)) + self.cell  # (B * 2, cells, d)
         tokens = tokens.view(batch, CAMERA_COUNT, -1, tokens.shape[-1]) + self.camera.weight[:, None]
-        tokens = tokens.flatten(1, 2)
-        grounded, _ = self.ground(tokens, words, words, key_padding_mask=word_pad, need_weights=False)
-        tokens = tokens + grounded + self.kind.weight[3]
-        query = (self.query + self.kind.weight[0]).expand(batch, 1, -1)
-        state_token = self.state((state - self.state_mean) / self.state_std) + self.kind.weight[1]
-        text_token = pooled + self.kind.weight[2]
-        sequence = torch.cat([query, state_token.unsqueeze(1), text_token.unsqueeze(1), tokens], dim=1)
-        return self.head(self.encoder(sequence)[:, 0]).view(batch, self.config.chunk, 7)
-
-
-def save_checkpoint(path: str | Path, model: SmallVLA, vocab: Vocabulary, training: dict) -> Path:
-    """Write weights and metadata to one safetensors file."""
-    return save_model(path, model, vocab, training, format=FORMAT)
+        tokens = self.grounded(tokens.flatten(1, 2), words, word_pad)
+        state_token = self.state((state - self.state_mean) / self.state_std)
+        return self.decode(state_token, pooled, tokens)
 
 
 def load_checkpoint(path: str | Path) -> tuple[SmallVLA, Vocabulary, dict]:
-    """Read a checkpoint written by `save_checkpoint`; returns (model in eval mode, vocabulary, training info)."""
-
-    def build(config: dict, vocab_size: int, state: dict) -> SmallVLA:
-        normalizer = StateNormalizer(state["state_mean"].tolist(), state["state_std"].tolist())
-        return SmallVLA(VisionConfig(**config), vocab_size, normalizer)
-
-    return load_model(path, format=FORMAT, kind="small-vla", build=build)
+    """Read a checkpoint written by `chunk_transformer.save_checkpoint`; returns (model in eval mode, vocabulary,
+    training info)."""
+    return SmallVLA.load(path)
