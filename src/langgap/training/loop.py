@@ -60,6 +60,14 @@ class TrainConfig:
             raise ParameterError("{device} {name}: only cpu and cuda are supported", name=self.device)
         return device
 
+    def seeded_device(self) -> torch.device:
+        """The checked training device (`torch_device`), with PyTorch's threads and seed set for the run: what
+        makes training deterministic for a seed and thread count. Call it before the model is made."""
+        device = self.torch_device()
+        torch.set_num_threads(self.threads)
+        torch.manual_seed(self.seed)
+        return device
+
 
 class _OfTask(Protocol):
     task_id: str

@@ -73,9 +73,7 @@ def select_demos(config: TrainConfig, log=print) -> list[Demo]:
 def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=print) -> dict:
     """Train a small-bc model on `config`'s demonstrations and save it to `out`; returns training facts."""
     started = time.perf_counter()
-    device = config.torch_device()
-    torch.set_num_threads(config.threads)
-    torch.manual_seed(config.seed)
+    device = config.seeded_device()
     model_config = config.model or ModelConfig()
     demos = select_demos(config, log)
     vocab = config.words(training_texts(demos))

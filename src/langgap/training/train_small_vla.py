@@ -37,9 +37,7 @@ def train(config: TrainConfig, out: str | Path, *, log_every: int = 200, log=pri
     """Train a small-vla model on `config`'s demonstrations (their images at the model's size) and save it to
     `out`; returns training facts."""
     started = time.perf_counter()
-    device = config.torch_device()
-    torch.set_num_threads(config.threads)
-    torch.manual_seed(config.seed)
+    device = config.seeded_device()
     loaded = load_image_demos(config.data, config.tasks)
     # The loader read only the selected tasks, so the selection checks and notes; it drops nothing.
     demos: list[ImageDemo] = selected(config, loaded.demos, log)
