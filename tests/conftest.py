@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+import langgap  # noqa: F401  first: it pins the BLAS kernel before anything loads numpy (langgap/blas.py)
 from tests.support.harness import SHORT_STEPS, in_ci, tiny_config
 
 

@@ -18,6 +18,10 @@ from __future__ import annotations
 
 import importlib
 
+from langgap.blas import pin_blas_core
+
+pin_blas_core()  # before anything loads numpy: OpenBLAS chooses its kernel once, when it loads
+
 # public name -> module that defines it
 _EXPORTS = {
     "load_catalog": "langgap.catalog.catalog",

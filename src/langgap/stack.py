@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from langgap.blas import blas_core
 from langgap.errors import DependencyNotInstalled, InitStateError
 from langgap.vocabulary import SeedScheme, Stepping
 
@@ -100,7 +101,7 @@ DEFAULT_SEED_SCHEME = SeedScheme.PER_EPISODE.value
 def physics_stack(stepping: str = DEFAULT_STEPPING, seed_scheme: str = DEFAULT_SEED_SCHEME) -> dict[str, str | None]:
     """Installed versions of everything that changes simulation results, the start and image conventions,
     and the `fast` stepping and the `openpi` seed scheme where used (as plain strings: results store them)."""
-    versions = {name: version_of(name) for name in RECORDED}
+    versions = {name: version_of(name) for name in RECORDED} | {"blas": blas_core()}
     chosen = {"stepping": Stepping.FAST.value} if stepping == Stepping.FAST else {}
     if seed_scheme != DEFAULT_SEED_SCHEME:
         chosen["seed_scheme"] = str(seed_scheme)
@@ -111,6 +112,9 @@ def physics_stack(stepping: str = DEFAULT_STEPPING, seed_scheme: str = DEFAULT_S
 # under the same stepping (its `made_by` names it).
 CHOSEN = ("stepping", "seed_scheme")
 UNRECORDED = "stack not recorded"
+# Entries LangGap began recording after results and verdicts had been made without them: where either side lacks
+# such an entry, what it was made on is unknown, not different (the BLAS kernel, langgap/blas.py).
+RECORDED_SINCE = ("blas",)
 
 
 def stack_differences(made_on: dict, reference: dict) -> list[str]:
@@ -119,7 +123,8 @@ def stack_differences(made_on: dict, reference: dict) -> list[str]:
     [`UNRECORDED`] when `made_on` is empty; [] when they are the same."""
     if not made_on:
         return [UNRECORDED]
-    keys = sorted(made_on.keys() | reference.keys())
+    unknown = {key for key in RECORDED_SINCE if key not in made_on or key not in reference}
+    keys = sorted((made_on.keys() | reference.keys()) - unknown)
     return [
         f"{key} {made_on.get(key) or 'none'} (not {reference.get(key) or 'none'})"
         for key in keys

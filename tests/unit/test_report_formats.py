@@ -116,3 +116,13 @@ def test_allow_mismatch_on_the_command_line_pairs_runs_whose_protocols_differ(tm
     )
     allowed = run_cli("report", str(first), "--compare", str(other), "--no-published", "--allow-mismatch")
     assert "Runs compared on matched episodes (McNemar) — protocols differ: b (my-vla): physics" in allowed.stdout
+
+
+def test_runs_from_before_the_blas_kernel_was_recorded_pair_with_runs_that_record_it(tmp_path):
+    from langgap.report.summary import protocol_differences, results
+
+    older = write_run(tmp_path / "a", "blind", memoriser())
+    newer = write_run(tmp_path / "b", "my-vla", reader(), physics={"mujoco": "3.2.3", "blas": "Haswell"})
+    other = write_run(tmp_path / "c", "my-vla", reader(), physics={"mujoco": "3.2.3", "blas": "SkylakeX"})
+    a, b, c = (results(run) for run in load_runs([older, newer, other]))
+    assert protocol_differences(a, b) == [] and protocol_differences(b, c) == ["physics"]

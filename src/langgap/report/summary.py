@@ -609,8 +609,16 @@ class Summary:
 
 
 def protocol_differences(a: RunResults, b: RunResults) -> list[str]:
-    """The protocol items in which two runs differ (runs are paired episode by episode only when none)."""
-    return [item for item in PROTOCOL_ITEMS if a.card[item] != b.card[item]]
+    """The protocol items in which two runs differ (runs are paired episode by episode only when none); their
+    physics as `langgap.stack.stack_differences` compares stacks (an entry one run predates is not a difference)."""
+    physics = a.spec.get("physics", {}), b.spec.get("physics", {})
+
+    def differs(item: str) -> bool:
+        if item == "physics":
+            return physics[0] != physics[1] and bool(stack_differences(*physics))
+        return a.card[item] != b.card[item]
+
+    return [item for item in PROTOCOL_ITEMS if differs(item)]
 
 
 def same_spec(a: RunResults, b: RunResults) -> bool:
