@@ -77,6 +77,7 @@ _VALIDATE_CLI = "tests/test_validate.py::test_cli_validate_writes_report_and_rec
 _GENERATE_GATE = "tests/test_generate.py::test_generate_gates_every_candidate_and_records_how"
 _GENERATE_CLI = "tests/test_generate.py::test_cli_generate_writes_a_loadable_registry_and_prints_counts"
 _REPLAY = "tests/test_search.py::test_tasks_replay_replays_a_verdicts_demonstrations_and_fails_a_damaged_one"
+_REMAKE = "tests/test_search.py::test_tasks_replay_remake_keeps_what_does_the_task_here_and_leaves_the_rest"
 _SPLITS = "tests/unit/test_splits.py::test_generate_writes_a_file_that_shows_and_checks"
 _SPLIT_WORDS = "tests/unit/test_splits.py::test_novel_word_splits_hold_out_a_sentence_with_a_word_training_never_says"
 _AUDIT = "tests/test_external.py::test_audit_runs_the_start_check_on_k_init_states_and_records_it_beside_the_registry"
@@ -127,6 +128,7 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "tasks gate --condition": (Differs(("tasks", "gate"), ("--condition", "switch:20")), ProvenBy(_SWITCH_GATE)),
     "tasks replay --catalog": (ProvenBy(_REPLAY),),
     "tasks replay --tasks": (ProvenBy(_REPLAY),),
+    "tasks replay --remake": (ProvenBy(_REMAKE),),
     "tasks audit --catalog": (Differs(("tasks", "audit", "--tasks", "spatial/s0/*"), ("--catalog", "libero-pro")),),
     "tasks audit --tasks": (Differs(("tasks", "audit", "--catalog", "libero-pro"), ("--tasks", "spatial/s0/*")),),
     "tasks audit --examples": (Differs(("tasks", "audit", "--catalog", "libero-pro"), ("--examples", "0")),),

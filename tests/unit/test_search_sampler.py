@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
+from langgap.validity.demonstrations import DemonstrationError
 from langgap.validity.search import EXPLORE, PRESS_DEPTH_M, TILT_DEG, TURN_DEG, Candidate, Sampler
 
 
@@ -41,3 +43,11 @@ def test_later_candidates_centre_on_the_press_that_moved_the_drawer_furthest():
     assert np.all(np.abs(later[:, :2] - [40.0, 2.0]) < 40.0)  # around the best, never near the other's turn
     assert abs(np.median(later[:, 0]) - 40.0) < 6 and abs(np.median(later[:, 1]) - 2.0) < 6
     assert abs(np.median(later[:, 2]) - 0.02) < 0.005
+
+
+def test_a_candidate_is_read_back_from_the_found_by_it_wrote():
+    candidate = Candidate({"drawer": "press:30.0,-5.0,0.020", "noise": "0.110", "noise_seed": "12"})
+    assert Candidate.parse(str(candidate)) == candidate and Candidate.parse("oracle") == Candidate({})
+    for written in ("small-bc noise=0.1", "oracle noise"):
+        with pytest.raises(DemonstrationError, match="not an oracle with key=value arguments"):
+            Candidate.parse(written)

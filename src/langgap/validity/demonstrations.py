@@ -158,6 +158,8 @@ class ReplayCheck:
     init_index: int
     steps: int
     error: str
+    catalog: str  # the catalog whose gate made the verdict (a name or registry path)
+    path: Path  # the file
 
 
 def verdict_evidence(task: Task, catalog_name: str) -> tuple[str, str, dict[int, Path]]:
@@ -185,13 +187,13 @@ def replay_verdicts(tasks: list[Task], catalog_name: str):
         envs: dict[str, TaskEnv] = {}
         try:
             for init_index, path in sorted(files.items()):
-                yield _replay_check(catalog, task_id, init_index, path, envs)
+                yield _replay_check(catalog, maker, task_id, init_index, path, envs)
         finally:
             for env in envs.values():
                 env.close()
 
 
-def _replay_check(catalog: Catalog, task_id: str, init_index: int, path: Path, envs: dict) -> ReplayCheck:
+def _replay_check(catalog: Catalog, maker: str, task_id: str, init_index: int, path: Path, envs: dict) -> ReplayCheck:
     try:
         demo = Demonstration.load(path)
         if (demo.task_id, demo.init_index) != (task_id, init_index):
@@ -200,5 +202,6 @@ def _replay_check(catalog: Catalog, task_id: str, init_index: int, path: Path, e
             envs[demo.stepping] = replay_env(catalog.get(task_id), demo.stepping)
         verify(envs[demo.stepping], demo, catalog)
     except DemonstrationError as exc:
-        return ReplayCheck(task_id, init_index, 0, str(exc).removeprefix(f"{task_id} init {init_index}: "))
-    return ReplayCheck(task_id, init_index, demo.steps, "")
+        error = str(exc).removeprefix(f"{task_id} init {init_index}: ")
+        return ReplayCheck(task_id, init_index, 0, error, maker, path)
+    return ReplayCheck(task_id, init_index, demo.steps, "", maker, path)

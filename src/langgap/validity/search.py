@@ -21,7 +21,7 @@ state and budget try the same candidates.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import ClassVar
 
@@ -41,7 +41,14 @@ from langgap.policies.oracle.planner import order_goal
 from langgap.policies.oracle.scene import Scene
 from langgap.sim.env import TaskEnv
 from langgap.stack import physics_stack
-from langgap.validity.demonstrations import Demonstration, demonstration_path, replay_env, verify
+from langgap.validity.demonstrations import (
+    Demonstration,
+    DemonstrationError,
+    demonstration_path,
+    replay,
+    replay_env,
+    verify,
+)
 from langgap.version import code_version
 
 BUDGET = 16  # candidate episodes per init state the oracle fails
@@ -64,6 +71,15 @@ class Candidate:
 
     def __str__(self) -> str:
         return "oracle " + " ".join(f"{k}={v}" for k, v in sorted(self.policy_args.items()))
+
+    @staticmethod
+    def parse(found_by: str) -> Candidate:
+        """The candidate a demonstration's `found_by` names (what `str` wrote)."""
+        name, *args = found_by.split()
+        pairs = [arg.partition("=") for arg in args]
+        if name != "oracle" or not all(sep for _, sep, _ in pairs):
+            raise DemonstrationError(f"found by {found_by!r}: not an oracle with key=value arguments")
+        return Candidate({key: value for key, _, value in pairs})
 
 
 @dataclass
@@ -177,38 +193,73 @@ def search(
     oracle whose plan the candidates vary (what a candidate draws replaces them)."""
     rng = np.random.default_rng([search_seed, init_index, seed])
     result = SearchResult(task.id, init_index)
-    context = task_context(task, catalog, init_index=init_index, seed=seed)
     probe = make_policy("oracle", oracle_args)
     with TaskEnv(task, env_options_for(probe, stepping=stepping)) as env:
         start = Scene(env.reset(init_index, seed=seed, render=False).privileged)
         sampler = Sampler(moves_a_drawer(start, task), rng)
         for _ in range(budget):
             candidate = sampler.draw()
-            policy = make_policy("oracle", (oracle_args or {}) | candidate.policy_args)
-            actions: list[np.ndarray] = []
-
-            def keep(_env: TaskEnv, _step: int, action: np.ndarray, kept: list = actions) -> None:
-                kept.append(action.copy())
-
-            outcome = run_episode(env, policy, context, on_step=keep)
-            result.tried.append((candidate, outcome.success, outcome.steps))
+            steps, found = _play(env, Candidate((oracle_args or {}) | candidate.policy_args), catalog, init_index, seed)
+            result.tried.append((candidate, found is not None, steps))
             sampler.tell(candidate, drawer_progress(start, Scene(env.observe(()).privileged), task))
-            if outcome.success and result.found is None:
-                result.found = Demonstration(
-                    task_id=task.id,
-                    catalog=catalog.name,
-                    init_index=init_index,
-                    seed=seed,
-                    stepping=stepping,
-                    steps=outcome.steps,
-                    instruction=context.instruction,
-                    found_by=str(Candidate((oracle_args or {}) | candidate.policy_args)),
-                    made_with={"code_version": code_version(), "physics": physics_stack(stepping)},
-                    actions=np.array(actions),
-                )
+            if found is not None and result.found is None:
+                result.found = found
                 if stop_at_first:
                     break
     return result
+
+
+def _play(
+    env: TaskEnv, candidate: Candidate, catalog: Catalog, init_index: int, seed: int
+) -> tuple[int, Demonstration | None]:
+    """One episode of `candidate` on the plan entry: the steps it ran, and its demonstration where it did the
+    task (else None)."""
+    context = task_context(env.task, catalog, init_index=init_index, seed=seed)
+    actions: list[np.ndarray] = []
+
+    def keep(_env: TaskEnv, _step: int, action: np.ndarray) -> None:
+        actions.append(action.copy())
+
+    outcome = run_episode(env, make_policy("oracle", candidate.policy_args), context, on_step=keep)
+    if not outcome.success:
+        return outcome.steps, None
+    stepping = env.options.stepping
+    return outcome.steps, Demonstration(
+        task_id=env.task.id,
+        catalog=catalog.name,
+        init_index=init_index,
+        seed=seed,
+        stepping=stepping,
+        steps=outcome.steps,
+        instruction=context.instruction,
+        found_by=str(candidate),
+        made_with={"code_version": code_version(), "physics": physics_stack(stepping)},
+        actions=np.array(actions),
+    )  # fmt: skip
+
+
+def remake(demo: Demonstration, catalog: Catalog) -> tuple[Demonstration, str] | None:
+    """A demonstration of `demo`'s task and plan entry that replays on the installed physics stack, and how it was
+    made, or None where neither way below does the task.
+
+    A demonstration replays open loop, so it holds only on the stack it was recorded on; on another (another BLAS
+    kernel: langgap/blas.py) its actions may reach the goal sooner, and they are kept up to there (`recorded
+    actions`); otherwise the candidate that found it (its `found_by`), which acts closed loop, plays again
+    (`finder`)."""
+    task = catalog.get(demo.task_id)
+    made_with = {"code_version": code_version(), "physics": physics_stack(demo.stepping)}
+    with replay_env(task, demo.stepping) as env:
+        try:
+            replayed = replay(env, demo, catalog)
+        except DemonstrationError:  # its actions ran out first
+            replayed = None
+    if replayed is not None and replayed.success and replayed.steps < demo.steps:
+        kept = replace(demo, steps=replayed.steps, actions=demo.actions[: replayed.steps], made_with=made_with)
+        return kept, "recorded actions"
+    candidate = Candidate.parse(demo.found_by)
+    with TaskEnv(task, env_options_for(make_policy("oracle", candidate.policy_args), stepping=demo.stepping)) as env:
+        found = _play(env, candidate, catalog, demo.init_index, demo.seed)[1]
+    return (found, "finder") if found is not None else None
 
 
 @dataclass(frozen=True)
