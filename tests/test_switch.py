@@ -67,13 +67,21 @@ def test_nonsense_is_as_many_words_of_the_catalog_s_vocabulary(catalog):
     assert sentences == [condition_instruction(task, catalog, "nonsense", "libero", k) for k in range(5)]
 
 
-@pytest.mark.parametrize("condition", ["switch:0", "switch:x", "switch:", "swap"])
-def test_a_malformed_condition_is_one_error_line(short_catalog, tmp_path, condition):
+@pytest.mark.parametrize(
+    ("condition", "says"),
+    [
+        ("switch:0", "'switch:0': switch:K takes K, the policy step at which the instruction changes, as a whole"),
+        ("switch:x", "'switch:x': switch:K takes K"),
+        ("switch:", "'switch:': switch:K takes K"),
+        ("swap", "unknown condition(s) ['swap']"),
+    ],
+)
+def test_a_malformed_condition_is_one_error_line(short_catalog, tmp_path, condition, says):
     run = tmp_path / "run"
     result = run_cli(
         "eval", "--policy", "noop", "--catalog", short_catalog, "--run", str(run), "--condition", condition
     )
-    assert result.returncode != 0 and result.stderr.strip().splitlines()[-1].startswith("error: unknown condition")
+    assert result.returncode != 0 and result.stderr.strip().splitlines()[-1].startswith(f"error: {says}")
     assert not run.exists()
 
 
