@@ -132,6 +132,11 @@ def stack_differences(made_on: dict, reference: dict) -> list[str]:
     ]
 
 
+def stacks_differ(a: dict, b: dict) -> bool:
+    """Whether two recorded physics stacks differ (`stack_differences`: an entry one predates is not a difference)."""
+    return a != b and bool(stack_differences(a, b))
+
+
 def installed_differences(made_on: dict) -> list[str]:
     """How the physics stack `made_on` differs from the installed one (`stack_differences`), under the stepping
     and seed scheme `made_on` names: those are chosen per run, not installed."""

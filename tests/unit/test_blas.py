@@ -47,3 +47,15 @@ def test_the_kernel_is_a_difference_only_where_both_stacks_record_it():
     assert stack_differences(made_on, {"mujoco": "3.2.3"}) == []
     # the other entries still count when missing on one side
     assert stack_differences({"mujoco": "3.2.3"}, {"mujoco": "3.2.3", "numba": "0.68.1"}) == ["numba none (not 0.68.1)"]
+
+
+def test_a_run_stored_before_the_kernel_was_recorded_resumes_and_one_on_another_kernel_does_not():
+    from langgap.engine.spec import spec_differences
+
+    stored = {"policy": "noop", "physics": {"mujoco": "3.2.3"}}
+    assert spec_differences(stored, {"policy": "noop", "physics": {"mujoco": "3.2.3", "blas": PINNED_CORE}}) == []
+    other = {"policy": "noop", "physics": {"mujoco": "3.2.3", "blas": "SkylakeX"}}
+    assert spec_differences(other, {"policy": "noop", "physics": {"mujoco": "3.2.3", "blas": PINNED_CORE}}) == [
+        "physics"
+    ]
+    assert spec_differences({"physics": {"mujoco": "3.2.3"}}, {"physics": {"mujoco": "3.3.0"}}) == ["physics"]

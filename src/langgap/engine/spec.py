@@ -192,8 +192,16 @@ class RunSpec:
 
 def spec_differences(a: dict, b: dict) -> list[str]:
     """The `RunSpec` fields in which two specs in their stored (`RunSpec.to_dict`) form differ. None: the two are
-    one spec, a run's identity (`--resume` continues a run only under its own)."""
-    return [f.name for f in fields(RunSpec) if a.get(f.name) != b.get(f.name)]
+    one spec, a run's identity (`--resume` continues a run only under its own). Their physics differs as
+    `langgap.stack.stack_differences` says: a run stored before an entry was recorded (`RECORDED_SINCE`) continues."""
+
+    def differs(name: str) -> bool:
+        mine, theirs = a.get(name), b.get(name)
+        if name == "physics" and mine and theirs:
+            return stack.stacks_differ(mine, theirs)
+        return mine != theirs
+
+    return [f.name for f in fields(RunSpec) if differs(f.name)]
 
 
 @dataclass(frozen=True)

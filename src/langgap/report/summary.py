@@ -32,7 +32,7 @@ from langgap.report.labels import (
 )
 from langgap.report.load import Run
 from langgap.report.stats import PairedTest, Rate
-from langgap.stack import stack_differences
+from langgap.stack import stack_differences, stacks_differ
 from langgap.vocabulary import SAME_GOAL_DIMENSIONS, SWITCH, Condition, Outcome, TaskKind, switch_step
 
 
@@ -611,11 +611,10 @@ class Summary:
 def protocol_differences(a: RunResults, b: RunResults) -> list[str]:
     """The protocol items in which two runs differ (runs are paired episode by episode only when none); their
     physics as `langgap.stack.stack_differences` compares stacks (an entry one run predates is not a difference)."""
-    physics = a.spec.get("physics", {}), b.spec.get("physics", {})
 
     def differs(item: str) -> bool:
         if item == "physics":
-            return physics[0] != physics[1] and bool(stack_differences(*physics))
+            return stacks_differ(a.spec.get("physics", {}), b.spec.get("physics", {}))
         return a.card[item] != b.card[item]
 
     return [item for item in PROTOCOL_ITEMS if differs(item)]
