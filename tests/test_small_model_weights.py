@@ -5,7 +5,12 @@ The golden files are `save_checkpoint(path, model, VOCAB, {"final_loss": ..., "o
 as the code wrote them before the two models shared their trunk (PyTorch 2.13, CPU, one thread). A change of the
 order in which a model makes its layers (the seeded initialisation), of its parameters (gradient clipping sums their
 norms in that order), of its forward pass or of the loop shows here as other bits; a renamed tensor as a checkpoint
-that no longer loads. Regenerate them only for a change that is meant to move the weights."""
+that no longer loads. Regenerate them only for a change that is meant to move the weights.
+
+The last bits also depend on the CPU kernels PyTorch and its BLAS choose (as numpy's do: langgap/blas.py), so the
+comparison is bit for bit only on the kind of CPU the golden files were made on (`GOLDEN_CPU`: PyTorch's CPU
+capability and the vendor); elsewhere it allows a kernel's rounding (1e-4 relative), which still catches a layer made
+in another order (weights off by 0.08) but not a regrouped sum (off by 1e-9)."""
 
 from __future__ import annotations
 
@@ -19,6 +24,7 @@ from langgap.policies.text import Vocabulary
 torch = pytest.importorskip("torch", reason="small-bc and small-vla need PyTorch (pip install 'langgap[train]')")
 
 GOLDEN = Path(__file__).parent / "golden"
+GOLDEN_CPU = ("AVX512", "AuthenticAMD")  # torch.backends.cpu.get_cpu_capability(), /proc/cpuinfo's vendor_id
 VOCAB = Vocabulary(f"w{i}" for i in range(10))  # 12 ids: padding, unknown, ten words
 FRAMES, STEPS, BATCH = 24, 6, 8
 
@@ -107,10 +113,21 @@ def test_seeded_training_gives_the_golden_weights_bit_for_bit(kind):
     # The same tensors, made and registered in the same order (the order gradient clipping sums their norms in).
     assert list(model.state_dict()) == facts["order"]
     assert sorted(load_file(str(path))) == sorted(facts["order"])
+    exact = _cpu() == GOLDEN_CPU
     for name, value in model.state_dict().items():
         expected = golden.state_dict()[name]
-        assert torch.equal(value, expected), f"{name}: off by up to {(value - expected).abs().max().item():.3g}"
-    assert loss == facts["final_loss"]
+        same = torch.equal(value, expected) if exact else torch.allclose(value, expected, rtol=1e-4, atol=1e-6)
+        assert same, f"{name}: off by up to {(value - expected).abs().max().item():.3g}"
+    assert loss == facts["final_loss"] if exact else loss == pytest.approx(facts["final_loss"], rel=1e-4)
+
+
+def _cpu() -> tuple[str, str]:
+    try:
+        lines = Path("/proc/cpuinfo").read_text().splitlines()
+    except OSError:
+        lines = []
+    vendor = next((line.partition(":")[2].strip() for line in lines if line.startswith("vendor_id")), "")
+    return torch.backends.cpu.get_cpu_capability(), vendor
 
 
 def _loader(kind: str):
