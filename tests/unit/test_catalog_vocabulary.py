@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from collections import defaultdict
 
+import pytest
+
 from langgap.catalog.catalog import available_catalogs, load_catalog
 from langgap.policies.text import UNK, Vocabulary, catalog_texts, catalog_vocabulary, words
 
@@ -77,3 +79,15 @@ def test_the_texts_are_every_catalogs_sentences_and_their_scenes_entity_names():
     # the scenes' object and fixture names, as the BDDL files write them
     assert {"glazed_rim_porcelain_ramekin_1", "flat_stove_1", "main_table"} <= set(texts)
     assert catalog_vocabulary().tokens == Vocabulary.from_texts(texts).tokens
+
+
+def test_a_scene_file_that_does_not_parse_is_named_in_the_error(tmp_path, monkeypatch):
+    import langgap.policies.text as text
+    from langgap.bddl import BddlError
+
+    broken = tmp_path / "broken-scene.bddl"
+    broken.write_text("(define (problem", encoding="utf-8")
+    monkeypatch.setattr(text.stack, "bddl_path", lambda suite, scene: broken)  # a damaged install's scene file
+    with pytest.raises(BddlError) as raised:
+        text.catalog_texts()
+    assert str(raised.value).startswith(f"{broken}: ")
