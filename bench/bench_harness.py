@@ -272,8 +272,8 @@ def protocol(policy: str, run: str | None, stepping: str) -> None:
 
 def validation(workers: int, run: str | None, stepping: str) -> None:
     from langgap.engine.spec import ExecutionOptions
-    from langgap.validity.rows import FULL_INITS
-    from langgap.validity.validation import validate
+    from langgap.gate.rows import FULL_INITS
+    from langgap.gate.validation import validate
 
     start = time.perf_counter()
     found = validate(

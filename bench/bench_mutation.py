@@ -55,8 +55,8 @@ MODULES = {
     "text": Module("src/langgap/policies/text.py"),
     "runner_sentences": Module("src/langgap/catalog/runner_sentences.py"),
     "vocabulary": Module("src/langgap/vocabulary.py"),
-    "gate_rows": Module("src/langgap/validity/rows.py"),
-    "sentences": Module("src/langgap/validity/sentences.py"),
+    "gate_rows": Module("src/langgap/gate/rows.py"),
+    "sentences": Module("src/langgap/audit/sentences.py"),
     "stats": Module("src/langgap/report/stats.py"),
     "store": Module("src/langgap/store.py"),
     "plan": Module("src/langgap/engine/plan.py"),
@@ -67,7 +67,7 @@ MODULES = {
         "src/langgap/catalog/catalog.py",
         ("xǁCatalogǁselect__mutmut_*", "xǁCatalogǁ_match_term__mutmut_*", "xǁCatalogǁ_no_match__mutmut_*"),
     ),
-    "audit": Module("src/langgap/validity/audit.py"),
+    "audit": Module("src/langgap/audit/findings.py"),
 }
 
 # mutmut's exit codes per mutant (mutmut.stats.status_by_exit_code), folded into what the score counts.

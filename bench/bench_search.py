@@ -2,7 +2,7 @@
 
 On each of the paper's two bottom drawers, the oracle with its pressed drag turned off (`drawer=grasp`:
 the oracle before it opened these drawers, 0/50 on both) fails every init state. The search
-(`langgap.validity.search`) then tries all of its `--budget` candidates on each of the first `--inits` init
+(`langgap.gate.search`) then tries all of its `--budget` candidates on each of the first `--inits` init
 states (no early stop), and this prints, per task: how many candidates did the task (the hit rate),
 how many the first hit took (the budget a gate needs), and the wall time per candidate episode; then
 which kind of candidate hit (grasp / pressed drag / noise only).
@@ -18,8 +18,8 @@ import time
 
 from langgap.catalog.catalog import load_catalog
 from langgap.engine.plan import episode_seed
+from langgap.gate.search import search
 from langgap.stack import DEFAULT_STEPPING
-from langgap.validity.search import search
 
 TASKS = ("goal/s0/open-cabinet-bottom-drawer", "spatial/s2/open-cabinet-bottom-drawer")
 DISABLED = {"drawer": "grasp"}

@@ -29,8 +29,8 @@ _FACTS = """(() => {
 
 
 def test_the_audit_page_in_a_real_browser(tmp_path):
+    from langgap.audit.findings import read_audit
     from langgap.catalog.catalog import catalog_hash
-    from langgap.validity.audit import read_audit
 
     result = run_cli("tasks", "audit", "--catalog", "libero-pro", "--html", str(tmp_path / "audit"))
     assert result.returncode == 0, result.stderr

@@ -40,7 +40,7 @@ def test_generating_from_the_packages_gives_the_shipped_registry_and_findings(ca
     assert out.read_bytes() == (REGISTRY / f"{catalog}.yaml").read_bytes()
     fresh = json.loads(out.with_name(f"{catalog}.audit.json").read_text())
     shipped = json.loads((REGISTRY / f"{catalog}.audit.json").read_text())
-    from langgap.validity.audit import CHECKS
+    from langgap.audit.findings import CHECKS
 
     simulator = set(CHECKS["starts"] + CHECKS["references"])  # generating runs the file checks only
     assert fresh["tasks"] == {
@@ -114,8 +114,8 @@ def test_libero_pro_variants_start_from_the_init_states_they_ship(tmp_path):
     runs from the package's own states with the package's sentence."""
     ids = {"spatial/s0/black-bowl-1-on-plate", "spatial/s0/pro-task", "spatial/s0/pro-lan"}
     path = short_copy(tmp_path, "libero-pro", ids)
+    from langgap.audit.starts import starts_findings
     from langgap.catalog.catalog import load_catalog_file
-    from langgap.validity.starts import starts_findings
 
     catalog = load_catalog_file(path)
     found = starts_findings(catalog, [catalog.get("spatial/s0/pro-lan")], inits=1)
@@ -204,7 +204,7 @@ def test_a_variant_that_repeats_its_sources_trial_takes_its_verdict_and_is_not_r
     assert _trial(dataclasses.replace(reworded, max_steps=source.max_steps + 1), text) is None
 
     # A run's snapshot holds the taken verdict and the hash of the file it was read from.
-    snapshot = gate_snapshot("libero-pro", [source.id, "spatial/s0/pro-lan"])
+    snapshot = gate_snapshot("libero-pro", [pro.get(source.id), pro.get("spatial/s0/pro-lan")])
     assert snapshot["tasks"][source.id]["inherited_from"] == f"langgap99:{source.id}"
     assert snapshot["tasks"]["spatial/s0/pro-lan"]["inherited_from"] == ""
     langgap99_gate = registry_path("langgap99").with_name("langgap99.gate.json")

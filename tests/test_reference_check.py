@@ -51,10 +51,10 @@ def test_the_policy_image_viewpoint_is_the_image_langgap_renders():
     """Where each plate of libero_10 scene 4 lies in the agentview image LangGap gives a policy (segmented with
     the same render and rotation): the plate farther right in the policy-image viewpoint is farther right in the
     image, the farther mug higher up; the raw render has them the other way round."""
+    from langgap.audit.reference_check import _layout, _views
     from langgap.catalog.catalog import load_catalog
     from langgap.catalog.files import scene_problem
     from langgap.sim.env import EnvOptions, TaskEnv
-    from langgap.validity.reference_check import _layout, _views
 
     task = load_catalog("langgap99").get(LEFT_PLATE_TASK)
     with TaskEnv(task, EnvOptions(cameras=("agentview",), image_size=96)) as env:
@@ -83,9 +83,9 @@ def test_the_policy_image_viewpoint_is_the_image_langgap_renders():
 def test_every_expression_is_judged_or_counted_unread():
     """LIBERO-Plus's rewordings of libero_10 scene 4 that say "left plate" word for word: each expression the
     reader finds is judged or not read, and "left plate" is judged (wrong from the robot's side)."""
+    from langgap.audit.reference_check import _expressions, reference_findings
     from langgap.catalog.catalog import load_catalog
     from langgap.catalog.files import scene_problem
-    from langgap.validity.reference_check import _expressions, reference_findings
 
     catalog = load_catalog("libero-plus-language")
     tasks = [catalog.get(f"libero10/s4/plus-language-{n}") for n in (3, 23, 28, 35, 37, 45)]

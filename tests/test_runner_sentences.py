@@ -63,7 +63,7 @@ def test_libero_plus_tasks_carry_its_runners_sentence_and_whether_its_task_map_r
 
 @pytest.mark.parametrize("catalog", ["libero-pro", pytest.param("libero-plus-language", marks=PLUS)])
 def test_the_recorded_audits_carry_the_runners_findings_and_duplicates_both_ways(catalog):
-    from langgap.validity.audit import read_audit
+    from langgap.audit.findings import read_audit
 
     about, found = read_audit(REGISTRY / f"{catalog}.yaml")
     named = {}

@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 import langgap
-import langgap.validity.search
+import langgap.gate.search
 from langgap.catalog.catalog import load_catalog
 from langgap.engine.plan import episode_seed
 from langgap.engine.spec import ExecutionOptions
 from langgap.errors import LangGapError
-from langgap.validity.demonstrations import Demonstration, DemonstrationError, replay_env, verdict_evidence, verify
-from langgap.validity.search import demonstrate, search
+from langgap.gate.demonstrations import Demonstration, DemonstrationError, replay_env, verdict_evidence, verify
+from langgap.gate.search import demonstrate, search
 from tests.support.harness import run_cli
 
 DRAWER = "goal/s0/open-cabinet-bottom-drawer"
@@ -62,7 +62,7 @@ def test_a_find_that_does_not_replay_from_its_file_shows_nothing(found, tmp_path
     a find whose actions were cut (the search's result altered, nothing else) stops the search with the replay's
     error, and the task gains no init state."""
     cut = replace(found.found, steps=found.found.steps - 15, actions=found.found.actions[:-15])
-    monkeypatch.setattr(langgap.validity.search, "search", lambda *args, **kwargs: replace(found, found=cut))
+    monkeypatch.setattr(langgap.gate.search, "search", lambda *args, **kwargs: replace(found, found=cut))
     here = ExecutionOptions(workers=0, progress=False, max_attempts=1)
     with pytest.raises(LangGapError, match=r"init 0: the replay fails: its \d+ actions end before the goal holds"):
         demonstrate("langgap99", {DRAWER: [(0, episode_seed(0, 0))]}, tmp_path, stepping="exact", options=here)

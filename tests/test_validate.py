@@ -9,10 +9,10 @@ import pytest
 from langgap.bddl import Predicate
 from langgap.catalog.catalog import load_catalog_file
 from langgap.engine.spec import ExecutionOptions
+from langgap.gate.rows import goals_exclude
+from langgap.gate.validation import validate
 from langgap.goals import conjunction
 from langgap.stack import physics_stack
-from langgap.validity.rows import goals_exclude
-from langgap.validity.validation import validate
 from langgap.version import code_version
 from tests.support.catalogs import cut_down_catalog
 from tests.support.harness import run_cli

@@ -3,7 +3,7 @@
 A region of a page between `<!-- generated: WHAT -->` and `<!-- /generated -->` holds what WHAT gives:
 
 * `verdicts CATALOG`: the catalog's gate verdicts in one phrase ("848 tasks: 621 doable, 227 unproven"), counted
-  by `langgap.validity.coverage`, as `langgap tasks gate` counts them; it fits inside a sentence or a table cell;
+  by `langgap.gate.coverage`, as `langgap tasks gate` counts them; it fits inside a sentence or a table cell;
 * `langgap tasks ARGS` (read-only: `gate`, `audit` without `--starts`, `--references`, `--record` or `--html`,
   `list`, `show`): what that command prints, run in process; a Markdown table as it is, any other text in a
   ```text block.
@@ -41,7 +41,7 @@ class CountsError(Exception):
 def verdicts_phrase(catalog_name: str) -> str:
     """The catalog's verdicts in one phrase: its tasks, then each verdict that some task has, then the ungated."""
     from langgap.catalog.catalog import load_catalog
-    from langgap.validity.coverage import gate_counts
+    from langgap.gate.coverage import gate_counts
 
     (total,) = [c for c in gate_counts(load_catalog(catalog_name).select("all")) if c.dimension == "all"]
     parts = [f"{n:,} {verdict}" for verdict, n in total.verdicts.items() if n]

@@ -40,8 +40,7 @@ _EXPORTS = {
     "EpisodeRecord": "langgap.records",
     "Outcome": "langgap.vocabulary",
     "load_runs": "langgap.report",
-    "validate": "langgap.validity.validation",
-    "audit": "langgap.validity.audit_run",
+    "validate": "langgap.gate",
     "LangGapError": "langgap.errors",
 }
 

@@ -205,7 +205,7 @@ class Verdict(StrEnum):
     # Rejected without a proof: nobody has shown it doable or impossible (the oracle failing shows nothing
     # about other policies).
     UNPROVEN = "unproven"
-    # Rejected with a proof that holds for every policy (`langgap.validity.proofs`).
+    # Rejected with a proof that holds for every policy (`langgap.gate.proofs`).
     INFEASIBLE = "infeasible"
     # Rejected because its starts do not come to rest: the scene still moves after the settle steps, so the
     # task has no fixed start to be judged from, whatever the oracle did on it. A word of its own, since it

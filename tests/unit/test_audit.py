@@ -10,10 +10,7 @@ import numpy as np
 import pytest
 
 from langgap import stack
-from langgap.bddl import rewrite_task_sections
-from langgap.catalog.packages import states_from_bytes
-from langgap.errors import CatalogError
-from langgap.validity.audit import (
+from langgap.audit.findings import (
     Finding,
     duplicate_counts,
     duplicate_counts_text,
@@ -25,6 +22,9 @@ from langgap.validity.audit import (
     runner_findings,
     scene_findings,
 )
+from langgap.bddl import rewrite_task_sections
+from langgap.catalog.packages import states_from_bytes
+from langgap.errors import CatalogError
 
 EXTENDED = "spatial/s0/black-bowl-2-on-plate"
 ORIGINAL = stack.bddl_path("libero_spatial", "pick_up_the_black_bowl_on_the_stove_and_place_it_on_the_plate")
@@ -186,7 +186,7 @@ def test_pruned_init_files_are_read_as_arrays_and_nothing_else():
 
 
 def test_the_init_states_a_start_finding_names_are_shown_as_ranges():
-    from langgap.validity.starts import inits_text
+    from langgap.audit.starts import inits_text
 
     assert inits_text(list(range(50)), 50) == "init state(s) 0–49 (50 of 50)"
     assert inits_text([0, 1, 2, 3, 7], 10) == "init state(s) 0–3, 7 (5 of 10)"

@@ -13,12 +13,7 @@ import numpy as np
 import pytest
 
 from langgap import stack
-from langgap.bddl import Predicate, rewrite_task_sections
-from langgap.catalog.catalog import load_catalog
-from langgap.catalog.packages import PLUS_PACKAGE, PLUS_VERSION, PLUS_WHEEL
-from langgap.catalog.task import Origin
-from langgap.errors import CatalogError
-from langgap.validity.audit import (
+from langgap.audit.findings import (
     FINDINGS,
     Finding,
     audit_text,
@@ -31,6 +26,11 @@ from langgap.validity.audit import (
     runner_findings,
     scene_findings,
 )
+from langgap.bddl import Predicate, rewrite_task_sections
+from langgap.catalog.catalog import load_catalog
+from langgap.catalog.packages import PLUS_PACKAGE, PLUS_VERSION, PLUS_WHEEL
+from langgap.catalog.task import Origin
+from langgap.errors import CatalogError
 
 SOURCE_FILE = stack.bddl_path("libero_spatial", "pick_up_the_black_bowl_on_the_stove_and_place_it_on_the_plate")
 GOAL = "(And (On akita_black_bowl_1 plate_1))"

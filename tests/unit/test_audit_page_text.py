@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from html.parser import HTMLParser
 
-from langgap.validity.audit_page import about_html, finding_heading
+from langgap.audit.page import about_html, finding_heading
 
 ABOUT = {
     "files": {

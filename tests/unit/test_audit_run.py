@@ -8,10 +8,10 @@ import shutil
 
 import pytest
 
+from langgap.audit.findings import CHECKS, read_audit
+from langgap.audit.run import audit
 from langgap.catalog.catalog import registry_path
 from langgap.errors import ParameterError
-from langgap.validity.audit import CHECKS, read_audit
-from langgap.validity.audit_run import audit
 
 SELECTION = "spatial/s0/*"
 

@@ -45,9 +45,9 @@ def test_every_module_the_source_and_docs_cite_exists():
 
 
 def test_a_citation_of_a_moved_module_is_found():
-    assert _broken("the file checks (`catalog/audit`), `langgap.gate`, `langgap.catalog.task.Nothing`") == [
-        "langgap.gate",
+    assert _broken("the file checks (`catalog/audit`), `langgap.validity`, `langgap.catalog.task.Nothing`") == [
+        "langgap.validity",
         "langgap.catalog.task.Nothing",
         "catalog/audit",
     ]
-    assert _broken("`validity/audit`, `catalog/task.py`, `langgap.catalog.task.Task`, `engine/pools/`") == []
+    assert _broken("`audit/findings`, `catalog/task.py`, `langgap.catalog.task.Task`, `engine/pools/`") == []

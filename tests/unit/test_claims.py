@@ -7,7 +7,7 @@ import dataclasses
 import pytest
 
 from langgap.catalog.catalog import load_catalog
-from langgap.validity.claims import benchmark_claims
+from langgap.gate.claims import benchmark_claims
 from tests.support.reports import episode
 
 ORIGINAL, RAMEKIN = "spatial/s0/black-bowl-1-on-plate", "spatial/s0/ramekin-on-plate"

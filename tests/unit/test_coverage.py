@@ -8,7 +8,7 @@ import json
 from langgap.catalog.catalog import load_catalog, registry_path
 from langgap.catalog.verdicts import GateResult
 from langgap.cli.main import main
-from langgap.validity.coverage import gate_counts, on_other_stacks
+from langgap.gate.coverage import gate_counts, on_other_stacks
 from langgap.vocabulary import Verdict
 
 

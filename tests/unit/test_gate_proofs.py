@@ -8,10 +8,10 @@ import pytest
 
 from langgap.catalog.catalog import registry_path
 from langgap.catalog.verdicts import read_verdicts
+from langgap.gate import proofs
+from langgap.gate.recording import record
+from langgap.gate.rows import TaskValidation
 from langgap.stack import physics_stack
-from langgap.validity import proofs
-from langgap.validity.recording import record
-from langgap.validity.rows import TaskValidation
 
 DRAWER = "spatial/s2/open-cabinet-bottom-drawer"
 BOWL = "spatial/s2/black-bowl-1-on-plate"

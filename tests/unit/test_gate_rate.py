@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from langgap.validity.rows import shown_doable
+from langgap.gate.rows import shown_doable
 from langgap.vocabulary import FEASIBLE_RATE
 
 

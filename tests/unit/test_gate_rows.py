@@ -1,4 +1,4 @@
-"""The gate's row per task (`langgap.validity.rows.task_row`): which checks a task passes from the oracle's
+"""The gate's row per task (`langgap.gate.rows.task_row`): which checks a task passes from the oracle's
 episodes, the reason it names when one fails, the figures it shows, and the verdict it records."""
 
 from __future__ import annotations
@@ -9,8 +9,8 @@ import pytest
 
 from langgap.catalog.catalog import load_catalog
 from langgap.catalog.verdicts import SETTLE_CHECK
+from langgap.gate.rows import SETTLE_TOLERANCE_M, goals_exclude, task_row
 from langgap.goals import parse_goal
-from langgap.validity.rows import SETTLE_TOLERANCE_M, goals_exclude, task_row
 from langgap.vocabulary import Verdict
 from tests.support.reports import episode
 

@@ -10,9 +10,8 @@ import pytest
 
 from langgap.bddl import Predicate
 from langgap.catalog.catalog import load_catalog
-from langgap.goals import parse_goal
-from langgap.validity import proofs
-from langgap.validity.proofs import (
+from langgap.gate import proofs
+from langgap.gate.proofs import (
     MAX_STEP_M,
     PANDA_REACH_M,
     Body,
@@ -23,6 +22,7 @@ from langgap.validity.proofs import (
     prove,
     too_few_steps,
 )
+from langgap.goals import parse_goal
 
 SHOULDER = (0.0, 0.0, 1.0)
 HAND = 0.13

@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from langgap.audit.reference_check import judged_findings
+from langgap.audit.references import Layout, View, expected_entity, mentions, outcome, resolve
 from langgap.bddl import BddlProblem, Region
 from langgap.goals import goal_from_strings
-from langgap.validity.reference_check import judged_findings
-from langgap.validity.references import Layout, View, expected_entity, mentions, outcome, resolve
 
 # The robot looks along +x (its left is +y); the agentview camera looks back at it along -x (its right is +y);
 # the policy's image is the camera's mirrored left to right (its right is -y again).

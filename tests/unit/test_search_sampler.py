@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from langgap.validity.demonstrations import DemonstrationError
-from langgap.validity.search import EXPLORE, PRESS_DEPTH_M, TILT_DEG, TURN_DEG, Candidate, Sampler
+from langgap.gate.demonstrations import DemonstrationError
+from langgap.gate.search import EXPLORE, PRESS_DEPTH_M, TILT_DEG, TURN_DEG, Candidate, Sampler
 
 
 def _press(candidate) -> tuple[float, float, float]:

@@ -6,11 +6,11 @@ from dataclasses import replace
 
 import pytest
 
+from langgap.audit.findings import Finding
+from langgap.audit.sentences import TEMPLATES, sentence_findings, template_counts, template_of, templates_text
 from langgap.catalog import files
 from langgap.catalog.catalog import load_catalog
 from langgap.goals import And, Atom, Not, Or
-from langgap.validity.audit import Finding
-from langgap.validity.sentences import TEMPLATES, sentence_findings, template_counts, template_of, templates_text
 
 NOT_WHERE = "spatial/s0/black-bowl-1-on-plate~not-where"
 NOT_WHAT = "spatial/s5/black-bowl-1-on-plate~not-what"

@@ -16,7 +16,7 @@ from langgap import stack
 from langgap.catalog.verdicts import GateResult
 from langgap.cli.main import build_parser, main
 from langgap.engine.spec import RunSpec
-from langgap.validity.coverage import HEADER
+from langgap.gate.coverage import HEADER
 from langgap.vocabulary import (
     BEYOND_DIMENSIONS,
     CEILING_TARGET,

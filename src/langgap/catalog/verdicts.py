@@ -83,7 +83,7 @@ class GateResult:
     What a verdict shows: a task is doable when a demonstration did it — the oracle, at the gate's
     rate, or `demonstration`, a stored replayable episode (a path relative to the registry's directory)
     that does a task the oracle fails; it is impossible only by `proof`, an argument that holds for
-    every policy, printed with its assumptions (`langgap.validity.proofs`). A task the oracle fails without
+    every policy, printed with its assumptions (`langgap.gate.proofs`). A task the oracle fails without
     either is *unproven*: nobody has shown it doable or impossible. A task whose starts do not come to
     rest is *unsettled*, whatever the oracle did (`verdict`: the word, `langgap.vocabulary.Verdict`).
     """

@@ -121,8 +121,8 @@ def run(args) -> int:
     print("\n".join(summary_lines(tasks)))
     print(f"wrote {path}")
     if args.gate_inits:
-        from langgap.validity.recording import record
-        from langgap.validity.text import gate_summary
+        from langgap.gate.recording import record
+        from langgap.gate.text import gate_summary
 
         rows = run_gate(args, str(path), "all", args.gate_inits, recording=True).rows
         print(gate_summary(rows))
@@ -132,10 +132,10 @@ def run(args) -> int:
 
 def _run_external(args) -> int:
     """Read the catalog from its package, write it, run the file checks and record their findings beside it."""
+    from langgap.audit.findings import audit_text, duplicate_counts_text, record_audit
+    from langgap.audit.run import files_about, files_findings
     from langgap.catalog.catalog import load_catalog_file
     from langgap.generation.external import GENERATORS, write_external
-    from langgap.validity.audit import audit_text, duplicate_counts_text, record_audit
-    from langgap.validity.audit_run import files_about, files_findings
 
     if args.gate_inits or args.suites != list(SUITES):
         raise LangGapError(

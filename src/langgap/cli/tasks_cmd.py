@@ -262,7 +262,7 @@ def _recorded_switch_verdicts(catalog: str, task_id: str) -> dict:
 
 
 def run_gate(args) -> int:
-    from langgap.validity.coverage import coverage_table, gate_counts, stacks_text
+    from langgap.gate.coverage import coverage_table, gate_counts, stacks_text
 
     tasks = load_catalog(args.catalog).select(args.tasks)
     if args.condition:
@@ -287,7 +287,7 @@ def run_gate(args) -> int:
 
 
 def run_replay(args) -> int:
-    from langgap.validity.demonstrations import replay_verdicts
+    from langgap.gate.demonstrations import replay_verdicts
 
     tasks = load_catalog(args.catalog).select(args.tasks)
     checks = []
@@ -310,8 +310,8 @@ def _remade(check, failure: str):
     """`tasks replay --remake` on a file that failed: the check and its line once remade (`remake`)."""
     from dataclasses import replace
 
-    from langgap.validity.demonstrations import Demonstration, DemonstrationError, replay_env, verify
-    from langgap.validity.search import remake
+    from langgap.gate.demonstrations import Demonstration, DemonstrationError, replay_env, verify
+    from langgap.gate.search import remake
 
     catalog = load_catalog(check.catalog)
     old = Demonstration.load(check.path)
@@ -339,8 +339,8 @@ def _switch_gate_counts(args, tasks: list[Task]) -> int:
     from langgap.catalog.catalog import registry_path
     from langgap.catalog.switch_verdicts import read_switch_verdicts
     from langgap.engine.plan import without_switch_source
-    from langgap.validity.coverage import coverage_table, gate_counts
-    from langgap.validity.switch_gate import switch_conditions
+    from langgap.gate.coverage import coverage_table, gate_counts
+    from langgap.gate.switch import switch_conditions
 
     verdicts = read_switch_verdicts(registry_path(args.catalog))
     catalog = load_catalog(args.catalog)
@@ -364,8 +364,8 @@ def _switch_gate_counts(args, tasks: list[Task]) -> int:
 
 
 def run_audit(args) -> int:
-    from langgap.validity.audit import audit_text, duplicate_counts_text
-    from langgap.validity.audit_run import audit
+    from langgap.audit import audit
+    from langgap.audit.findings import audit_text, duplicate_counts_text
 
     found = audit(
         args.catalog,
@@ -388,8 +388,8 @@ def run_audit(args) -> int:
 def _write_audit_page(args, found) -> Path:
     """Write the audit page (`--html DIR`) of `found` (an `AuditResult`) and return its path."""
     from langgap.atomic import write_text_atomically
+    from langgap.audit.page import audit_data, audit_page
     from langgap.catalog.catalog import catalog_hash
-    from langgap.validity.audit_page import audit_data, audit_page
 
     data = audit_data(
         found.catalog,
@@ -430,7 +430,7 @@ def _gate_lines(gate) -> list[str]:
 
 def _recorded_findings(catalog: str, task_id: str) -> list[dict]:
     """What the recorded audit found in one task (empty without an audit)."""
+    from langgap.audit.findings import read_audit
     from langgap.catalog.catalog import registry_path
-    from langgap.validity.audit import read_audit
 
     return [{"name": f.name, "detail": f.detail} for f in read_audit(registry_path(catalog))[1] if f.task == task_id]

@@ -11,8 +11,8 @@ from langgap.cli.eval_cmd import add_stepping_option, print_switch_note
 from langgap.cli.execution_flags import add_execution_options, add_share_rollouts_option, execution_options
 from langgap.cli.tasks_cmd import add_catalog_option
 from langgap.errors import LangGapError
-from langgap.validity.rows import FULL_INITS
-from langgap.validity.search import BUDGET
+from langgap.gate.rows import FULL_INITS
+from langgap.gate.search import BUDGET
 from langgap.vocabulary import FEASIBLE_RATE, SWITCH, SWITCH_RATE, TaskKind, Verdict
 
 DEFAULT_POLICY = "oracle"
@@ -89,8 +89,8 @@ def run_gate(
     """Run the feasibility gate with the options of `add_gate_options`; returns its `Validation`. Searched
     demonstrations go beside the catalog's registry when `recording` or `record` (which records the verdicts);
     `share_rollouts`: an instruction-blind policy's episodes (`blind`'s) share rollouts."""
-    from langgap.validity.recording import demonstrations_dir
-    from langgap.validity.validation import validate
+    from langgap.gate import validate
+    from langgap.gate.recording import demonstrations_dir
 
     return validate(
         catalog,
@@ -109,7 +109,7 @@ def run_gate(
 
 
 def run(args) -> int:
-    from langgap.validity.text import table_text
+    from langgap.gate.text import table_text
 
     if args.claims_only:
         return _claims_only(args)
@@ -143,11 +143,11 @@ def run(args) -> int:
 
 
 def _switch_gate(args) -> int:
-    """The switch gate (`langgap.validity.switch_gate`): the oracle under each `switch:K`; its flags that vary or add to
+    """The switch gate (`langgap.gate.switch`): the oracle under each `switch:K`; its flags that vary or add to
     the plain gate's episodes are refused."""
     from langgap.catalog.catalog import load_catalog
-    from langgap.validity.switch_gate import record_switch, switch_conditions, switch_table_text, validate_switch
-    from langgap.validity.validation import check_resume
+    from langgap.gate.switch import record_switch, switch_conditions, switch_table_text, validate_switch
+    from langgap.gate.validation import check_resume
 
     plain_only = {
         "--blind": args.blind,
@@ -186,9 +186,9 @@ def _switch_gate(args) -> int:
 def _claims_only(args) -> int:
     """The claims about starts alone; the flags of a gate that runs a policy are refused."""
     from langgap.catalog.catalog import load_catalog
-    from langgap.validity.claims import start_claims
-    from langgap.validity.probes import scene_starts
-    from langgap.validity.validation import Validation
+    from langgap.gate import Validation
+    from langgap.gate.claims import start_claims
+    from langgap.gate.probes import scene_starts
 
     policy_flags = {
         "--policy": args.policy is not None,
@@ -215,7 +215,7 @@ def _claims_only(args) -> int:
 
 def _print_claims(found, out: str | None) -> None:
     """Print the claims; with `out`, write the whole validation there as JSON."""
-    from langgap.validity.text import claims_text, report
+    from langgap.gate.text import claims_text, report
 
     print(claims_text(found.claims))
     if out:

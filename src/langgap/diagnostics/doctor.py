@@ -81,7 +81,7 @@ def _catalog() -> Check:
 def _verdict_stacks() -> Check:
     """How many shipped gate verdicts were made on another physics stack than the installed one: information,
     not a failure (re-gating the tasks is what changes it)."""
-    from langgap.validity.coverage import on_other_stacks
+    from langgap.gate.coverage import on_other_stacks
 
     counts = {name: on_other_stacks(list(load_catalog(name))) for name in available_catalogs()}
     shown = ", ".join(f"{name} {other} of {gated}" for name, (other, gated) in counts.items() if gated)

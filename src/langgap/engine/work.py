@@ -5,8 +5,8 @@ of several (`langgap.engine.sharing.SharedRollout`: an instruction-blind policy'
 `Job`s, frozen dataclasses that live with the feature they serve and do their work in `perform`, on a
 worker's `JobHost` (the runner, which lends them the catalog and a kept environment): a demonstration
 collection of one task (`langgap.demos.collect`), a demonstration rendered (`langgap.demos.render`),
-the search for demonstrations of one task (`langgap.validity.search`), and the gate's probes of a scene
-(`langgap.validity.probes`). Whichever the kind, the scheduler gives it the same retries, timeouts, gaps
+the search for demonstrations of one task (`langgap.gate.search`), and the gate's probes of a scene
+(`langgap.gate.probes`). Whichever the kind, the scheduler gives it the same retries, timeouts, gaps
 and fail-fast rule, and every backend runs it.
 """
 

@@ -11,7 +11,7 @@ Each variant keeps its package's BDDL file unchanged (a run reads it, checked by
 that file's `(:language)`, its goal the file's goal read by LangGap's goal language; its `package` instruction
 is what its package's runner sends instead (`catalog/runner_sentences`), and a LIBERO-Plus origin says whether
 that runner reaches it (`registered`). A file that does not
-parse is left out, as an `unreadable` finding; LangGap's file checks of them are `langgap.validity.audit_run`'s
+parse is left out, as an `unreadable` finding; LangGap's file checks of them are `langgap.audit.run`'s
 `files_findings`.
 """
 
@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from langgap import stack
+from langgap.audit.findings import Finding
 from langgap.bddl import parse_bddl
 from langgap.catalog import files, packages, runner_sentences
 from langgap.catalog.naming import SUITE_SHORT
@@ -34,7 +35,6 @@ from langgap.generation.generate import source_tasks
 from langgap.generation.identity import original_in, same_trial
 from langgap.generation.registry_writer import registry_text
 from langgap.goals import conjunction
-from langgap.validity.audit import Finding
 from langgap.vocabulary import Dimension, InstructionStyle, Split, TaskKind
 
 PRO_CATALOG = "libero-pro"

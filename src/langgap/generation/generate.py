@@ -6,7 +6,7 @@ affords (`candidates`) becomes a task on the source's scene and init states, wit
 `naming`, both instruction styles from `phrasing`, and a dimension relative to the source. A
 candidate that is one of the paper's tasks keeps the paper's id, strings, dimension and split.
 
-Physical feasibility is not decided here: the feasibility gate (`langgap.validity`) runs the scripted
+Physical feasibility is not decided here: the feasibility gate (`langgap.gate`) runs the scripted
 oracle on the written catalog and records its verdicts beside the registry (`catalog/verdicts.py`).
 """
 

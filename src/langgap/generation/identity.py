@@ -5,10 +5,10 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from langgap.audit.findings import scene_findings
 from langgap.catalog.catalog import DEFAULT_CATALOG
 from langgap.catalog.files import task_bddl_text
 from langgap.catalog.task import Task
-from langgap.validity.audit import scene_findings
 from langgap.vocabulary import Dimension
 
 

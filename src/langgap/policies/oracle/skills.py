@@ -1,4 +1,4 @@
-"""Which way the oracle opens a drawer: a choice a search over demonstrations varies (`langgap.validity.search`)."""
+"""Which way the oracle opens a drawer: a choice a search over demonstrations varies (`langgap.gate.search`)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """A demonstration that shows a task doable: an episode's actions, replayed open-loop from the plan entry.
 
-The oracle's episodes show a task doable when it does them; where it does not, `langgap.validity.search` looks
+The oracle's episodes show a task doable when it does them; where it does not, `langgap.gate.search` looks
 for another episode that does, and keeps it here. What makes such an episode evidence is that anyone
 can replay it: the same task, init state, seed and stepping, the same actions from the first step, and
 LangGap's own judge of the goal after each one. A file (NPZ) holds `actions` (T, 7) and `meta` (JSON:

@@ -17,8 +17,8 @@ from langgap.engine.execute import execute
 from langgap.engine.runner import RunnerSetup
 from langgap.engine.spec import ExecutionOptions
 from langgap.engine.work import Job, JobHost
+from langgap.gate.claims import Start
 from langgap.stack import DEFAULT_STEPPING
-from langgap.validity.claims import Start
 
 SETTLE_INITS = 2
 SETTLE_IDLE_STEPS = 20

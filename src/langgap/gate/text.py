@@ -6,9 +6,9 @@ from collections import Counter
 from dataclasses import asdict
 
 from langgap.catalog.verdicts import verdict_counts
-from langgap.validity.claims import Claim
-from langgap.validity.rows import TaskValidation
-from langgap.validity.validation import Validation
+from langgap.gate.claims import Claim
+from langgap.gate.rows import TaskValidation
+from langgap.gate.validation import Validation
 from langgap.vocabulary import CEILING_TARGET, Verdict
 
 

@@ -3,8 +3,8 @@
 The checks here read files only: a task's BDDL against its source's, its goal against what LIBERO
 evaluates and the scene holds, its instruction's form, the init states it ships against its source's, and
 duplicates within a scene (tasks read from other benchmarks' packages). The checks that need the simulator
-(the t0 state, the goal at t0) are in `langgap.validity.starts`; whether a goal accepts what its sentence allows
-(LangGap's own, generated tasks) in `langgap.validity.sentences`. Findings are kept beside the registry in
+(the t0 state, the goal at t0) are in `langgap.audit.starts`; whether a goal accepts what its sentence allows
+(LangGap's own, generated tasks) in `langgap.audit.sentences`. Findings are kept beside the registry in
 `<catalog>.audit.json`, with which checks made them, so the gate and the docs read the same list.
 """
 
@@ -50,8 +50,8 @@ FINDINGS = {
     "goal wider than its sentence": "the goal accepts a state its sentence does not allow (sentence check)",
 }
 # The checks, by what they need: `files` reads the packages' files (here), `starts` runs the simulator
-# (`langgap.validity.starts`), `sentence` reads a generated task's goal and scene (`langgap.validity.sentences`),
-# `references` resolves its sentence on the simulator's scenes (`langgap.validity.reference_check`);
+# (`langgap.audit.starts`), `sentence` reads a generated task's goal and scene (`langgap.audit.sentences`),
+# `references` resolves its sentence on the simulator's scenes (`langgap.audit.reference_check`);
 # each makes the findings listed.
 _STARTS = ("starts elsewhere", "goal holds at t0")
 _SENTENCE = ("goal narrower than its sentence", "goal wider than its sentence")

@@ -69,7 +69,7 @@ def benchmark_claims(
 ) -> list[Claim]:
     """Check the claims the benchmark rests on, on the gate's episodes (and `blind`'s, when given). Workers
     switch a simulator between the tasks of one scene, so the t0 claim here mostly compares a scene with
-    itself; `langgap.validity.probes.scene_starts` builds every task's own."""
+    itself; `langgap.gate.probes.scene_starts` builds every task's own."""
     judged = [r for r in records if r.judged]
     claims = start_claims(
         [Start(r.task_id, r.source, r.init_index, r.t0_hash, tuple(r.goals_at_start)) for r in judged]

@@ -12,10 +12,10 @@ import html
 import json
 from collections.abc import Iterable
 
+from langgap.audit.findings import CHECKS, FINDINGS, Finding, duplicate_counts_text
 from langgap.catalog.catalog import Catalog
 from langgap.catalog.task import PACKAGE_STYLE, Task
 from langgap.page_style import PAGE_STYLE
-from langgap.validity.audit import CHECKS, FINDINGS, Finding, duplicate_counts_text
 from langgap.vocabulary import InstructionStyle
 
 _STYLE = (

@@ -8,8 +8,8 @@ from pathlib import Path
 
 from langgap.catalog.catalog import load_catalog, registry_path
 from langgap.catalog.verdicts import record_verdicts
+from langgap.gate.rows import TaskValidation
 from langgap.stack import DEFAULT_STEPPING, physics_stack
-from langgap.validity.rows import TaskValidation
 from langgap.version import code_version
 from langgap.vocabulary import FEASIBLE_RATE
 
@@ -30,10 +30,10 @@ def demonstrations_dir(catalog_name: str) -> Path:
 
 
 def prove_rejected(catalog_name: str, rows: list[TaskValidation], inits: int) -> dict[str, str]:
-    """Proofs of impossibility (`langgap.validity.proofs`) for the tasks the oracle did below the gate's rate, read
+    """Proofs of impossibility (`langgap.gate.proofs`) for the tasks the oracle did below the gate's rate, read
     from each task's simulator on init states 0..`inits`-1: task id -> the proof's text, for those that
     have one. A task with none stays unproven: the oracle failing it shows nothing about other policies."""
-    from langgap.validity.proofs import prove_tasks
+    from langgap.gate.proofs import prove_tasks
 
     catalog = load_catalog(catalog_name)
     below = {r.id: r for r in rows if r.short}

@@ -3,7 +3,7 @@ the object its goal names, from the robot's viewpoint, from the agentview camera
 and in the image a policy is given (that render rotated 180°, as openpi's and OpenVLA's LIBERO runners and
 LangGap give it: the camera's picture mirrored left to right)?
 
-For each task, the expressions that must tell objects apart (`langgap.validity.references`: a category the
+For each task, the expressions that must tell objects apart (`langgap.audit.references`: a category the
 scene holds more than once, or one with a relation or side) are resolved on the scene as a policy first sees
 it (init state k, seed 0, after the settle steps), with the objects' positions and LIBERO's `On` / `In`
 decided by the simulator. An expression picks the goal's object, another, none, or several; the last three
@@ -21,11 +21,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from langgap.bddl import BddlProblem, Predicate
-from langgap.catalog import files
-from langgap.catalog.task import Task
-from langgap.validity.audit import Finding
-from langgap.validity.references import (
+from langgap.audit.findings import Finding
+from langgap.audit.references import (
     Layout,
     Mention,
     View,
@@ -35,7 +32,10 @@ from langgap.validity.references import (
     outcome,
     resolve,
 )
-from langgap.validity.starts import SEED, inits_text
+from langgap.audit.starts import SEED, inits_text
+from langgap.bddl import BddlProblem, Predicate
+from langgap.catalog import files
+from langgap.catalog.task import Task
 
 CAMERA = "agentview"
 VIEWS = ("robot", "camera", "policy image")

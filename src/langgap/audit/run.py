@@ -1,9 +1,9 @@
 """The audit run: LangGap's checks over a catalog's selected tasks (`audit`), each run now or read as recorded.
 
 A package's tasks get the file checks (`files_findings`: each one's files against its source's, the checks of
-`langgap.validity.audit`) and the simulator checks of their starts (`langgap.validity.starts`); a catalog of
-LangGap's own sentences, the sentence check (`langgap.validity.sentences`); both, the reference check
-(`langgap.validity.reference_check`). A check not run now gives what the recorded audit (`<catalog>.audit.json`)
+`langgap.audit.findings`) and the simulator checks of their starts (`langgap.audit.starts`); a catalog of
+LangGap's own sentences, the sentence check (`langgap.audit.sentences`); both, the reference check
+(`langgap.audit.reference_check`). A check not run now gives what the recorded audit (`<catalog>.audit.json`)
 holds. `langgap tasks audit` prints an `AuditResult`.
 """
 
@@ -13,11 +13,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from langgap.catalog import files, packages
-from langgap.catalog.catalog import DEFAULT_CATALOG, Catalog, load_catalog, registry_path
-from langgap.catalog.task import Task
-from langgap.errors import CatalogError, ParameterError
-from langgap.validity.audit import (
+from langgap.audit.findings import (
     CHECKS,
     Finding,
     duplicate_counts,
@@ -30,6 +26,10 @@ from langgap.validity.audit import (
     runner_findings,
     scene_findings,
 )
+from langgap.catalog import files, packages
+from langgap.catalog.catalog import DEFAULT_CATALOG, Catalog, load_catalog, registry_path
+from langgap.catalog.task import Task
+from langgap.errors import CatalogError, ParameterError
 from langgap.vocabulary import InstructionStyle
 
 Say = Callable[[str], None]
@@ -146,7 +146,7 @@ def _starts_check(
     """The simulator checks' findings on package tasks: run now (on `inits` init states, added to `ran`), else as
     recorded."""
     if inits:
-        from langgap.validity.starts import SEED, starts_findings
+        from langgap.audit.starts import SEED, starts_findings
 
         found = starts_findings(catalog, tasks, inits, progress=say)
         ran["starts"] = {selection: {"inits": inits, "seed": SEED}}
@@ -166,9 +166,9 @@ def _references_check(
 ) -> list[Finding]:
     """The reference check's findings: run now (on `inits` init states, added to `ran`), else as recorded."""
     if inits:
-        from langgap.validity.reference_check import VIEWS, reference_findings
-        from langgap.validity.references import BETWEEN_ENDS, BETWEEN_WIDTH, MARGIN
-        from langgap.validity.starts import SEED
+        from langgap.audit.reference_check import VIEWS, reference_findings
+        from langgap.audit.references import BETWEEN_ENDS, BETWEEN_WIDTH, MARGIN
+        from langgap.audit.starts import SEED
 
         found, checked = reference_findings(tasks, inits, progress=say)
         unread = [f"{task}: {phrase}" for task, phrases in sorted(checked.unread.items()) for phrase in phrases]
@@ -189,7 +189,7 @@ def _references_check(
 def _sentence_check(tasks: list[Task], say: Say) -> tuple[list[Finding], dict]:
     """The sentence check over `tasks` (LangGap's own sentences): its findings, and how many tasks each
     template phrased (said with what each template's sentence allows and its goal checks)."""
-    from langgap.validity.sentences import sentence_findings, template_counts, templates_text
+    from langgap.audit.sentences import sentence_findings, template_counts, templates_text
 
     counts = template_counts(tasks, files.scene_problem)
     say(f"sentence: {len(tasks)} task(s) by template")

@@ -14,7 +14,7 @@ oracle's own closed-loop plan, so every candidate starts from what the oracle al
   moves every waypoint the plan reaches.
 
 Each candidate is one episode; the first that reaches the goal is kept as a `Demonstration`, which is
-stored, replayed from the file and verified before the gate (`langgap.validity`) counts it. A task's search
+stored, replayed from the file and verified before the gate (`langgap.gate`) counts it. A task's search
 is one work item for the engine's scheduler (`SearchTask`). The search is seeded: the same task, init
 state and budget try the same candidates.
 """
@@ -35,13 +35,7 @@ from langgap.engine.rollout import env_options_for, run_episode
 from langgap.engine.runner import RunnerSetup
 from langgap.engine.spec import ExecutionOptions
 from langgap.engine.work import Job, JobHost
-from langgap.goals import atoms
-from langgap.policies import make_policy
-from langgap.policies.oracle.planner import order_goal
-from langgap.policies.oracle.scene import Scene
-from langgap.sim.env import TaskEnv
-from langgap.stack import physics_stack
-from langgap.validity.demonstrations import (
+from langgap.gate.demonstrations import (
     Demonstration,
     DemonstrationError,
     demonstration_path,
@@ -49,6 +43,12 @@ from langgap.validity.demonstrations import (
     replay_env,
     verify,
 )
+from langgap.goals import atoms
+from langgap.policies import make_policy
+from langgap.policies.oracle.planner import order_goal
+from langgap.policies.oracle.scene import Scene
+from langgap.sim.env import TaskEnv
+from langgap.stack import physics_stack
 from langgap.version import code_version
 
 BUDGET = 16  # candidate episodes per init state the oracle fails

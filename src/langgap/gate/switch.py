@@ -21,11 +21,11 @@ from langgap.catalog.verdicts import GateResult, verdict_counts, verdict_of
 from langgap.engine.evaluate import evaluate
 from langgap.engine.spec import ExecutionOptions, RunSpec
 from langgap.errors import ParameterError
+from langgap.gate.recording import provenance
+from langgap.gate.rows import gate_result
 from langgap.records import EpisodeRecord
 from langgap.stack import DEFAULT_STEPPING
 from langgap.store import RunStore
-from langgap.validity.recording import provenance
-from langgap.validity.rows import gate_result
 from langgap.vocabulary import SWITCH, SWITCH_RATE, Verdict, switch_step
 
 

@@ -12,11 +12,11 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
+from langgap.audit.findings import Finding
 from langgap.bddl import BddlProblem, Predicate
 from langgap.catalog import affordances
 from langgap.catalog.task import Task
 from langgap.goals import And, Atom, Not, Or, Then, plain_atoms
-from langgap.validity.audit import Finding
 from langgap.vocabulary import Dimension
 
 

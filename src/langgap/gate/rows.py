@@ -59,7 +59,7 @@ class TaskValidation:
     def verdict(self, inits: int, made_by: str = "", proof: str = "", physics: dict | None = None) -> GateResult:
         """The verdict to record, for a gate that ran init states 0..`inits`-1 as `made_by` says, on the physics
         stack `physics` (with `proof`, the text of a proof that no policy can do the task,
-        `langgap.validity.proofs`)."""
+        `langgap.gate.proofs`)."""
         return gate_result(
             self,
             inits,

@@ -4,14 +4,14 @@
 ordinary evaluation harness, then checks per task:
 
 * success rate — below `FEASIBLE_RATE` the task is rejected (unproven: the oracle does not do it; only
-  a proof from `langgap.validity.proofs`, recorded with `--record`, makes it infeasible);
+  a proof from `langgap.gate.proofs`, recorded with `--record`, makes it infeasible);
 * the goal is false at t0 (after settling) in every episode;
 * for an extended task whose goal excludes its source's goal (the same object placed elsewhere), the
   source goal is false at the end of every successful episode;
 * the environment builds and its scene settles (no infrastructure gap; objects at rest after the
   settle steps, on the first init states of each scene).
 
-Then the benchmark's own claims, over every validated init state (`langgap.validity.claims`): the tasks of
+Then the benchmark's own claims, over every validated init state (`langgap.gate.claims`): the tasks of
 a scene start from the identical state (equal t0 hashes per init state), no scene task's goal holds
 at t0, and — with `blind=True`, which also runs the `blind` policy — the scene's original task done
 whatever the instruction says succeeds exactly where the oracle does on originals and never on an
@@ -29,16 +29,16 @@ from langgap.engine.evaluate import evaluate
 from langgap.engine.pools import backend_session
 from langgap.engine.spec import ExecutionOptions, RunSpec
 from langgap.errors import ParameterError
+from langgap.gate.claims import Claim, benchmark_claims
+from langgap.gate.demonstrations import stored_demonstrations
+from langgap.gate.probes import settle_drifts
+from langgap.gate.recording import beside_registry, demonstrations_dir, prove_rejected
+from langgap.gate.recording import record as record_verdicts
+from langgap.gate.rows import FULL_INITS, TaskValidation, task_row
+from langgap.gate.search import BUDGET, demonstrate
 from langgap.records import EpisodeRecord
 from langgap.stack import DEFAULT_STEPPING
 from langgap.store import RunStore
-from langgap.validity.claims import Claim, benchmark_claims
-from langgap.validity.demonstrations import stored_demonstrations
-from langgap.validity.probes import settle_drifts
-from langgap.validity.recording import beside_registry, demonstrations_dir, prove_rejected
-from langgap.validity.recording import record as record_verdicts
-from langgap.validity.rows import FULL_INITS, TaskValidation, task_row
-from langgap.validity.search import BUDGET, demonstrate
 
 
 @dataclass
@@ -96,7 +96,7 @@ def validate(
             check its claims.
         stepping: How the simulator steps (`langgap.vocabulary.Stepping`).
         search_budget: Candidate episodes searched for a demonstration on each init state the oracle fails
-            (`langgap.validity.search`); those found are replayed and counted (0: no search; None: `BUDGET` for
+            (`langgap.gate.search`); those found are replayed and counted (0: no search; None: `BUDGET` for
             the oracle, else 0).
         demonstrations: The directory the searched demonstrations are stored in (None: beside the registry with
             `record`, else the run's, or a temporary one).

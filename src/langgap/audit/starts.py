@@ -13,11 +13,11 @@ from __future__ import annotations
 import hashlib
 from collections.abc import Callable
 
+from langgap.audit.findings import Finding
 from langgap.bddl import strip_sections
 from langgap.catalog import files
 from langgap.catalog.catalog import Catalog
 from langgap.catalog.task import Task
-from langgap.validity.audit import Finding
 
 SEED = 0
 

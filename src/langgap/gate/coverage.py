@@ -3,7 +3,7 @@
 A task is *gated* when a verdict is recorded for it; each gated task is counted under its verdict's word
 (`langgap.vocabulary.Verdict`): doable (the gate kept it: the oracle met the gate's rate, or a searched
 demonstration did it), unproven (rejected without a proof: nobody has yet shown it doable or impossible),
-infeasible (rejected with a proof that no policy can do it, `langgap.validity.proofs`) or unsettled (rejected
+infeasible (rejected with a proof that no policy can do it, `langgap.gate.proofs`) or unsettled (rejected
 because its starts do not come to rest).
 """
 
