@@ -93,6 +93,18 @@ def test_every_shipped_demonstration_replays_to_its_goal(path):
 REPLAYED = "spatial/s5/black-bowl-1-on-plate"  # the oracle fails init state 1; a searched demonstration does it
 
 
+def _registry_copy(tmp_path: Path) -> tuple[str, Path, Demonstration]:
+    """LangGap-99's registry copied to `tmp_path` without its demonstrations: the copy's path, where the copy looks
+    for REPLAYED's init-1 file, and the shipped file's demonstration."""
+    registry = Path(langgap.__file__).parent / "catalog" / "registry"
+    for name in ("langgap99.yaml", "langgap99.gate.json"):
+        (tmp_path / name).write_bytes((registry / name).read_bytes())
+    copy = str(tmp_path / "langgap99.yaml")
+    file = verdict_evidence(load_catalog(copy).get(REPLAYED), copy)[2][1]
+    file.parent.mkdir(parents=True)
+    return copy, file, Demonstration.load(registry / file.relative_to(tmp_path))
+
+
 def test_tasks_replay_replays_a_verdicts_demonstrations_and_fails_a_damaged_one(tmp_path):
     shown = run_cli("tasks", "replay", "--catalog", "langgap99", "--tasks", REPLAYED)
     assert shown.returncode == 0, shown.stderr
@@ -102,14 +114,8 @@ def test_tasks_replay_replays_a_verdicts_demonstrations_and_fails_a_damaged_one(
         "1/1 stored demonstration(s) of 1 task(s) replay to their goals",
     ]
     # A copy of the registry whose file lost its last action: the replay, not the file's claim, decides.
-    registry = Path(langgap.__file__).parent / "catalog" / "registry"
-    for name in ("langgap99.yaml", "langgap99.gate.json"):
-        (tmp_path / name).write_bytes((registry / name).read_bytes())
-    copy = str(tmp_path / "langgap99.yaml")
-    _, _, files = verdict_evidence(load_catalog(copy).get(REPLAYED), copy)
-    demo = Demonstration.load(registry / files[1].relative_to(tmp_path))
-    files[1].parent.mkdir(parents=True)
-    replace(demo, steps=demo.steps - 1, actions=demo.actions[:-1]).save(files[1])
+    copy, file, demo = _registry_copy(tmp_path)
+    replace(demo, steps=demo.steps - 1, actions=demo.actions[:-1]).save(file)
     damaged = run_cli("tasks", "replay", "--catalog", copy, "--tasks", REPLAYED)
     assert damaged.returncode == 1
     assert damaged.stdout.splitlines()[0].startswith(f"{REPLAYED} init 1: FAIL: the replay fails")
@@ -121,36 +127,30 @@ def test_tasks_replay_replays_a_verdicts_demonstrations_and_fails_a_damaged_one(
 def test_tasks_replay_remake_keeps_what_does_the_task_here_and_leaves_the_rest(tmp_path):
     # Files another stack recorded, as they replay here: actions that reach the goal sooner are kept up to there;
     # actions that run out before it are replaced by the episode their finder (found_by) plays again, closed loop.
-    registry = Path(langgap.__file__).parent / "catalog" / "registry"
-    for name in ("langgap99.yaml", "langgap99.gate.json"):
-        (tmp_path / name).write_bytes((registry / name).read_bytes())
-    copy = str(tmp_path / "langgap99.yaml")
-    _, _, files = verdict_evidence(load_catalog(copy).get(REPLAYED), copy)
-    demo = Demonstration.load(registry / files[1].relative_to(tmp_path))
-    files[1].parent.mkdir(parents=True)
+    copy, file, demo = _registry_copy(tmp_path)
     command = ("tasks", "replay", "--catalog", copy, "--tasks", REPLAYED, "--remake")
     cases = [
         (replace(demo, steps=demo.steps + 5, actions=np.vstack([demo.actions, np.zeros((5, 7))])), "recorded actions"),
         (replace(demo, steps=demo.steps - 1, actions=demo.actions[:-1]), "finder"),
     ]
     for damaged, how in cases:
-        damaged.save(files[1])
+        damaged.save(file)
         remade = run_cli(*command)
         assert remade.returncode == 0, remade.stderr
         assert remade.stdout.splitlines() == [
             f"{REPLAYED} init 1: remade from its {how}: reaches its goal at step {demo.steps} (was {damaged.steps})",
             "1/1 stored demonstration(s) of 1 task(s) replay to their goals",
         ]
-        again = Demonstration.load(files[1])
+        again = Demonstration.load(file)
         assert again.found_by == demo.found_by and again.made_with["physics"]["blas"]
-        assert sorted(p.name for p in files[1].parent.iterdir()) == [files[1].name]  # nothing left beside it
+        assert sorted(p.name for p in file.parent.iterdir()) == [file.name]  # nothing left beside it
         assert run_cli("tasks", "replay", "--catalog", copy, "--tasks", REPLAYED).returncode == 0
     # neither: the file stays as it was (the plain oracle fails this init state) and the line says to search again
     lost = replace(demo, steps=demo.steps - 1, actions=demo.actions[:-1], found_by="oracle")
-    lost.save(files[1])
-    kept = files[1].read_bytes()
+    lost.save(file)
+    kept = file.read_bytes()
     failed = run_cli(*command)
-    assert failed.returncode == 1 and files[1].read_bytes() == kept
+    assert failed.returncode == 1 and file.read_bytes() == kept
     assert failed.stdout.splitlines()[0].endswith(
         "neither its actions nor its finder (oracle) do the task here: search again"
     )
