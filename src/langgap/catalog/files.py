@@ -4,13 +4,14 @@ Original tasks run LIBERO's shipped BDDL unchanged. An extended task's BDDL is g
 source's shipped BDDL by replacing `(:language)`, `(:obj_of_interest)` and `(:goal)` only, and is
 written once to the cache directory (`$LANGGAP_CACHE`, default `~/.cache/langgap`). A task read from
 another benchmark's package (`Task.origin`) runs that package's BDDL file and init states as shipped
-(`catalog/packages.py`).
+(`catalog/packages.py`). What an environment needs of them is resolved once per task (`task_files`).
 """
 
 from __future__ import annotations
 
 import functools
 import hashlib
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -116,3 +117,30 @@ def init_states(task: Task) -> np.ndarray:
     if _runs_own_states(task):
         return packages.own_init_states(task.origin)
     return stack.load_init_states(task.suite, task.scene_task)
+
+
+@dataclass(frozen=True)
+class TaskFiles:
+    """What a LIBERO environment of a task is built and reset from, resolved once (`task_files`).
+
+    Attributes:
+        bddl: A BDDL file LIBERO can load (`task_bddl_path`: checked against the registry, a generated one written).
+        scene: The key of the scene the task is set in (`scene_key`).
+        init_states_file: The file of the init states (`init_states_path`).
+        init_states: The fixed init states the task starts from (`init_states`).
+    """
+
+    bddl: Path
+    scene: str
+    init_states_file: Path
+    init_states: np.ndarray = field(compare=False, repr=False)
+
+    def same_start(self, other: TaskFiles) -> bool:
+        """Whether an environment of `other` starts as one of these: the same scene and the same init states."""
+        return (self.scene, self.init_states_file) == (other.scene, other.init_states_file)
+
+
+def task_files(task: Task) -> TaskFiles:
+    """The files an environment of `task` needs, each resolved (and checked) here."""
+    states = init_states(task)
+    return TaskFiles(task_bddl_path(task), scene_key(task), init_states_path(task), states)

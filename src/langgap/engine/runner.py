@@ -5,8 +5,9 @@ of several (`SharedRollout`) run here, with the runner's policy; any other work 
 its own work (`Job.perform`) with what the runner lends it (the catalog, a kept environment, the output
 directory). A runner owns at most one
 policy and one environment; the environment is built lazily for the task of the next item and kept
-(soft resets) while consecutive items share the task. After an infrastructure failure everything is
-rebuilt, since a crash may leave either broken.
+(soft resets) while consecutive items share the task; a task's files (`TaskFiles`) are resolved the first
+time it comes. After an infrastructure failure everything is rebuilt (and the files resolved again), since a
+crash may leave any of it broken.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from pathlib import Path
 from typing import Any, Protocol
 
 from langgap.catalog.catalog import load_catalog
+from langgap.catalog.files import TaskFiles, task_files
 from langgap.catalog.task import DEFAULT_STYLE, Task
 from langgap.engine.episode import EpisodeSettings, execute_episode, execute_shared, video_hook
 from langgap.engine.filming import VIDEO_DIR, clip_name
@@ -72,6 +74,7 @@ class WorkRunner:
         self.setup = setup
         self.worker = worker
         self.catalog = load_catalog(setup.catalog)
+        self._files: dict[str, TaskFiles] = {}  # by task id: each task's, resolved the first time it comes
         self._policy = None
         self._settings: EpisodeSettings | None = None  # built with the policy (its config hash is the policy's)
         self._env: TaskEnv | None = None
@@ -101,8 +104,15 @@ class WorkRunner:
         env = self._env
         if env is None or env.task.id != task.id or env.options != options:
             self._close_env()
-            self._env = TaskEnv(task, options)
+            self._env = TaskEnv(task, options, self._files_of(task))
         return self._env
+
+    def _files_of(self, task: Task) -> TaskFiles:
+        """The files of `task` (`langgap.catalog.files.task_files`), resolved once by this runner."""
+        files = self._files.get(task.id)
+        if files is None:
+            files = self._files[task.id] = task_files(task)
+        return files
 
     def _run_episode(self, planned: PlannedEpisode, attempts: int) -> EpisodeRecord:
         task = self.catalog.get(planned.key.task_id)
@@ -137,12 +147,13 @@ class WorkRunner:
             self._settings = EpisodeSettings(self.setup.policy, policy_hash, self.setup.style, self.worker)
         # An environment without the video cameras serves every episode but a filmed one (rendering
         # needs a GL context, which costs an environment build seconds and memory: only filming pays it).
-        env = self._env
-        if env is not None and env.can_switch_to(task) and (not film or set(CAMERAS) <= set(env.options.cameras)):
-            env.switch_task(task)
+        env, files = self._env, self._files_of(task)
+        serves = env is not None and (not film or set(CAMERAS) <= set(env.options.cameras))
+        if serves and env.can_switch_to(task, files):
+            env.switch_task(task, files)
         else:
             self._close_env()
-            self._env = TaskEnv(task, self._env_options(film))
+            self._env = TaskEnv(task, self._env_options(film), files)
 
     def _env_options(self, film: bool):
         filming = {}
@@ -163,8 +174,9 @@ class WorkRunner:
             self._env = None
 
     def close(self) -> None:
-        """Release the environment and the policy."""
+        """Release the environment and the policy, and forget the tasks' files."""
         self._close_env()
+        self._files.clear()
         if self._policy is not None and hasattr(self._policy, "close"):
             with contextlib.suppress(Exception):  # closing a broken policy must not hide the original failure
                 self._policy.close()

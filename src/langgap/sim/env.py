@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from langgap.bddl import Predicate
-from langgap.catalog import files
+from langgap.catalog.files import TaskFiles, task_files
 from langgap.catalog.task import Task
 from langgap.errors import InitStateError, SimulationError
 from langgap.goals import Goal, GoalProgress, holds_now
@@ -154,12 +154,13 @@ def state_from_robosuite(obs: dict) -> np.ndarray:
 
 
 class TaskEnv:
-    """A LIBERO environment for `task`. Close it (or use it as a context manager) before exit."""
+    """A LIBERO environment for `task`, built from its files (`files`: resolved here when not given). Close it
+    (or use it as a context manager) before exit."""
 
-    def __init__(self, task: Task, options: EnvOptions | None = None):
+    def __init__(self, task: Task, options: EnvOptions | None = None, files: TaskFiles | None = None):
         self.task = task
         self.options = options or EnvOptions()
-        self.init_states = files.init_states(task)
+        self.files = task_files(task) if files is None else files
         self.t0_hash: str | None = None
         self.steps = 0
         self.renders = 0  # camera images rendered since construction (what benchmarks and tests count)
@@ -170,7 +171,6 @@ class TaskEnv:
         self._holds = False  # the task's goal, as of the last observed step
         self._truth: dict[Predicate, bool] = {}  # atoms read in the state `_truth_of` names
         self._truth_of: tuple | None = None
-        bddl = files.task_bddl_path(task)
         configure_rendering()
         # Imported here: robosuite and MuJoCo load only when an environment is built (after the GL choice).
         from libero.libero.envs.env_wrapper import ControlEnv
@@ -179,7 +179,7 @@ class TaskEnv:
         from langgap.sim.stepping import FastStepping
 
         kwargs = dict(
-            bddl_file_name=str(bddl),
+            bddl_file_name=str(self.files.bddl),
             has_renderer=False,
             has_offscreen_renderer=self.options.renders,
             use_camera_obs=False,  # we render on demand in observe(), never per physics step
@@ -199,23 +199,30 @@ class TaskEnv:
         if self.options.stepping != Stepping.ROBOSUITE:
             FastStepping.install(self._inner, fast=self.options.stepping == Stepping.FAST)
 
+    @property
+    def init_states(self) -> np.ndarray:
+        """The fixed init states the task starts from (`TaskFiles.init_states`)."""
+        return self.files.init_states
+
     # -- lifecycle ---------------------------------------------------------------------------
 
-    def can_switch_to(self, task: Task) -> bool:
-        """Whether `task` is set in this env's scene with the same init states, so the simulator can be kept
-        (a package's task may ship init states of its own beside its source's: LIBERO-PRO's do)."""
-        return (
-            (task.suite, task.scene_task) == (self.task.suite, self.task.scene_task)
-            and files.scene_key(task) == files.scene_key(self.task)
-            and files.init_states_path(task) == files.init_states_path(self.task)
+    def can_switch_to(self, task: Task, files: TaskFiles | None = None) -> bool:
+        """Whether `task` (its `files`: resolved here when not given) is set in this env's scene with the same
+        init states, so the simulator can be kept (a package's task may ship init states of its own beside its
+        source's: LIBERO-PRO's do)."""
+        return (task.suite, task.scene_task) == (self.task.suite, self.task.scene_task) and self.files.same_start(
+            task_files(task) if files is None else files
         )
 
-    def switch_task(self, task: Task) -> None:
-        """Evaluate `task` from now on. Same-scene tasks differ only in goal and instruction, which LangGap
-        evaluates itself, so the simulator (seconds to build) is reused as it is."""
-        if not self.can_switch_to(task):
+    def switch_task(self, task: Task, files: TaskFiles | None = None) -> None:
+        """Evaluate `task` (its `files`: resolved here when not given) from now on. Same-scene tasks differ only
+        in goal and instruction, which LangGap evaluates itself, so the simulator (seconds to build) is reused
+        as it is."""
+        files = task_files(task) if files is None else files
+        if not self.can_switch_to(task, files):
             raise SimulationError(f"cannot switch {self.task.id} to {task.id}: not the same scene and init states")
         self.task = task
+        self.files = files
         self._progress = GoalProgress(task.goal)
         self._holds = False
 
