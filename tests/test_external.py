@@ -204,7 +204,7 @@ def test_a_variant_that_repeats_its_sources_trial_takes_its_verdict_and_is_not_r
     assert _trial(dataclasses.replace(reworded, max_steps=source.max_steps + 1), text) is None
 
     # A run's snapshot holds the taken verdict and the hash of the file it was read from.
-    snapshot = gate_snapshot("libero-pro", [source.id, "spatial/s0/pro-lan"])
+    snapshot = gate_snapshot("libero-pro", [pro.get(source.id), pro.get("spatial/s0/pro-lan")])
     assert snapshot["tasks"][source.id]["inherited_from"] == f"langgap99:{source.id}"
     assert snapshot["tasks"]["spatial/s0/pro-lan"]["inherited_from"] == ""
     langgap99_gate = registry_path("langgap99").with_name("langgap99.gate.json")

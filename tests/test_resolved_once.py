@@ -1,5 +1,5 @@
-"""What an evaluation resolves once and hands down: each task's files (`TaskFiles`), resolved once per worker and
-given to the simulator, which reads none itself."""
+"""What an evaluation resolves once and hands down: the catalog, loaded once per `evaluate` in this process, and
+each task's files (`TaskFiles`), resolved once per worker and given to the simulator, which reads none itself."""
 
 from __future__ import annotations
 
@@ -12,8 +12,12 @@ import pytest
 
 from langgap import stack
 from langgap.catalog import catalog as catalog_module
-from langgap.catalog.files import task_files
+from langgap.catalog import files as files_module
+from langgap.catalog.files import scene_key, task_files
+from langgap.engine.evaluate import evaluate
+from langgap.engine.spec import ExecutionOptions, RunSpec
 from langgap.sim.env import EnvOptions, TaskEnv
+from tests.support.harness import store_rows
 
 
 def _rebind(monkeypatch, original: Callable, replacement: Callable) -> None:
@@ -24,6 +28,35 @@ def _rebind(monkeypatch, original: Callable, replacement: Callable) -> None:
             for name, value in list(vars(module).items()):
                 if value is original:
                     monkeypatch.setattr(module, name, replacement)
+
+
+def _counted(monkeypatch, original: Callable) -> list:
+    """The arguments of every call of `original` from now on (it still does its work)."""
+    calls = []
+
+    def counting(*args, **kwargs):
+        calls.append(args)
+        return original(*args, **kwargs)
+
+    _rebind(monkeypatch, original, counting)
+    return calls
+
+
+def test_an_evaluation_here_loads_its_catalog_once_and_resolves_each_tasks_files_once(
+    short_catalog, tmp_path, monkeypatch
+):
+    spec = RunSpec.create("noop", catalog=short_catalog, episodes=2, conditions=("given", "shuffled"))
+    loads = _counted(monkeypatch, catalog_module.load_catalog)
+    resolved = _counted(monkeypatch, files_module.task_files)
+    summary = evaluate(spec, tmp_path / "run", ExecutionOptions(workers=0, progress=False))
+    assert (summary.ran, summary.gaps) == (12, 0)
+    assert loads == [(short_catalog,)]  # the plan, the gate snapshot and the worker in this process share it
+    assert sorted(task.id for (task,) in resolved) == sorted(spec.tasks)  # each task's files once, for 4 episodes
+    catalog = catalog_module.load_catalog(short_catalog)
+    # The scene the plan found for each task is the one its records carry.
+    assert {(r["task_id"], r["scene"]) for r in store_rows(tmp_path / "run")} == {
+        (t, scene_key(catalog.get(t))) for t in spec.tasks
+    }
 
 
 class FileRead(Exception):

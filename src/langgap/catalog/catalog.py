@@ -305,17 +305,16 @@ def catalog_hash(name: str) -> str:
         raise CatalogError(f"cannot read catalog {path}: {exc}") from None
 
 
-def gate_snapshot(name: str, task_ids: Iterable[str], previous: dict | None = None) -> dict:
-    """The gate verdicts of `task_ids` in catalog `name` with their file's SHA-256, as a run stores them
+def gate_snapshot(name: str, tasks: Iterable[Task], previous: dict | None = None) -> dict:
+    """The gate verdicts of `tasks` of catalog `name` with their file's SHA-256, as a run stores them
     (`snapshot_verdicts`; `previous` keeps a run's earlier snapshot and adds only tasks it lacks), and under
     `switch` the same of its switch verdicts (`switch_verdicts`). A task with `gate_from` gets that task's
     verdict, from its catalog's file."""
-    task_ids, registry = list(task_ids), registry_path(name)
-    catalog = load_catalog(name)
-    inherited = {}
-    for task_id in task_ids:
-        if (taken := catalog.get(task_id).gate_from) is not None:
-            inherited[task_id] = (registry_path(taken.partition(":")[0]), taken)
+    tasks, registry = list(tasks), registry_path(name)
+    task_ids = [t.id for t in tasks]
+    inherited = {
+        t.id: (registry_path(t.gate_from.partition(":")[0]), t.gate_from) for t in tasks if t.gate_from is not None
+    }
     snapshot = snapshot_verdicts(registry, task_ids, previous, inherited)
     return {**snapshot, "switch": snapshot_switch_verdicts(registry, task_ids, (previous or {}).get("switch"))}
 

@@ -8,7 +8,7 @@ from dataclasses import asdict, dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
 
-from langgap.catalog.catalog import gate_snapshot, load_catalog
+from langgap.catalog.catalog import Catalog, gate_snapshot, load_catalog
 from langgap.engine.episode import gap_record
 from langgap.engine.execute import scheduled, with_progress
 from langgap.engine.filming import VideoSelection, replay_matches
@@ -66,9 +66,8 @@ class RunSummary:
         return self.gaps == 0
 
 
-def plan_of(spec: RunSpec) -> list[PlannedEpisode]:
-    """Every episode of the run: each task × condition × init index of the spec."""
-    catalog = load_catalog(spec.catalog)
+def plan_of(spec: RunSpec, catalog: Catalog) -> list[PlannedEpisode]:
+    """Every episode of the run: each task × condition × init index of the spec (`catalog`: the spec's, loaded)."""
     return build_plan(
         [catalog.get(t) for t in spec.tasks],
         catalog,
@@ -87,11 +86,15 @@ def still_to_run(plan: list[PlannedEpisode], done: set[EpisodeKey]) -> list[Plan
     return [p for p in plan if p.key not in done]
 
 
-def _open_store(spec: RunSpec, options: ExecutionOptions, run: Path, *, resume: bool, extend: bool) -> RunStore:
-    """Create the run's store, or reopen it for a resume after checking that it holds the same run."""
+def _open_store(
+    spec: RunSpec, catalog: Catalog, options: ExecutionOptions, run: Path, *, resume: bool, extend: bool
+) -> RunStore:
+    """Create the run's store, or reopen it for a resume after checking that it holds the same run (`catalog`:
+    the spec's, loaded)."""
+    tasks = [catalog.get(t) for t in spec.tasks]
     if not (resume and RunStore.exists(run)):
         created = {"code_version": code_version(), "created_at": datetime.now(UTC).isoformat(timespec="seconds")}
-        gate = gate_snapshot(spec.catalog, spec.tasks)  # reports read these verdicts, never the live gate file
+        gate = gate_snapshot(spec.catalog, tasks)  # reports read these verdicts, never the live gate file
         return RunStore.create(
             run, {"spec": spec.to_dict(), "execution": asdict(options), "created": created, "gate": gate}
         )
@@ -112,7 +115,7 @@ def _open_store(spec: RunSpec, options: ExecutionOptions, run: Path, *, resume: 
         if differing:
             store.set_meta("spec", spec.to_dict())
             if (gate := store.meta("gate")) is not None:  # a run grown by --extend: verdicts of its new tasks
-                store.set_meta("gate", gate_snapshot(spec.catalog, spec.tasks, gate))
+                store.set_meta("gate", gate_snapshot(spec.catalog, tasks, gate))
         store.set_meta("execution", asdict(options))
     except BaseException:
         store.close()
@@ -171,10 +174,10 @@ def evaluate(
     if resume:
         spec = _tasks_as_created(spec, run)
     videos = options.video_selection
-    plan = plan_of(spec)
+    catalog = load_catalog(spec.catalog)  # once: the plan, the store's gate snapshot and a worker here use it
+    plan = plan_of(spec, catalog)
     firsts = videos.filmed_while_running([p.key for p in plan])
     plan = [replace(p, film=True) if p.key in firsts else p for p in plan]
-    catalog = load_catalog(spec.catalog)
     setup = RunnerSetup(
         catalog=spec.catalog,
         policy=spec.policy,
@@ -203,10 +206,10 @@ def evaluate(
 
     # The pool comes first: options it cannot satisfy (no Ray, too few GPUs) fail before a run
     # directory exists. Workers only start when the scheduler asks for them.
-    pool = make_pool(setup, options)
+    pool = make_pool(setup, options, catalog)
     with contextlib.ExitStack() as stack:
         stack.callback(pool.close)
-        store = stack.enter_context(_open_store(spec, options, run, resume=resume, extend=extend))
+        store = stack.enter_context(_open_store(spec, catalog, options, run, resume=resume, extend=extend))
         todo = still_to_run(plan, store.done_keys())
         summary = RunSummary(run, planned=len(plan), skipped=len(plan) - len(todo))
         items = todo if sharing is None else share_rollouts(todo, catalog, sharing, spec.style)
@@ -230,7 +233,7 @@ def evaluate(
     if videos:
 
         def replay(todo: list[PlannedEpisode]) -> Iterator[EpisodeRecord]:
-            pool = make_pool(setup, options)
+            pool = make_pool(setup, options, catalog)
             try:
                 yield from run_episodes(todo, pool)
             finally:

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
-from langgap.catalog.catalog import load_catalog
+from langgap.catalog.catalog import Catalog, load_catalog
 from langgap.catalog.files import TaskFiles, task_files
 from langgap.catalog.task import DEFAULT_STYLE, Task
 from langgap.engine.episode import EpisodeSettings, execute_episode, execute_shared, video_hook
@@ -68,12 +68,13 @@ class WorkFailure(Exception):
 
 
 class WorkRunner:
-    """Does work items on one worker; see the module's docstring."""
+    """Does work items on one worker; see the module's docstring. `catalog`: `setup.catalog` as this process
+    loaded it already (None: loaded here)."""
 
-    def __init__(self, setup: RunnerSetup, worker: int = 0):
+    def __init__(self, setup: RunnerSetup, worker: int = 0, catalog: Catalog | None = None):
         self.setup = setup
         self.worker = worker
-        self.catalog = load_catalog(setup.catalog)
+        self.catalog = load_catalog(setup.catalog) if catalog is None else catalog
         self._files: dict[str, TaskFiles] = {}  # by task id: each task's, resolved the first time it comes
         self._policy = None
         self._settings: EpisodeSettings | None = None  # built with the policy (its config hash is the policy's)

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 from langgap.errors import LangGapError
 
 if TYPE_CHECKING:
+    from langgap.catalog.catalog import Catalog
     from langgap.engine.runner import RunnerSetup
     from langgap.engine.spec import ExecutionOptions
     from langgap.engine.work import WorkItem
@@ -74,20 +75,21 @@ class WorkerPool(Protocol):
         ...
 
 
-PoolFactory = Callable[["RunnerSetup", "ExecutionOptions"], WorkerPool]
+# (setup, options, the catalog `setup` names as this process loaded it: a runner in this process uses it)
+PoolFactory = Callable[["RunnerSetup", "ExecutionOptions", "Catalog | None"], WorkerPool]
 
 
-def _local(setup: RunnerSetup, options: ExecutionOptions) -> WorkerPool:
+def _local(setup: RunnerSetup, options: ExecutionOptions, catalog: Catalog | None) -> WorkerPool:
     if options.workers == 0:
         from langgap.engine.pools.inprocess import InProcessPool
 
-        return InProcessPool(setup)
+        return InProcessPool(setup, catalog)
     from langgap.engine.pools.processes import ProcessPool
 
     return ProcessPool(setup, options)
 
 
-def _ray(setup: RunnerSetup, options: ExecutionOptions) -> WorkerPool:
+def _ray(setup: RunnerSetup, options: ExecutionOptions, _catalog: Catalog | None) -> WorkerPool:
     from langgap.engine.pools.ray import RayPool
 
     return RayPool(setup, options)
@@ -109,8 +111,9 @@ def backend_session(options: ExecutionOptions) -> Iterator[None]:
         yield
 
 
-def make_pool(setup: RunnerSetup, options: ExecutionOptions) -> WorkerPool:
-    """The worker pool of backend `options.backend`."""
+def make_pool(setup: RunnerSetup, options: ExecutionOptions, catalog: Catalog | None = None) -> WorkerPool:
+    """The worker pool of backend `options.backend`. `catalog`: `setup.catalog` as this process loaded it, for a
+    worker in this process (`--workers 0`); workers in other processes load it themselves."""
     if options.backend not in BACKENDS:
         raise LangGapError(f"unknown backend {options.backend!r} (known: {', '.join(sorted(BACKENDS))})")
-    return BACKENDS[options.backend](setup, options)
+    return BACKENDS[options.backend](setup, options, catalog)

@@ -2,23 +2,26 @@
 
 from __future__ import annotations
 
+from langgap.catalog.catalog import Catalog
 from langgap.engine.pools import Event, ItemDone, ItemFailed
 from langgap.engine.runner import RunnerSetup, WorkFailure, WorkRunner
 from langgap.engine.work import WorkItem
 
 
 class InProcessPool:
-    """Runs each submitted item in this process when polled."""
+    """Runs each submitted item in this process when polled; its runners use `catalog` (`setup.catalog` as this
+    process loaded it; None: each loads it)."""
 
-    def __init__(self, setup: RunnerSetup):
+    def __init__(self, setup: RunnerSetup, catalog: Catalog | None = None):
         self.setup = setup
+        self.catalog = catalog
         self._runners: dict[int, WorkRunner] = {}
         self._pending: list[tuple[int, WorkItem, int]] = []
         self._next_id = 0
 
     def spawn(self) -> int:
         worker, self._next_id = self._next_id, self._next_id + 1
-        self._runners[worker] = WorkRunner(self.setup, worker=worker)
+        self._runners[worker] = WorkRunner(self.setup, worker=worker, catalog=self.catalog)
         return worker
 
     def submit(self, worker: int, item: WorkItem, attempt: int) -> None:
