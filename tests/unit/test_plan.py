@@ -8,7 +8,7 @@ import hashlib
 import pytest
 
 from langgap import stack
-from langgap.catalog.catalog import Catalog, catalog_hash, load_catalog
+from langgap.catalog.catalog import Catalog, catalog_hash, load_catalog, load_catalog_file, registry_path
 from langgap.engine.plan import (
     build_plan,
     condition_instruction,
@@ -91,6 +91,25 @@ def test_every_episode_knows_its_scene(catalog):
     # one scene per spatial layout; every libero_goal task shares one layout
     assert sorted(scenes.values(), key=sorted) == [{"goal/s1", "goal/s7"}, {"spatial/s0"}, {"spatial/s1"}]
     assert all(len(scene) == 16 for scene in scenes)
+
+
+def test_a_plan_reads_each_scene_once_however_many_episodes_its_tasks_have(monkeypatch):
+    from langgap.catalog import files
+
+    catalog = load_catalog_file(registry_path("langgap99"))  # a catalog of its own: none of its scenes read yet
+    read = []
+    scene_key = files.scene_key
+
+    def reading(task):
+        read.append(task.id)
+        return scene_key(task)
+
+    monkeypatch.setattr(files, "scene_key", reading)
+    tasks = catalog.select(f"{BOWL_1},{RAMEKIN}")
+    plan = build_plan(tasks, catalog, episodes=5, conditions=("given", "shuffled", "switch:5"), repeats=2)
+    assert len(plan) == 2 * 3 * 5 * 2
+    # The shuffled and switch pools need the scene of every task of the suite: each is read once, for 60 episodes.
+    assert sorted(read) == sorted(t.id for t in catalog if t.suite == "libero_spatial")
 
 
 def test_the_instruction_style_reaches_the_plan(catalog):
@@ -390,7 +409,7 @@ def test_switch_episodes_that_cannot_be_planned_are_errors(catalog):
         build_plan([task], catalog, episodes=1, conditions=("switch:220",))
     assert build_plan([task], catalog, episodes=1, conditions=("switch:219",))[0].changes[0][0] == 219
     with pytest.raises(LangGapError, match="switch:K takes K"):
-        switch_episode(EpisodeKey(task.id, 0, 0, "switch:0"), task, catalog, "libero")
+        switch_episode(EpisodeKey(task.id, 0, 0, "switch:0"), task, catalog, "libero", catalog.scene_key(task))
     with pytest.raises(LangGapError, match=f"^switch: {lone.id} has no sibling task in its scene to start under$"):
         switch_source(lone, catalog, "libero", 0)
 

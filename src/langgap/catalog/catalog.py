@@ -56,6 +56,7 @@ class Catalog:
         self.description = description
         self.tasks: tuple[Task, ...] = tuple(tasks)
         self._by_id: dict[str, Task] = {}
+        self._scene_keys: dict[str, str] = {}  # by task id: `scene_key`, computed the first time it is asked
         for task in self.tasks:
             if task.id in self._by_id:
                 raise CatalogError(f"catalog {name}: duplicate task id {task.id}")
@@ -100,10 +101,20 @@ class Catalog:
 
     def scene_mates(self, task: Task) -> tuple[Task, ...]:
         """All tasks set in the same scene layout as `task` (may use other init states, as in libero_goal)."""
+        key = self.scene_key(task)
+        return tuple(t for t in self.tasks if t.suite == task.suite and self.scene_key(t) == key)
+
+    def scene_key(self, task: Task) -> str:
+        """The key of the scene `task` is set in (`langgap.catalog.files.scene_key`), computed once for each of
+        the catalog's tasks."""
         from langgap.catalog.files import scene_key
 
-        key = scene_key(task)
-        return tuple(t for t in self.tasks if t.suite == task.suite and scene_key(t) == key)
+        if self._by_id.get(task.id) is not task:  # not one of ours (a copy with other fields, say): no memo
+            return scene_key(task)
+        key = self._scene_keys.get(task.id)
+        if key is None:
+            key = self._scene_keys[task.id] = scene_key(task)
+        return key
 
     def select(self, expression: str | None) -> list[Task]:
         """Tasks matching a selection expression, in catalog order.

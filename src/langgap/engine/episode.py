@@ -17,7 +17,6 @@ import numpy as np
 
 from langgap import stack
 from langgap.catalog.catalog import Catalog
-from langgap.catalog.files import scene_key
 from langgap.catalog.task import Task
 from langgap.engine.context import planned_context
 from langgap.engine.plan import PlannedEpisode
@@ -62,7 +61,7 @@ def _record(planned: PlannedEpisode, task: Task, **values) -> EpisodeRecord:
         dimension=task.dimension,
         split=task.split,
         source=task.source,
-        scene=scene_key(task),
+        scene=planned.scene,
         max_steps=task.max_steps,
         settle_steps=SETTLE_STEPS,
         code_version=code_version(),

@@ -6,9 +6,11 @@ killed and resumed, and still consist of exactly the same episodes.
 
 from __future__ import annotations
 
+import functools
 import hashlib
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import ClassVar, TypeVar
 
 import numpy as np
 
@@ -29,6 +31,7 @@ _CONDITION_MEANING = {
     f"{TaskKind.ORIGINAL}'s sibling) until policy step K, then the task's own",
 }
 CONDITION_HELP = "; ".join(f"{condition}: {meaning}" for condition, meaning in _CONDITION_MEANING.items())
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -40,7 +43,7 @@ class PlannedEpisode:
 
     key: EpisodeKey
     instruction: str  # the exact string the policy will receive first
-    scene: str = ""  # the scene it is set in: a worker's environment serves every task of one scene
+    scene: str  # the key of the scene it is set in (a worker's environment serves every task of one), recorded
     film: bool = False  # record a clip of the episode (the run's `--video` chose it)
     # (policy step, instruction): where the instruction changes mid-episode (condition `switch:K`)
     changes: tuple[tuple[int, str], ...] = ()
@@ -89,47 +92,127 @@ def unknown_conditions_text(unknown: list[str]) -> str:
     return "; ".join(parts)
 
 
-def _pick(pool: list[Task], *salt) -> Task:
+def _pick(pool: Sequence[T], *salt) -> T:
     """A deterministic member of `pool`, spread over it by `salt` (a task id, an init index, a seed)."""
     digest = hashlib.sha256("#".join(str(s) for s in salt).encode()).digest()
     return pool[int.from_bytes(digest[:8], "big") % len(pool)]
 
 
-def _switch_pool(task: Task, catalog: Catalog, style: str) -> list[Task]:
-    """The tasks a `switch:K` episode of `task` may start under: an extended task's source; for an original,
-    the siblings of its scene with another instruction and goal."""
-    if task.kind != TaskKind.ORIGINAL:
-        return [catalog.get(task.source)]
-    own = task.instruction(style)
-    return [
-        t for t in catalog.scene_mates(task) if t.id != task.id and t.instruction(style) != own and t.goal != task.goal
-    ]
+@functools.lru_cache(maxsize=8)
+def _vocabulary(catalog: Catalog, style: str) -> tuple[str, ...]:
+    """The words of every instruction of `catalog` in `style`, sorted (once per catalog and style)."""
+    return tuple(sorted({word for t in catalog for word in t.instruction(style).split()}))
+
+
+class TaskLanguage:
+    """What the episodes of `task` may be told under each language condition: its instruction, its source's, the
+    other instructions of its scene, the tasks a `switch:K` may start under, words of the catalog. Each is read
+    from `catalog` the first time a condition asks for it, so a plan asks the catalog once per task, not once per
+    episode."""
+
+    def __init__(self, task: Task, catalog: Catalog, style: str):
+        self.task, self.catalog, self.style = task, catalog, style
+
+    @functools.cached_property
+    def own(self) -> str:
+        """The task's instruction."""
+        return self.task.instruction(self.style)
+
+    @functools.cached_property
+    def switch_pool(self) -> list[Task]:
+        """The tasks a `switch:K` episode may start under: an extended task's source; for an original, the
+        siblings of its scene with another instruction and goal."""
+        task, catalog, style = self.task, self.catalog, self.style
+        if task.kind != TaskKind.ORIGINAL:
+            return [catalog.get(task.source)]
+        return [
+            t
+            for t in catalog.scene_mates(task)
+            if t.id != task.id and t.instruction(style) != self.own and t.goal != task.goal
+        ]
+
+    @functools.cached_property
+    def _shuffle_pool(self) -> list[str]:
+        """The other instructions of the task's scene (of its suite, for a scene with one task: libero_10's)."""
+        task, style = self.task, self.style
+
+        def others(tasks: Iterable[Task]) -> list[str]:
+            return [i for t in tasks if t.id != task.id and (i := t.instruction(style)) != self.own]
+
+        return others(self.catalog.scene_mates(task)) or others(t for t in self.catalog if t.suite == task.suite)
+
+    def instruction(self, condition: str, init_index: int) -> str:
+        """The instruction a policy receives for the task under a language `condition` (not `switch:K`)."""
+        if condition == Condition.GIVEN:
+            return self.own
+        if condition == Condition.EMPTY:
+            return ""
+        if condition == Condition.SOURCE:
+            return self.catalog.get(self.task.source).instruction(self.style)
+        if condition == Condition.NONSENSE:
+            return self.nonsense(init_index)
+        if condition == Condition.SHUFFLED:
+            if not self._shuffle_pool:
+                raise CatalogError(f"no other instruction to shuffle in for {self.task.id}")
+            # Deterministic and spread over the pool: the choice depends on the task and the init index only.
+            return _pick(self._shuffle_pool, self.task.id, init_index)
+        raise CatalogError(unknown_conditions_text([condition]))
+
+    def nonsense(self, init_index: int) -> str:
+        """As many words as the task's instruction has, drawn (seeded by the task and init index) from the words
+        of every instruction of the catalog: a sentence of the benchmark's words that asks for nothing."""
+        vocabulary = _vocabulary(self.catalog, self.style)
+        seed = int.from_bytes(hashlib.sha256(f"{self.task.id}#nonsense#{init_index}".encode()).digest()[:8])
+        words = np.random.default_rng(seed).integers(len(vocabulary), size=len(self.own.split()))
+        return " ".join(vocabulary[i] for i in words)
+
+    def switch_source(self, seed: int) -> Task:
+        """The task whose instruction a `switch:K` episode starts under: one of `switch_pool`, chosen from the
+        episode's seed."""
+        if not self.switch_pool:
+            raise CatalogError(f"switch: {self.task.id} has no sibling task in its scene to start under")
+        return _pick(self.switch_pool, self.task.id, "switch", seed)
+
+    def switch_episode(self, key: EpisodeKey, scene: str) -> PlannedEpisode:
+        """A `switch:K` episode (K from `key.condition`) of the task, set in `scene`: under its first task's
+        instruction until policy step K, then the task's own. A K the task never reaches is a CatalogError."""
+        task = self.task
+        k = switch_step(key.condition)
+        if k is None:
+            raise CatalogError(unknown_conditions_text([key.condition]))
+        if k >= task.max_steps:
+            raise CatalogError(
+                f"{key.condition}: {task.id} ends at step {task.max_steps}, before its instruction would switch"
+            )
+        first = self.switch_source(key.seed)
+        return PlannedEpisode(key, first.instruction(self.style), scene, changes=((k, self.own),), started_as=first.id)
 
 
 def switch_source(task: Task, catalog: Catalog, style: str, seed: int) -> Task:
-    """The task whose instruction a `switch:K` episode of `task` starts under: an extended task's source;
-    for an original, one of its scene's siblings (`_switch_pool`), chosen from the episode's seed."""
-    pool = _switch_pool(task, catalog, style)
-    if not pool:
-        raise CatalogError(f"switch: {task.id} has no sibling task in its scene to start under")
-    return _pick(pool, task.id, "switch", seed)
+    """The task whose instruction a `switch:K` episode of `task` starts under (`TaskLanguage.switch_source`)."""
+    return TaskLanguage(task, catalog, style).switch_source(seed)
+
+
+def switch_episode(key: EpisodeKey, task: Task, catalog: Catalog, style: str, scene: str) -> PlannedEpisode:
+    """A `switch:K` episode of `task`, set in `scene` (`TaskLanguage.switch_episode`)."""
+    return TaskLanguage(task, catalog, style).switch_episode(key, scene)
+
+
+def condition_instruction(task: Task, catalog: Catalog, condition: str, style: str, init_index: int) -> str:
+    """The instruction a policy receives for `task` under a language `condition` (`TaskLanguage.instruction`)."""
+    return TaskLanguage(task, catalog, style).instruction(condition, init_index)
 
 
 def without_switch_source(tasks: list[Task], catalog: Catalog, style: str = "libero") -> list[str]:
     """The ids of `tasks` that no `switch:K` episode can start under another instruction of: originals whose
     scene holds no other task of the catalog (libero_10's scenes in LangGap-99). A plan leaves their switch
     episodes out."""
-    return [t.id for t in tasks if not _switch_pool(t, catalog, style)]
-
-
-def _unswitched(tasks: list[Task], catalog: Catalog, conditions: tuple[str, ...], style: str) -> list[str]:
-    """`without_switch_source` when `conditions` hold a `switch:K`; no task otherwise."""
-    return without_switch_source(tasks, catalog, style) if any(map(switch_step, conditions)) else []
+    return [t.id for t in tasks if not TaskLanguage(t, catalog, style).switch_pool]
 
 
 def switch_note(tasks: list[Task], catalog: Catalog, conditions: tuple[str, ...], style: str = "libero") -> str:
     """The line that says which tasks a plan with `switch:K` conditions leaves unswitched (empty: none)."""
-    missing = _unswitched(tasks, catalog, conditions, style)
+    missing = without_switch_source(tasks, catalog, style) if any(map(switch_step, conditions)) else []
     if not missing:
         return ""
     shown = ", ".join(missing[:4]) + (f", … ({len(missing) - 4} more)" if len(missing) > 4 else "")
@@ -137,39 +220,6 @@ def switch_note(tasks: list[Task], catalog: Catalog, conditions: tuple[str, ...]
         f"note: {len(missing)} task(s) have no other task in their scene to start under; their {SWITCH}K "
         f"episodes are not planned: {shown}"
     )
-
-
-def nonsense(task: Task, catalog: Catalog, style: str, init_index: int) -> str:
-    """As many words as `task`'s instruction has, drawn (seeded by the task and init index) from the words of
-    every instruction of the catalog: a sentence of the benchmark's words that asks for nothing."""
-    vocabulary = sorted({word for t in catalog for word in t.instruction(style).split()})
-    length = len(task.instruction(style).split())
-    rng = np.random.default_rng(
-        int.from_bytes(hashlib.sha256(f"{task.id}#nonsense#{init_index}".encode()).digest()[:8])
-    )
-    return " ".join(vocabulary[i] for i in rng.integers(len(vocabulary), size=length))
-
-
-def condition_instruction(task: Task, catalog: Catalog, condition: str, style: str, init_index: int) -> str:
-    """The instruction a policy receives for `task` under a language `condition`."""
-    if condition == Condition.GIVEN:
-        return task.instruction(style)
-    if condition == Condition.EMPTY:
-        return ""
-    if condition == Condition.SOURCE:
-        return catalog.get(task.source).instruction(style)
-    if condition == Condition.NONSENSE:
-        return nonsense(task, catalog, style, init_index)
-    if condition == Condition.SHUFFLED:
-        own = task.instruction(style)
-        pool = [t for t in catalog.scene_mates(task) if t.id != task.id and t.instruction(style) != own]
-        if not pool:  # a scene with one task (e.g. libero_10): fall back to the suite
-            pool = [t for t in catalog if t.suite == task.suite and t.instruction(style) != own]
-        if not pool:
-            raise CatalogError(f"no other instruction to shuffle in for {task.id}")
-        # Deterministic and spread over the pool: the choice depends on the task and the init index only.
-        return _pick(pool, task.id, init_index).instruction(style)
-    raise CatalogError(unknown_conditions_text([condition]))
 
 
 def build_plan(
@@ -191,52 +241,27 @@ def build_plan(
     unknown = unknown_conditions(conditions)
     if unknown:
         raise CatalogError(unknown_conditions_text(unknown))
-    from langgap.catalog import files
-    from langgap.catalog.files import scene_key
+    from langgap.catalog.files import init_states
 
     plan = []
-    unswitched = set(_unswitched(tasks, catalog, conditions, style))
     for task in tasks:
-        available = files.init_states(task).shape[0]
+        available = init_states(task).shape[0]
         if first_init < 0 or first_init + episodes > available:
             raise InitStateError(
                 f"{task.id} has {available} init states; init indices {first_init}..{first_init + episodes - 1} "
                 "are out of range"
             )
+        # What the task's episodes are set in and told, read from the catalog once for all of them.
+        scene, language = catalog.scene_key(task), TaskLanguage(task, catalog, style)
         for condition in conditions:
             k = switch_step(condition)
-            if k and task.id in unswitched:
+            if k and not language.switch_pool:
                 continue
             for init_index in range(first_init, first_init + episodes):
-                instruction = None if k else condition_instruction(task, catalog, condition, style, init_index)
+                instruction = None if k else language.instruction(condition, init_index)
                 for repeat in range(repeats):
                     key = EpisodeKey(task.id, init_index, episode_seed(seed, init_index, repeat), condition)
-                    if k:
-                        plan.append(switch_episode(key, task, catalog, style))
-                    else:
-                        plan.append(PlannedEpisode(key, instruction, scene=scene_key(task)))
+                    plan.append(language.switch_episode(key, scene) if k else PlannedEpisode(key, instruction, scene))
     if not plan:
         raise CatalogError("switch: no selected task has another task in its scene to start under")
     return plan
-
-
-def switch_episode(key: EpisodeKey, task: Task, catalog: Catalog, style: str) -> PlannedEpisode:
-    """A `switch:K` episode (K from `key.condition`): under its first task's instruction until policy step K,
-    then the task's own. A K the task never reaches is a CatalogError."""
-    from langgap.catalog.files import scene_key
-
-    k = switch_step(key.condition)
-    if k is None:
-        raise CatalogError(unknown_conditions_text([key.condition]))
-    if k >= task.max_steps:
-        raise CatalogError(
-            f"{key.condition}: {task.id} ends at step {task.max_steps}, before its instruction would switch"
-        )
-    first = switch_source(task, catalog, style, key.seed)
-    return PlannedEpisode(
-        key,
-        first.instruction(style),
-        scene=scene_key(task),
-        changes=((k, task.instruction(style)),),
-        started_as=first.id,
-    )

@@ -18,8 +18,8 @@ from collections.abc import Hashable
 from dataclasses import dataclass
 from typing import ClassVar
 
-from langgap.catalog import files
 from langgap.catalog.catalog import Catalog
+from langgap.catalog.files import init_states_path
 from langgap.engine.context import planned_context
 from langgap.engine.plan import PlannedEpisode
 from langgap.policies import make_policy
@@ -59,7 +59,7 @@ def rollout_key(planned: PlannedEpisode, catalog: Catalog, spec: PolicySpec, sty
     context = planned_context(planned, task, catalog, style).for_policy(spec)
     # The start (`TaskEnv.can_switch_to`), everything the policy is told (the context holds the init index, seed
     # and step limit), and when it is asked again because its instruction switched.
-    start = task.suite, task.scene_task, files.scene_key(task), str(files.init_states_path(task))
+    start = task.suite, task.scene_task, planned.scene, str(init_states_path(task))
     return *start, context, change_steps(planned)
 
 

@@ -183,10 +183,10 @@ class LangGapTaskEnv(gym.Env):
         key = EpisodeKey(self.task.id, init_index, episode_seed(self._run_seed, init_index), condition)
         # The harness's plan entry for this episode (what `langgap eval` would run and record).
         if switch_step(condition) is not None:
-            self._planned = switch_episode(key, self.task, self._catalog, self.style)
+            self._planned = switch_episode(key, self.task, self._catalog, self.style, sim.files.scene)
         else:
             instruction = condition_instruction(self.task, self._catalog, condition, self.style, init_index)
-            self._planned = PlannedEpisode(key, instruction)
+            self._planned = PlannedEpisode(key, instruction, sim.files.scene)
         self._context = planned_context(self._planned, self.task, self._catalog, self.style)
         self._instructions = [(0, self._planned.instruction)]
         with global_rng_kept():
