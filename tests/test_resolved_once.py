@@ -13,6 +13,7 @@ import pytest
 from langgap import stack
 from langgap.catalog import catalog as catalog_module
 from langgap.catalog import files as files_module
+from langgap.catalog import packages
 from langgap.catalog.files import scene_key, task_files
 from langgap.engine.evaluate import evaluate
 from langgap.engine.spec import ExecutionOptions, RunSpec
@@ -92,3 +93,15 @@ def test_the_simulator_runs_on_the_files_it_is_given_and_reads_none_itself(short
         env.switch_task(sibling, sibling_files)
         env.reset(1, seed=1)
         assert env.task is sibling and env.files is sibling_files and env.init_states is sibling_files.init_states
+
+
+@pytest.mark.parametrize("catalog", ["libero-pro", "libero-plus-language"])
+def test_a_package_tasks_files_are_resolved_in_one_pass(catalog, monkeypatch):
+    # One read and one SHA-256 check of the package's BDDL file gives the file LIBERO loads (installed, or
+    # extracted from the wheel: written once), the check against the registry and the scene key.
+    task = next(t for t in catalog_module.load_catalog(catalog).tasks if t.origin is not None)
+    checked = _counted(monkeypatch, packages.checked_bytes)
+    files = task_files(task)
+    assert checked == [(task.origin,)]
+    assert files.bddl.read_bytes() == packages.checked_bytes(task.origin)
+    assert files.scene == scene_key(task)

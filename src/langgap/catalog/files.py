@@ -31,7 +31,7 @@ def scene_bddl_path(task: Task) -> Path:
     """LIBERO's shipped BDDL of the task whose scene `task` uses (a package's task: its own file, the scene it
     ships)."""
     if task.origin is not None:
-        return packages.bddl_path(task.origin)
+        return packages.bddl_path(task.origin, packages.checked_bytes(task.origin))
     return stack.bddl_path(task.suite, task.scene_task)
 
 
@@ -43,10 +43,19 @@ def _read_text(path: Path) -> str:
         raise BddlError(f"cannot read BDDL file {path}: {exc.strerror}") from None
 
 
+def _scene_text(task: Task) -> tuple[str, str]:
+    """The shipped BDDL text of the scene `task` is set in (a package's task: its own file, checked against the
+    registry), and the name of the file it was read from."""
+    if task.origin is not None:
+        return packages.checked_bytes(task.origin).decode("utf-8"), task.origin.file
+    path = stack.bddl_path(task.suite, task.scene_task)
+    return _read_text(path), str(path)
+
+
 def scene_problem(task: Task) -> BddlProblem:
     """The parsed scene (objects, fixtures, regions, init) of `task`."""
-    path = scene_bddl_path(task)
-    return parse_bddl(_read_text(path), source=str(path))
+    text, source = _scene_text(task)
+    return parse_bddl(text, source=source)
 
 
 def scene_key(task: Task) -> str:
@@ -54,33 +63,35 @@ def scene_key(task: Task) -> str:
 
     Tasks with equal keys have the same objects, fixtures and placements; all libero_goal tasks share one.
     """
-    return _scene_key(scene_bddl_path(task))
+    return _scene_hash(_scene_text(task)[0])
 
 
 @functools.lru_cache(maxsize=256)
-def _scene_key(path: Path) -> str:
-    return hashlib.sha256(strip_task_sections(_read_text(path)).encode("utf-8")).hexdigest()[:16]
+def _scene_hash(text: str) -> str:
+    return hashlib.sha256(strip_task_sections(text).encode("utf-8")).hexdigest()[:16]
 
 
 def task_bddl_text(task: Task) -> str:
     """The BDDL text of `task`: LIBERO's own for originals, generated for extended tasks."""
+    return _task_text(task, *_scene_text(task))
+
+
+def _task_text(task: Task, scene_text: str, source: str) -> str:
+    """`task_bddl_text` from its scene's text, read from `source`."""
     if task.origin is not None:
-        text = packages.checked_bytes(task.origin).decode("utf-8")
-        shipped = parse_bddl(text, source=task.origin.file)
+        shipped = parse_bddl(scene_text, source=source)
         if conjunction(shipped.goal) != task.goal or shipped.language != task.instruction(InstructionStyle.PAPER):
-            raise BddlError(f"task {task.id}: registry goal or instruction differs from {task.origin.file}")
-        return text
-    source_text = _read_text(scene_bddl_path(task))
+            raise BddlError(f"task {task.id}: registry goal or instruction differs from {source}")
+        return scene_text
     if task.kind == TaskKind.ORIGINAL:
-        shipped = parse_bddl(source_text, source=str(scene_bddl_path(task)))
-        if conjunction(shipped.goal) != task.goal:
+        if conjunction(parse_bddl(scene_text, source=source).goal) != task.goal:
             raise BddlError(f"task {task.id}: registry goal {task.goal_strings} differs from LIBERO's BDDL")
-        return source_text
+        return scene_text
     try:
         # Atoms only the goal language reads (an `Or`'s other parts, a `Not`) must name the scene's things too.
-        parse_bddl(source_text).check_goal(atoms(task.goal))
+        parse_bddl(scene_text).check_goal(atoms(task.goal))
         return rewrite_task_sections(
-            source_text,
+            scene_text,
             language=task.instruction(InstructionStyle.PAPER),
             obj_of_interest=task.obj_of_interest,
             goal=task.bddl_goal,
@@ -91,10 +102,16 @@ def task_bddl_text(task: Task) -> str:
 
 def task_bddl_path(task: Task) -> Path:
     """A BDDL file for `task` that LIBERO can load; generated files are written atomically once."""
-    if task.kind == TaskKind.ORIGINAL or task.origin is not None:
-        task_bddl_text(task)  # checks the registry against the shipped file
-        return scene_bddl_path(task)
-    text = task_bddl_text(task)
+    return _bddl_file(task, task_bddl_text(task))
+
+
+def _bddl_file(task: Task, text: str) -> Path:
+    """A file LIBERO can load holding `text`, the checked BDDL of `task`: the shipped file, or one written to the
+    cache (a package's extracted from its wheel, an extended task's generated) unless it holds `text` already."""
+    if task.origin is not None:
+        return packages.bddl_path(task.origin, text.encode("utf-8"))
+    if task.kind == TaskKind.ORIGINAL:
+        return stack.bddl_path(task.suite, task.scene_task)
     path = cache_dir() / "bddl" / task.catalog / f"{task.id}.bddl"
     if not path.is_file() or path.read_text(encoding="utf-8") != text:
         write_text_atomically(path, text)  # concurrent workers never see a half-written file
@@ -141,6 +158,8 @@ class TaskFiles:
 
 
 def task_files(task: Task) -> TaskFiles:
-    """The files an environment of `task` needs, each resolved (and checked) here."""
+    """The files an environment of `task` needs, resolved (and checked) in one pass: its scene's file read once."""
     states = init_states(task)
-    return TaskFiles(task_bddl_path(task), scene_key(task), init_states_path(task), states)
+    scene_text, source = _scene_text(task)
+    bddl = _bddl_file(task, _task_text(task, scene_text, source))
+    return TaskFiles(bddl, _scene_hash(scene_text), init_states_path(task), states)

