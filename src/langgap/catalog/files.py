@@ -159,7 +159,6 @@ class TaskFiles:
 
 def task_files(task: Task) -> TaskFiles:
     """The files an environment of `task` needs, resolved (and checked) in one pass: its scene's file read once."""
-    states = init_states(task)
     scene_text, source = _scene_text(task)
-    bddl = _bddl_file(task, _task_text(task, scene_text, source))
-    return TaskFiles(bddl, _scene_hash(scene_text), init_states_path(task), states)
+    text = _task_text(task, scene_text, source)
+    return TaskFiles(_bddl_file(task, text), _scene_hash(scene_text), init_states_path(task), init_states(task))
