@@ -237,7 +237,8 @@ def test_a_schema_version_that_is_no_number_or_missing_is_unsupported(tmp_path, 
 
 def test_a_store_opens_with_its_directory_and_schema_and_is_created_in_an_empty_directory(tmp_path):
     (tmp_path / "run").mkdir()
-    RunStore.create(tmp_path / "run", {}).close()  # an existing empty directory is fine
+    with RunStore.create(tmp_path / "run", {}) as store:  # an existing empty directory is fine
+        assert (store.directory, store.schema) == (tmp_path / "run", SCHEMA_VERSION)
     with RunStore.open(tmp_path / "run") as store:
         assert (store.directory, store.schema) == (tmp_path / "run", SCHEMA_VERSION)
     _schema_1_store(tmp_path / "old")
