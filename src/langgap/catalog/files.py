@@ -31,7 +31,7 @@ def scene_bddl_path(task: Task) -> Path:
     """LIBERO's shipped BDDL of the task whose scene `task` uses (a package's task: its own file, the scene it
     ships)."""
     if task.origin is not None:
-        return packages.bddl_path(task.origin, packages.checked_bytes(task.origin))
+        return packages.loadable_bddl(task.origin, packages.checked_bytes(task.origin))
     return stack.bddl_path(task.suite, task.scene_task)
 
 
@@ -109,7 +109,7 @@ def _bddl_file(task: Task, text: str) -> Path:
     """A file LIBERO can load holding `text`, the checked BDDL of `task`: the shipped file, or one written to the
     cache (a package's extracted from its wheel, an extended task's generated) unless it holds `text` already."""
     if task.origin is not None:
-        return packages.bddl_path(task.origin, text.encode("utf-8"))
+        return packages.loadable_bddl(task.origin, text.encode("utf-8"))
     if task.kind == TaskKind.ORIGINAL:
         return stack.bddl_path(task.suite, task.scene_task)
     path = cache_dir() / "bddl" / task.catalog / f"{task.id}.bddl"

