@@ -83,6 +83,12 @@ def _from_row(row: sqlite3.Row, present: set[str]) -> EpisodeRecord:
     return EpisodeRecord(**data)
 
 
+def _remove_database(path: Path) -> None:
+    """Delete an SQLite database and the journal files beside it."""
+    for file in (path, path.with_name(f"{path.name}-wal"), path.with_name(f"{path.name}-shm")):
+        file.unlink(missing_ok=True)
+
+
 def _lock_for_writing(directory: Path) -> int:
     """Take the run's writer lock (non-blocking); returns its file descriptor, closed to release it."""
     fd = os.open(directory / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
@@ -139,6 +145,8 @@ class RunStore:
                     "run {directory} already exists; pass {resume} to continue it, or choose a new {run}",
                     directory=directory,
                 )
+            # A create that fails part-way leaves no store behind (a retry would find one without its meta).
+            undo.callback(_remove_database, path)
             db = cls._connect(path)
             undo.callback(db.close)
             with db:

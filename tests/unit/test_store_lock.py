@@ -129,6 +129,11 @@ def test_a_create_that_fails_part_way_raises_its_failure_and_lets_go_of_the_data
     with pytest.raises(TypeError, match="is not JSON serializable"):
         RunStore.create(run, {"spec": {"policy": object()}})
     assert _open_files_under(run) == []
+    assert sorted(p.name for p in run.iterdir()) == [LOCK_NAME]  # no half-made store: a retry creates the run
+    RunStore.create(run, {"spec": {"policy": "noop"}}).close()
+    store = RunStore.open(run)
+    assert store.meta("spec") == {"policy": "noop"}
+    store.close()
     fd = os.open(run / LOCK_NAME, os.O_RDWR)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # free: nobody holds it
