@@ -490,3 +490,30 @@ def test_a_task_without_a_switch_source_keeps_the_episodes_of_its_other_conditio
         (task.id, "given"),
         (task.id, "empty"),
     ]
+
+
+def test_one_switch_episode_rebuilt_alone_is_the_plans_under_its_style(catalog):
+    # What the Gymnasium environment and the instruction checks call for one episode: the plan's own episode
+    # of that task, key, scene and style, and the task it starts under.
+    extended = catalog.get("spatial/s0/cookie-box-on-plate")
+    for style in ("libero", "paper"):
+        (planned,) = build_plan([extended], catalog, episodes=1, seed=4, conditions=("switch:5",), style=style)
+        assert switch_episode(planned.key, extended, catalog, style, planned.scene) == planned
+        assert switch_source(extended, catalog, style, planned.key.seed).id == planned.started_as
+        assert planned.instruction == catalog.get(planned.started_as).instruction(style)
+    paper = build_plan([extended], catalog, episodes=1, seed=4, conditions=("switch:5",), style="paper")[0]
+    assert paper.instruction != switch_episode(paper.key, extended, catalog, "libero", paper.scene).instruction
+    # an original starts under one of several scene mates, drawn by the episode's seed
+    original = catalog.get("spatial/s0/black-bowl-1-on-plate")
+    plan = build_plan([original], catalog, episodes=8, conditions=("switch:5",))
+    assert [switch_source(original, catalog, "libero", p.key.seed).id for p in plan] == [p.started_as for p in plan]
+    assert len({p.started_as for p in plan}) > 1
+
+
+def test_the_switch_note_asks_about_the_runs_own_style():
+    # In LIBERO-PRO's package style 28 of its tasks (its originals) have no scene mate that sends another
+    # sentence with another goal, so they have nothing to start under; in LangGap's styles every task has one.
+    pro = load_catalog("libero-pro")
+    tasks = list(pro)
+    assert switch_note(tasks, pro, ("switch:5",), "libero") == ""
+    assert switch_note(tasks, pro, ("switch:5",), "package").startswith("note: 28 task(s) have no other task")
