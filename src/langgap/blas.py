@@ -17,6 +17,7 @@ library until `blas_core` is called.
 from __future__ import annotations
 
 import ctypes
+import functools
 import glob
 import os
 import platform
@@ -48,9 +49,10 @@ def pin_blas_core() -> None:
         os.environ["OPENBLAS_CORETYPE"] = PINNED_CORE
 
 
+@functools.cache
 def blas_core() -> str:
     """The BLAS numpy runs on: OpenBLAS's kernel name (`Haswell`, `SkylakeX`, ...), else the library's name
-    (`accelerate` on macOS); `unknown` when neither can be read."""
+    (`accelerate` on macOS); `unknown` when neither can be read. Read once: OpenBLAS chooses when it loads."""
     import numpy
 
     blas = numpy.__config__.CONFIG.get("Build Dependencies", {}).get("blas", {}).get("name") or "unknown"

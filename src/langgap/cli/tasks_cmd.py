@@ -310,7 +310,7 @@ def _remade(check, failure: str):
     """`tasks replay --remake` on a file that failed: the check and its line once remade (`remake`)."""
     from dataclasses import replace
 
-    from langgap.gate.demonstrations import Demonstration, DemonstrationError, replay_env, verify
+    from langgap.gate.demonstrations import Demonstration, DemonstrationError, save_verified
     from langgap.gate.search import remake
 
     catalog = load_catalog(check.catalog)
@@ -319,15 +319,10 @@ def _remade(check, failure: str):
     if remade is None:
         return check, f"{failure}; neither its actions nor its finder ({old.found_by}) do the task here: search again"
     new, how = remade
-    # written beside the file and moved over it only once it replays: a failed remake leaves the old file
-    written = new.save(check.path.with_name(f"{check.path.stem}.remade.npz"))
     try:
-        with replay_env(catalog.get(check.task_id), new.stepping) as env:
-            verify(env, Demonstration.load(written), catalog)
+        save_verified(new, check.path, catalog)
     except DemonstrationError as exc:
-        written.unlink()
         return check, f"{failure}; remade from its {how}, but {exc}"
-    written.replace(check.path)
     line = f"remade from its {how}: reaches its goal at step {new.steps} (was {old.steps})"
     return replace(check, steps=new.steps, error=""), line
 

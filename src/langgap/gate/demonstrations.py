@@ -128,6 +128,19 @@ def verify(env: TaskEnv, demo: Demonstration, catalog: Catalog) -> None:
                                  f"the demonstration at step {demo.steps}")  # fmt: skip
 
 
+def save_verified(demo: Demonstration, path: Path, catalog: Catalog) -> None:
+    """Store `demo` at `path` only once the file, read back, replays to its goal at its recorded step (`verify`):
+    it is written beside `path` and moved over it, so a DemonstrationError leaves whatever `path` held."""
+    written = demo.save(path.with_name(f"{path.stem}.new.npz"))
+    try:
+        with replay_env(catalog.get(demo.task_id), demo.stepping) as env:
+            verify(env, Demonstration.load(written), catalog)
+    except DemonstrationError:
+        written.unlink()
+        raise
+    written.replace(path)
+
+
 def replay_env(task: Task, stepping: str) -> TaskEnv:
     """The cheapest environment a replay needs: nothing rendered, nothing privileged."""
     return TaskEnv(task, EnvOptions(stepping=stepping))

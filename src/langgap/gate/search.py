@@ -41,7 +41,7 @@ from langgap.gate.demonstrations import (
     demonstration_path,
     replay,
     replay_env,
-    verify,
+    save_verified,
 )
 from langgap.goals import atoms
 from langgap.policies import make_policy
@@ -294,9 +294,7 @@ class SearchTask(Job):
                            budget=self.budget, oracle_args=dict(self.oracle_args) or None).found  # fmt: skip
             if found is None:
                 break
-            path = found.save(demonstration_path(runner.output_dir / self.task_id, init_index))
-            with replay_env(task, self.stepping) as env:
-                verify(env, Demonstration.load(path), catalog)
+            save_verified(found, demonstration_path(runner.output_dir / self.task_id, init_index), catalog)
             shown.append(init_index)
         return self.task_id, shown
 
