@@ -67,6 +67,8 @@ mkdir -p "$OUT"
 
 # shellcheck source=experiments/timed.sh
 source "$(dirname "$0")/timed.sh"  # timed STEP COMMAND...: run it, then append "STEP<TAB>seconds" to OUT/times.tsv
+# shellcheck source=experiments/frames.sh
+source "$(dirname "$0")/frames.sh"  # frames KEY TRAIN-ARG...: the training frames of that data (OUT/frames.tsv)
 
 if [ ! -f "$OUT/demos/collection.json" ]; then
     # Exit code 1: written, but some tasks kept fewer than DEMOS (listed in collection.json); the sweep trains on
@@ -76,22 +78,10 @@ if [ ! -f "$OUT/demos/collection.json" ]; then
         || [ $? -eq 1 ]
 fi
 
-frames() {  # frames K: the training frames of the K-task subset's demonstrations (cached in OUT/frames.tsv)
-    local known printed
-    known=$(awk -v k="$1" '$1 == k { print $2 }' "$OUT/frames.tsv" 2>/dev/null)
-    if [ -z "$known" ]; then  # one training step prints them: "trained on N demonstrations (F frames) ..."
-        printed=$(langgap train small-bc --data "$OUT/demos" --catalog full --tasks "split:$COMPOSITIONAL:$1" \
-            --steps 1 --threads "$THREADS" --out "$OUT/frames-k$1.safetensors" | tail -n 1)
-        rm -f "$OUT/frames-k$1.safetensors"
-        known=$(sed -n 's/.*(\([0-9]*\) frames).*/\1/p' <<< "$printed")
-        [ -n "$known" ] || fail "no frame count in: $printed"
-        printf '%s\t%s\n' "$1" "$known" >> "$OUT/frames.tsv"
-    fi
-    echo "$known"
-}
 steps() {  # steps K: ceil(PASSES x frames_K / BATCH), capped at MAX_STEPS
-    local n
-    n=$(((PASSES * $(frames "$1") + BATCH - 1) / BATCH))
+    local n seen
+    seen=$(frames "$1" --data "$OUT/demos" --catalog full --tasks "split:$COMPOSITIONAL:$1")
+    n=$(((PASSES * seen + BATCH - 1) / BATCH))
     [ -n "$MAX_STEPS" ] && [ "$n" -gt "$MAX_STEPS" ] && n="$MAX_STEPS"
     echo "$n"
 }

@@ -1,7 +1,7 @@
-"""`experiments/small_scale_vla.sh` and `experiments/diversity_sweep.sh` around their steps: which policies they
-run, the settings they refuse, and the reports they write from every finished run in OUT, earlier invocations'
-included. Every training and evaluation step is already done here (its marker and store exist, the stores
-synthetic), so the scripts run only `langgap report` (and the sweep its table and figure)."""
+"""The experiment scripts (`experiments/small_scale.sh`, `small_scale_vla.sh`, `diversity_sweep.sh`) around their
+steps: which policies they run, the settings they refuse, and the reports they write from every finished run in
+OUT, earlier invocations' included. Every training and evaluation step is already done here (its marker and store
+exist, the stores synthetic), so the scripts run only `langgap report` (and the sweep its table and figure)."""
 
 from __future__ import annotations
 
@@ -117,4 +117,52 @@ def test_a_misspelt_sweep_setting_stops_it_before_anything_runs(tmp_path, settin
     done = run_script(tmp_path / "out", SWEEP, **setting)
     assert done.returncode == 2
     assert done.stderr.strip() == message
+    assert not (tmp_path / "out").exists()
+
+
+SMALL_SCALE = REPO / "experiments" / "small_scale.sh"
+
+
+def test_the_small_scale_reports_keep_the_scene_and_the_three_suites_apart_with_each_blind(tmp_path):
+    # `one` and `originals` finished in an earlier invocation; `suites` now, on two seeds.
+    out = finished_experiment(
+        tmp_path / "out",
+        {"blind": "blind", "blind-suites": "blind", "one": "small-bc", "originals": "small-bc",
+         "suites": "small-bc", "suites-seed1": "small-bc"},
+    )  # fmt: skip
+    done = run_script(out, SMALL_SCALE, CONFIGS="suites", SEEDS="0 1")
+    assert done.returncode == 0, done.stderr
+    assert not (out / "times.tsv").exists()  # nothing collected, trained or evaluated again
+    scene = (out / "report.md").read_text()
+    assert f"{out}/runs/one:" in scene and f"{out}/runs/blind:" in scene and "runs/suites" not in scene
+    suites = (out / "report-suites.md").read_text()
+    compared = [f"{out}/runs/{name}:" for name in ("originals", "suites", "blind-suites")]
+    assert all(name in suites for name in compared), suites[:2000]
+    assert [suites.index(name) for name in compared] == sorted(suites.index(name) for name in compared)
+    assert f"{out}/runs/one:" not in suites
+    seed1 = (out / "report-suites-seed1.md").read_text()
+    assert f"{out}/runs/suites-seed1:" in seed1 and f"{out}/runs/originals:" not in seed1
+    assert not (out / "report-seed1.md").exists()  # no scene policy finished on seed 1
+
+    def pools(name: str) -> list[list[str]]:
+        lines = (out / name).read_text().splitlines()
+        return [line.split(" | ")[:2] for line in lines if line.startswith("| ") and "Pool" not in line]
+
+    assert pools("pooled.md") == [["| blind", "1"], ["| one", "1"]]
+    assert pools("pooled-suites.md") == [["| blind", "1"], ["| originals", "1"], ["| suites", "2"]]
+
+
+@pytest.mark.parametrize(
+    ("setting", "message"),
+    [
+        ({"CONFIGS": "one suits"}, "error: CONFIGS: unknown policy 'suits' (known: original extended mixed diluted"),
+        ({"ONE_DEMOS": "0"}, "error: ONE_DEMOS: '0' is not a whole number above 0"),
+        ({"STEPS": "4k"}, "error: STEPS: '4k' is not a whole number above 0"),
+        ({"SEEDS": "0 -1"}, "error: SEEDS: '-1' is not a whole number"),
+    ],
+)
+def test_a_misspelt_small_scale_setting_stops_it_before_anything_runs(tmp_path, setting, message):
+    done = run_script(tmp_path / "out", SMALL_SCALE, **setting)
+    assert done.returncode == 2
+    assert done.stderr.startswith(message)
     assert not (tmp_path / "out").exists()
