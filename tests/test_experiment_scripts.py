@@ -104,23 +104,29 @@ def test_the_sweeps_table_counts_every_group_of_a_run_and_each_seed_beside_the_p
     assert (out / "sweep.png").read_bytes()[:4] == b"\x89PNG"
 
 
-@pytest.mark.parametrize(
-    ("setting", "message"),
-    [
-        ({"KS": "1 5"}, "error: KS: full-spatial-s0-compositional has no subset of '5' tasks (it has: 1 3 6 12 24)"),
-        ({"WIDTHS": "64 130"}, "error: WIDTHS: 130 is not a multiple of the model's 4 heads"),
-        ({"PASSES": "1.5"}, "error: PASSES: '1.5' is not a whole number above 0"),
-        ({"SEEDS": "0 one"}, "error: SEEDS: 'one' is not a whole number"),
-    ],
-)
-def test_a_misspelt_sweep_setting_stops_it_before_anything_runs(tmp_path, setting, message):
-    done = run_script(tmp_path / "out", SWEEP, **setting)
-    assert done.returncode == 2
-    assert done.stderr.strip() == message
-    assert not (tmp_path / "out").exists()
-
-
 SMALL_SCALE = REPO / "experiments" / "small_scale.sh"
+
+
+@pytest.mark.parametrize(
+    ("script", "setting", "message"),
+    [
+        (SWEEP, {"KS": "1 5"}, "KS: full-spatial-s0-compositional has no subset of '5' tasks (it has: 1 3 6 12 24)"),
+        (SWEEP, {"WIDTHS": "64 130"}, "WIDTHS: 130 is not a multiple of the model's 4 heads"),
+        (SWEEP, {"PASSES": "1.5"}, "PASSES: '1.5' is not a whole number above 0"),
+        (SWEEP, {"SEEDS": "0 one"}, "SEEDS: 'one' is not a whole number"),
+        (SMALL_SCALE, {"CONFIGS": "one suits"}, "CONFIGS: unknown policy 'suits' (known: original extended mixed "
+         "diluted diluted-passes one originals suites suites-originals)"),
+        (SMALL_SCALE, {"ONE_DEMOS": "0"}, "ONE_DEMOS: '0' is not a whole number above 0"),
+        (SMALL_SCALE, {"STEPS": "4k"}, "STEPS: '4k' is not a whole number above 0"),
+        (SMALL_SCALE, {"SEEDS": "0 -1"}, "SEEDS: '-1' is not a whole number"),
+    ],
+    ids=lambda v: v.name if isinstance(v, Path) else None,
+)  # fmt: skip
+def test_a_misspelt_setting_stops_the_script_before_anything_runs(tmp_path, script, setting, message):
+    done = run_script(tmp_path / "out", script, **setting)
+    assert done.returncode == 2
+    assert done.stderr.strip() == f"error: {message}"
+    assert not (tmp_path / "out").exists()
 
 
 def test_the_small_scale_reports_keep_the_scene_and_the_three_suites_apart_with_each_blind(tmp_path):
@@ -150,19 +156,3 @@ def test_the_small_scale_reports_keep_the_scene_and_the_three_suites_apart_with_
 
     assert pools("pooled.md") == [["| blind", "1"], ["| one", "1"]]
     assert pools("pooled-suites.md") == [["| blind", "1"], ["| originals", "1"], ["| suites", "2"]]
-
-
-@pytest.mark.parametrize(
-    ("setting", "message"),
-    [
-        ({"CONFIGS": "one suits"}, "error: CONFIGS: unknown policy 'suits' (known: original extended mixed diluted"),
-        ({"ONE_DEMOS": "0"}, "error: ONE_DEMOS: '0' is not a whole number above 0"),
-        ({"STEPS": "4k"}, "error: STEPS: '4k' is not a whole number above 0"),
-        ({"SEEDS": "0 -1"}, "error: SEEDS: '-1' is not a whole number"),
-    ],
-)
-def test_a_misspelt_small_scale_setting_stops_it_before_anything_runs(tmp_path, setting, message):
-    done = run_script(tmp_path / "out", SMALL_SCALE, **setting)
-    assert done.returncode == 2
-    assert done.stderr.startswith(message)
-    assert not (tmp_path / "out").exists()
