@@ -6,7 +6,7 @@
 #                                   and 4 held-out tasks that combine parts seen in the pool in a new way
 #   full-spatial-s0-novel-word      3 held-out tasks whose sentence holds a word no pool sentence holds
 # Training data = oracle demonstrations of the pool's 24 tasks from fresh placements (never the evaluation init
-# states). For each K, `small-bc` trains on the K-task subset's demonstrations for an equal number of passes over
+# states). For each K, POLICY trains on the K-task subset's demonstrations for an equal number of passes over
 # its frames: steps = ceil(PASSES x frames_K / BATCH), frames_K read from the collection (`langgap train` prints
 # it; OUT/frames.tsv keeps it). Two model widths (d_model), several training seeds. Each policy is evaluated on
 # the compositional held-out tasks, the novel-word held-out tasks and its own K trained tasks (three runs),
@@ -23,6 +23,9 @@
 # "0 1 2"; seed 0 writes k<K>-d<W>.safetensors and runs/k<K>-d<W>-<set>, seed N k<K>-d<W>-seedN.*), EPISODES (per
 # task, default 10), WORKERS (default 2), THREADS (training threads, default 1). With LANGGAP_SMOKE set (every
 # command shrunk: langgap.cli.smoke), the sweep runs the first K, width and seed only, on that subset's tasks.
+# POLICY (default small-bc; small-vla sees both cameras instead of the simulator's state: the demonstrations'
+# images are rendered first, at SIZE px, default 96, into the collection), DEMOS_FROM (a finished collection of
+# the pool to train on instead of collecting OUT/demos: another sweep's, to compare policies on the same data).
 # Every step's wall time is appended to OUT/times.tsv. The results: OUT/pooled-<set>.md (`langgap report --pool`
 # of each set: compositional, novel-word, trained; .json beside), OUT/sweep.md (each set's success against K per
 # width, every split group of a run counted together) and OUT/sweep.png (experiments/diversity_plot.py).
@@ -40,6 +43,9 @@ SEEDS="${SEEDS:-0 1 2}"
 EPISODES="${EPISODES:-10}"
 WORKERS="${WORKERS:-2}"
 THREADS="${THREADS:-1}"
+POLICY="${POLICY:-small-bc}"
+SIZE="${SIZE:-96}"
+DEMOS_FROM="${DEMOS_FROM:-}"
 COMPOSITIONAL="full-spatial-s0-compositional"
 NOVEL="full-spatial-s0-novel-word"
 SUBSETS="1 3 6 12 24"  # the compositional split's nested subsets
@@ -56,6 +62,11 @@ for width in $WIDTHS; do
 done
 for seed in $SEEDS; do [[ "$seed" =~ ^[0-9]+$ ]] || fail "SEEDS: '$seed' is not a whole number"; done
 [[ "$NOISE" =~ ^[0-9]*\.?[0-9]+$ ]] || fail "NOISE: '$NOISE' is not a number"
+[[ " small-bc small-vla " == *" $POLICY "* ]] || fail "POLICY: '$POLICY' is neither small-bc nor small-vla"
+whole SIZE "$SIZE"
+if [ -n "$DEMOS_FROM" ]; then
+    [ -f "$DEMOS_FROM/collection.json" ] || fail "DEMOS_FROM: $DEMOS_FROM holds no finished collection"
+fi
 POOL="split:$COMPOSITIONAL:train"  # the tasks collected: every K-task subset's
 if [ -n "${LANGGAP_SMOKE:-}" ]; then  # every command shrinks itself; so does the sweep
     echo "note: LANGGAP_SMOKE is set, so this script is shrunk: KS '$KS' -> '${KS%% *}', WIDTHS '$WIDTHS' ->" \
@@ -70,17 +81,25 @@ source "$(dirname "$0")/timed.sh"  # timed STEP COMMAND...: run it, then append 
 # shellcheck source=experiments/frames.sh
 source "$(dirname "$0")/frames.sh"  # frames KEY TRAIN-ARG...: the training frames of that data (OUT/frames.tsv)
 
-if [ ! -f "$OUT/demos/collection.json" ]; then
+DATA="${DEMOS_FROM:-$OUT/demos}"
+if [ ! -f "$DATA/collection.json" ]; then
     # Exit code 1: written, but some tasks kept fewer than DEMOS (listed in collection.json); the sweep trains on
     # what there is.
     timed "collect" langgap collect --catalog full --tasks "$POOL" --demos "$DEMOS" \
         --noise "$NOISE" --out "$OUT/demos" --workers "$WORKERS" --seed 1000 --format compact --no-progress \
         || [ $? -eq 1 ]
 fi
+if [ "$POLICY" = small-vla ] && [ ! -f "$DATA/hdf5/complete-$SIZE" ]; then
+    # Both cameras at SIZE px, rendered by replaying the demonstrations' states (--resume: the tasks an
+    # interrupted render finished are kept, checked to be of this collection and size).
+    timed "images ($SIZE px)" langgap export-hdf5 "$DATA" --images --image-size "$SIZE" --workers "$WORKERS" \
+        --no-progress --resume
+    touch "$DATA/hdf5/complete-$SIZE"
+fi
 
 steps() {  # steps K: ceil(PASSES x frames_K / BATCH), capped at MAX_STEPS
     local n seen
-    seen=$(frames "$1" --data "$OUT/demos" --catalog full --tasks "split:$COMPOSITIONAL:$1")
+    seen=$(frames "$1" --data "$DATA" --catalog full --tasks "split:$COMPOSITIONAL:$1")
     n=$(((PASSES * seen + BATCH - 1) / BATCH))
     [ -n "$MAX_STEPS" ] && [ "$n" -gt "$MAX_STEPS" ] && n="$MAX_STEPS"
     echo "$n"
@@ -100,8 +119,9 @@ train() {  # train K WIDTH SEED
     local name="k$1-d$2$(suffix "$3")" config="$OUT/width-$2.yaml" n
     [ -f "$OUT/$name.safetensors" ] && return
     printf 'model:\n  d_model: %s\n' "$2" > "$config"
+    [ "$POLICY" = small-vla ] && printf '  image_size: %s\n' "$SIZE" >> "$config"
     n=$(steps "$1")
-    timed "train $name ($n steps)" langgap train small-bc --config "$config" --data "$OUT/demos" --catalog full \
+    timed "train $name ($n steps)" langgap train "$POLICY" --config "$config" --data "$DATA" --catalog full \
         --tasks "split:$COMPOSITIONAL:$1" --steps "$n" --batch-size "$BATCH" --threads "$THREADS" --seed "$3" \
         --out "$OUT/$name.safetensors"
 }
@@ -140,9 +160,9 @@ for seed in $SEEDS; do
             train "$k" "$width" "$seed"
             checkpoint="checkpoint=$OUT/k$k-d$width$s.safetensors"
             for set in compositional novel-word; do
-                evaluate "k$k-d$width$s-$set" "${SETS[$set]}" small-bc --policy-arg "$checkpoint"
+                evaluate "k$k-d$width$s-$set" "${SETS[$set]}" "$POLICY" --policy-arg "$checkpoint"
             done
-            evaluate "k$k-d$width$s-trained" "split:$COMPOSITIONAL:$k" small-bc --policy-arg "$checkpoint"
+            evaluate "k$k-d$width$s-trained" "split:$COMPOSITIONAL:$k" "$POLICY" --policy-arg "$checkpoint"
         done
         tables || echo "note: the tables failed (above); the sweep goes on" >&2
     done

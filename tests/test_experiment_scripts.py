@@ -114,6 +114,8 @@ SMALL_SCALE = REPO / "experiments" / "small_scale.sh"
         (SWEEP, {"WIDTHS": "64 130"}, "WIDTHS: 130 is not a multiple of the model's 4 heads"),
         (SWEEP, {"PASSES": "1.5"}, "PASSES: '1.5' is not a whole number above 0"),
         (SWEEP, {"SEEDS": "0 one"}, "SEEDS: 'one' is not a whole number"),
+        (SWEEP, {"POLICY": "smolvla"}, "POLICY: 'smolvla' is neither small-bc nor small-vla"),
+        (SWEEP, {"DEMOS_FROM": "nowhere"}, "DEMOS_FROM: nowhere holds no finished collection"),
         (SMALL_SCALE, {"CONFIGS": "one suits"}, "CONFIGS: unknown policy 'suits' (known: original extended mixed "
          "diluted diluted-passes one originals suites suites-originals)"),
         (SMALL_SCALE, {"ONE_DEMOS": "0"}, "ONE_DEMOS: '0' is not a whole number above 0"),
