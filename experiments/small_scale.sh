@@ -33,7 +33,8 @@
 # runs those rows over every seed first). Per seed, report.md (report-seedN.md) compares the scene's finished
 # policies and report-suites.md (report-suites-seedN.md) the three suites' ones, with `blind`; pooled.md and
 # pooled-suites.md are the results tables (every finished run of each policy pooled over its seeds: `langgap
-# report --pool`). Every step's wall time is appended to OUT/times.tsv.
+# report --pool`). Every step's wall time is appended to OUT/times.tsv. With LANGGAP_SMOKE set (every command shrunk:
+# langgap.cli.smoke), the script runs the first seed only.
 # Needs `langgap` with the train extra on PATH (source .venv/bin/activate).
 set -euo pipefail
 OUT="${1:-runs/small_scale}"
@@ -64,6 +65,10 @@ for name in DEMOS STEPS ONE_DEMOS EPISODES WORKERS; do
     [[ "${!name}" =~ ^[1-9][0-9]*$ ]] || fail "$name: '${!name}' is not a whole number above 0"
 done
 for seed in $SEEDS; do [[ "$seed" =~ ^[0-9]+$ ]] || fail "SEEDS: '$seed' is not a whole number"; done
+if [ -n "${LANGGAP_SMOKE:-}" ] && [ "$SEEDS" != "${SEEDS%% *}" ]; then  # every command shrinks itself; so do the seeds
+    echo "note: LANGGAP_SMOKE is set, so this script is shrunk: SEEDS '$SEEDS' -> '${SEEDS%% *}'" >&2
+    SEEDS="${SEEDS%% *}"
+fi
 mkdir -p "$OUT"
 
 # shellcheck source=experiments/timed.sh
