@@ -3,6 +3,8 @@ plan `langgap experiment run --dry-run` prints (no LeRobot needed)."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from langgap.catalog.catalog import load_catalog
@@ -131,3 +133,37 @@ def test_originals_from_a_local_lerobot_libero_copy_replace_the_originals_group(
     assert "train: original: 40 tasks x 44 demonstrations = 1760 (from --originals)" in result.stdout
     assert "collect original" not in result.stdout and "] collect paper:40" in result.stdout
     assert f"langgap merge-lerobot {out}/data/train {originals} {out}/data/group1/lerobot" in result.stdout
+
+
+def test_an_experiment_of_ones_own_needs_no_paper_row(tmp_path):
+    # The diversity sweep's K = 24 point, for LeRobot's policies: a YAML file without the paper's row.
+    out = tmp_path / "out"
+    result = run_cli(
+        "experiment", "run", "experiments/diversity_k24.yaml", "--catalog", "full", "--out", str(out), "--dry-run"
+    )
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert "  paper: none (not one of the paper's experiments)" in lines
+    assert "  train: split:full-spatial-s0-compositional:24: 24 tasks x 12 demonstrations = 288" in lines
+    assert "  demonstrations: 288" in lines  # and no paper count beside it
+    evaluated = "--tasks split:full-spatial-s0-compositional:24,split:full-spatial-s0-compositional:heldout,"
+    assert evaluated in result.stdout and "--catalog full" in result.stdout and "--steps=70000" in result.stdout
+    assert not out.exists()
+
+
+def test_the_summary_puts_the_papers_row_beside_an_experiment_of_the_papers_only(tmp_path):
+    from langgap.training.experiment_run import Settings, summary
+    from tests.support.reports import reader, write_run
+
+    write_run(tmp_path / "eval", "lerobot", reader())
+    recipe, settings = load_recipe("act"), Settings(out=tmp_path)
+    papers = summary(load_experiment("exp2"), recipe, settings).splitlines()
+    header = "| Set | Tasks | Successes | Success % [95 % CI] | Paper before fine-tuning | Paper after |"
+    assert header in papers and "The paper's row: " in papers[-1]
+    trained = next(line for line in papers if line.startswith("| trained |"))
+    assert trained.endswith("| 0.0 | 28.0 |")  # the paper's Table IV: exp 2, before and after
+    own = dataclasses.replace(load_experiment("exp2"), paper={})
+    mine = summary(own, recipe, settings).splitlines()
+    assert "| Set | Tasks | Successes | Success % [95 % CI] |" in mine and not any("Paper" in line for line in mine)
+    assert [line.count("|") for line in mine if line.startswith("| trained |")] == [5]
+    assert mine[-1] == "Not one of the paper's experiments: no row to compare."

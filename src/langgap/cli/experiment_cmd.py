@@ -52,6 +52,9 @@ def add_parser(subparsers) -> None:
     tiny.set_defaults(handler=run_tiny_smolvlm)
 
 
+NO_PAPER_ROW = "none (not one of the paper's experiments)"
+
+
 def run_list(args) -> int:
     from langgap.catalog.catalog import load_catalog
     from langgap.training.lerobot_train import EXPERIMENTS, POLICIES, load_experiment, load_recipe
@@ -120,13 +123,14 @@ def run_experiment(args) -> int:
     tuning = recipe.tuning(settings.tuning)
     tasks = load_catalog(catalog)
     print(f"{experiment.name}: {experiment.title}")
-    print(f"  paper: {experiment.paper}")
+    print(f"  paper: {experiment.paper or NO_PAPER_ROW}")
     for group in experiment.train:
         count = len(tasks.select(group.tasks))
         demos = settings.demos or group.demos
         source = " (from --originals)" if settings.originals and group.tasks == TaskKind.ORIGINAL else ""
         print(f"  train: {group.tasks}: {count} tasks x {demos} demonstrations = {count * demos}{source}")
-    print(f"  demonstrations: {experiment.demonstrations(tasks, settings.demos)} (paper: {experiment.paper['demos']})")
+    paper_demos = f" (paper: {experiment.paper['demos']})" if "demos" in experiment.paper else ""
+    print(f"  demonstrations: {experiment.demonstrations(tasks, settings.demos)}{paper_demos}")
     print(f"  policy: {recipe.title}{' -- tiny random-weight rehearsal' if settings.tiny else ''}")
     print(f"  tuning {tuning.name}: trains {tuning.trains}; frozen: {tuning.frozen}")
     for index, stage in enumerate(stages, 1):

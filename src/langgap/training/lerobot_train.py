@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import shutil
 import subprocess
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
@@ -26,7 +26,7 @@ EXPERIMENTS = ("exp1", "exp2", "exp3", "exp4", "exp5")
 POLICIES = ("pi05", "pi0", "smolvla", "act")
 EVAL_SETS = ("trained", "heldout", "original")
 TINY_VLM = "{tiny_vlm}"  # in a tiny recipe: the local SmolVLM directory the rehearsal builds
-_EXPERIMENT_KEYS = ("name", "title", "paper", "train", "eval", "episodes", "steps", "lora_rank")
+_EXPERIMENT_KEYS = ("name", "title", "train", "eval", "episodes", "steps", "lora_rank")  # and `paper`, the paper's
 _RECIPE_KEYS = ("name", "title", "reads_instruction", "image_size", "lerobot", "tunings", "tiny")
 
 
@@ -45,7 +45,8 @@ class Experiment:
     Attributes:
         name: Its name (`exp1`).
         title: What it trains, in words.
-        paper: The paper's Table III row (tasks, demos, lora_rank, steps, eval_tasks, episodes, baseline, result).
+        paper: The paper's Table III row (tasks, demos, lora_rank, steps, eval_tasks, episodes, baseline, result);
+            empty for an experiment of one's own (a YAML file without `paper`).
         train: The training groups: a task selection and demonstrations per task each.
         eval: Evaluation task selections by set (`trained`, `heldout`, `original`).
         episodes: Evaluation episodes per task.
@@ -55,12 +56,12 @@ class Experiment:
 
     name: str
     title: str
-    paper: dict
     train: tuple[TrainingGroup, ...]
     eval: dict[str, str]
     episodes: int
     steps: int
     lora_rank: int
+    paper: dict = field(default_factory=dict)
 
     def demonstrations(self, catalog, demos: int | None = None) -> int:
         """How many demonstrations it trains on: each group's tasks in `catalog` times their demonstrations per
@@ -144,7 +145,11 @@ def load_experiment(name_or_path: str) -> Experiment:
     if any(g.demos < 1 for g in groups):
         raise LangGapError(f"experiment {path}: demos must be at least 1")
     fields = {k: data[k] for k in _EXPERIMENT_KEYS if k not in ("train", "eval")}
-    return Experiment(**fields, train=groups, eval={s: data["eval"][s] for s in EVAL_SETS if s in data["eval"]})
+    paper = data.get("paper") or {}
+    if not isinstance(paper, dict):
+        raise LangGapError(f"experiment {path}: paper: expected the paper's row as a mapping")
+    evals = {s: data["eval"][s] for s in EVAL_SETS if s in data["eval"]}
+    return Experiment(**fields, train=groups, eval=evals, paper=paper)
 
 
 def load_recipe(name_or_path: str) -> Recipe:
