@@ -98,6 +98,14 @@ def markdown(table: dict[str, dict[str, Cell]]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def seeds_text(points: list[tuple[int, Cell]]) -> str:
+    """How many training seeds the points of one line pool: one number, or the range while a sweep runs."""
+    counts = sorted({len(cell.runs) for _, cell in points})
+    if len(counts) == 1:
+        return f"{counts[0]} seed{'s' if counts[0] > 1 else ''}"
+    return f"{counts[0]}–{counts[-1]} seeds per point"
+
+
 def figure(table: dict[str, dict[str, Cell]], path: Path) -> None:
     """A panel per set: success against K (log scale), a line per width with its intervals, `blind` dashed."""
     import matplotlib
@@ -120,8 +128,7 @@ def figure(table: dict[str, dict[str, Cell]], path: Path) -> None:
             y = [100 * c.rate for _, c in points]
             low = [100 * (c.rate - c.interval[0]) for _, c in points]
             high = [100 * (c.interval[1] - c.rate) for _, c in points]
-            seeds = max(len(c.runs) for _, c in points)
-            ax.errorbar(x, y, yerr=[low, high], marker="o", capsize=3, label=f"d_model {width} ({seeds} seed(s))")
+            ax.errorbar(x, y, yerr=[low, high], marker="o", capsize=3, label=f"d_model {width} ({seeds_text(points)})")
         if "blind" in by_label:
             ax.axhline(100 * by_label["blind"].rate, color="grey", linestyle="--", label="blind")
         ax.set_xscale("log")
