@@ -262,6 +262,12 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
         ),
         Differs(("report", "--pool", "a={stored},{reseeded}"), ("--allow-mismatch",)),
     ),
+    "report --split": (
+        ProvenBy("tests/unit/test_report_split.py::test_the_pools_and_the_report_group_by_the_split_in_its_order"),
+        Differs(_REPORT, ("--split", "langgap99-instruction")),
+        Differs(("report", "--pool", "a={stored}"), ("--split", "langgap99-instruction")),
+        Refused((*_REPORT, "--split", "nope"), "unknown split 'nope'"),
+    ),
     "report --html": (Differs(_REPORT, ("--html", "{dir}/html")),),
     "report --plots": (Differs(_REPORT, ("--plots", "{dir}/plots")),),
     "report --episodes": (Differs(_REPORT, ("--episodes", "{dir}/episodes.csv")),),

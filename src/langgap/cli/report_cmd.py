@@ -48,6 +48,13 @@ def add_parser(subparsers) -> None:
         action="store_true",
         help="pair runs episode by episode even when their protocol cards differ",
     )
+    parser.add_argument(
+        "--split",
+        metavar="NAME[:K]",
+        help="group every table's episodes by a stored split (`langgap splits list`, or a split file): its training "
+        "tasks (with :K, its nested subset of K), its held-out tasks and the rest, instead of the tasks' own "
+        "split (the per-episode table keeps theirs)",
+    )
     parser.add_argument("--html", metavar="DIR", help="write the report as one self-contained page, DIR/index.html")
     parser.add_argument("--plots", metavar="DIR", help="write PNG figures to DIR")
     parser.add_argument("--episodes", metavar="FILE", help="write the per-episode table (.csv or .parquet)")
@@ -80,7 +87,7 @@ def run(args) -> int:
         if given:
             shown = ", ".join("RUN" if n == "run" else "--" + n.replace("_", "-") for n in given)
             raise LangGapError(f"--pool prints the pooled table only: name every run in a --pool, without {shown}")
-        print(pooled_text(_pools(args.pool), args.format, allow_mismatch=args.allow_mismatch), end="")
+        print(pooled_text(_pools(args.pool), args.format, allow_mismatch=args.allow_mismatch, split=args.split), end="")
         return 0
     if not args.run:
         raise LangGapError("name a run directory (or pool runs with --pool LABEL=RUN,RUN...)")
@@ -92,12 +99,14 @@ def run(args) -> int:
                 f"--summary shows the diagnosis as {' or '.join(DIAGNOSIS_FORMATS)}; --format {args.format} holds "
                 "every number of the full report: drop --summary"
             )
-        text = diagnosis_text(paths, args.format, published=published, allow_mismatch=args.allow_mismatch)
+        text = diagnosis_text(
+            paths, args.format, published=published, allow_mismatch=args.allow_mismatch, split=args.split
+        )
     else:
-        text = render(paths, args.format, published=published, allow_mismatch=args.allow_mismatch)
+        text = render(paths, args.format, published=published, allow_mismatch=args.allow_mismatch, split=args.split)
     print(text, end="")
     if args.html or args.plots:
-        summary = summarize(load_runs(paths), allow_mismatch=args.allow_mismatch)
+        summary = summarize(load_runs(paths, split=args.split), allow_mismatch=args.allow_mismatch)
     if args.html:
         from langgap.report.html import write_html
         from langgap.report.published import load_published

@@ -160,11 +160,18 @@ FORMATS: dict[str, Callable[[Summary, Published | None], str]] = {
 }
 
 
-def render(paths: list[str | Path], fmt: str = "md", *, published: bool = True, allow_mismatch: bool = False) -> str:
+def render(
+    paths: list[str | Path],
+    fmt: str = "md",
+    *,
+    published: bool = True,
+    allow_mismatch: bool = False,
+    split: str | None = None,
+) -> str:
     """The full report of one or more runs (the first is the reference for comparisons); `published`
     adds the paper's results as reference rows to the formats that show tables; `allow_mismatch`
-    pairs runs whose protocols differ."""
-    summary = summarize(load_runs(paths), allow_mismatch=allow_mismatch)
+    pairs runs whose protocols differ; `split` groups episodes by a stored split (`load_runs`)."""
+    summary = summarize(load_runs(paths, split=split), allow_mismatch=allow_mismatch)
     return FORMATS[fmt](summary, load_published() if published else None)
 
 
@@ -176,11 +183,17 @@ DIAGNOSIS_FORMATS: dict[str, Callable[[Summary, Published | None, Layout], str]]
 
 
 def diagnosis_text(
-    paths: list[str | Path], fmt: str = "md", *, published: bool = False, allow_mismatch: bool = False
+    paths: list[str | Path],
+    fmt: str = "md",
+    *,
+    published: bool = False,
+    allow_mismatch: bool = False,
+    split: str | None = None,
 ) -> str:
     """The short diagnosis: the answer, the protocol card, success by dimension, what each policy did instead
-    (`fmt`: a name in `DIAGNOSIS_FORMATS`; `allow_mismatch` pairs runs whose protocols differ)."""
-    summary = summarize(load_runs(paths), allow_mismatch=allow_mismatch)
+    (`fmt`: a name in `DIAGNOSIS_FORMATS`; `allow_mismatch` pairs runs whose protocols differ; `split` groups
+    episodes by a stored split: `load_runs`)."""
+    summary = summarize(load_runs(paths, split=split), allow_mismatch=allow_mismatch)
     reference = load_published() if published else None
     return DIAGNOSIS_FORMATS[fmt](summary, reference, DIAGNOSIS)
 
@@ -214,6 +227,9 @@ POOLED_FORMATS: dict[str, Callable[[list[PooledRow]], str]] = {
 }
 
 
-def pooled_text(pools: dict[str, list[str | Path]], fmt: str = "md", *, allow_mismatch: bool = False) -> str:
-    """The pooled table of replicate runs (`langgap.report.pooled.pool`) in `fmt` (a name in `POOLED_FORMATS`)."""
-    return POOLED_FORMATS[fmt](pool(pools, allow_mismatch=allow_mismatch))
+def pooled_text(
+    pools: dict[str, list[str | Path]], fmt: str = "md", *, allow_mismatch: bool = False, split: str | None = None
+) -> str:
+    """The pooled table of replicate runs (`langgap.report.pooled.pool`) in `fmt` (a name in `POOLED_FORMATS`),
+    its groups a stored split's when `split` names one."""
+    return POOLED_FORMATS[fmt](pool(pools, allow_mismatch=allow_mismatch, split=split))

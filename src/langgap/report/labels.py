@@ -34,6 +34,21 @@ SPLIT_LABEL = {
     Split.HELDOUT: "Extended, held-out",
 }
 
+# A stored split's groups (`langgap report --split NAME[:K]`), in table order: its training part, its held-out part,
+# every other task of the run.
+SPLIT_PARTS = ("trained ({})", "held out ({})", "outside {}")
+
+
+def split_order(groups: set[str]) -> list[str]:
+    """`groups` in table order: the catalog's splits, a stored split's parts (`SPLIT_PARTS`), the rest sorted."""
+    ranks = {g: i for i, g in enumerate(SPLIT_ORDER)}
+    for group in groups:
+        for i, part in enumerate(SPLIT_PARTS):
+            head, tail = part.split("{}")
+            if group.startswith(head) and group.endswith(tail):
+                ranks.setdefault(group, len(SPLIT_ORDER) + i)
+    return sorted(groups, key=lambda g: (ranks.get(g, len(SPLIT_ORDER) + len(SPLIT_PARTS)), g))
+
 
 def label(names: dict[str, str], key: str) -> str:
     """The display name of `key`, or the key itself for a name a newer catalog added."""

@@ -7,13 +7,16 @@ report. Runs stored before snapshots were kept fall back to the catalog's live v
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
+from langgap.catalog.split_files import load_split
 from langgap.catalog.switch_verdicts import SwitchVerdicts, read_switch_verdicts, snapshot_switch_gates
 from langgap.catalog.verdicts import GateResult, snapshot_gates
-from langgap.errors import LangGapError
+from langgap.errors import CatalogError, LangGapError
 from langgap.records import EpisodeRecord, Privilege, privilege
+from langgap.report.labels import SPLIT_PARTS
 from langgap.store import PROGRESS, RunStore
 
 
@@ -70,8 +73,6 @@ class Run:
 
 def live_gates(spec: dict) -> dict[str, GateResult]:
     """The verdicts in the run's catalog's verdict file now (empty when it has none or cannot be read)."""
-    from langgap.catalog.catalog import load_catalog
-
     try:
         catalog = load_catalog(spec["catalog"])
     except (KeyError, LangGapError):
@@ -96,11 +97,44 @@ def run_name(policy: str, label: str) -> str:
     return policy if label == policy else f"{label} ({policy})"
 
 
-def load_runs(paths: list[str | Path]) -> list[Run]:
+def split_groups(records: list[EpisodeRecord], catalog: str, split: str) -> list[EpisodeRecord]:
+    """`records` grouped by a stored split instead of their tasks' own `split` field: each record's `split`
+    becomes `trained (NAME)`, `held out (NAME)` or `outside NAME`, which reports show as they show the catalog's
+    groups (the store is not touched).
+
+    Args:
+        records: A run's episode records.
+        catalog: The run's catalog (its name or registry file): the split must be one of its.
+        split: `NAME` (its training and held-out tasks) or `NAME:K` (its nested subset of K training tasks
+            as the trained part): a shipped split's name or a split file's path (`langgap splits list`).
+
+    Raises:
+        CatalogError: No such split, or a split of another catalog or of another version of it.
+    """
+    name, sep, subset = split.rpartition(":")
+    if not (sep and subset.isdigit()):
+        name, subset = split, "train"
+    tasks = load_catalog(catalog)
+    if (of := load_split(name).catalog) != tasks.name:
+        raise CatalogError(f"split {name} is of catalog {of}; this run is of {tasks.name}")
+    trained = {t.id for t in tasks.select(f"split:{name}:{subset}")}
+    held_out = {t.id for t in tasks.select(f"split:{name}:heldout")}
+
+    def group(task_id: str) -> str:
+        if task_id in trained:
+            return SPLIT_PARTS[0].format(split)
+        return SPLIT_PARTS[1].format(name) if task_id in held_out else SPLIT_PARTS[2].format(name)
+
+    return [replace(r, split=group(r.task_id)) for r in records]
+
+
+def load_runs(paths: list[str | Path], *, split: str | None = None) -> list[Run]:
     """Read runs from their stores (while they are being written, too).
 
     Args:
         paths: Run directories (each the `run` of an `evaluate`).
+        split: Group each run's episodes by this stored split (`split_groups`) instead of their tasks' own
+            split (None: their own).
 
     Returns:
         One `Run` per path, in order: its name, spec and episode records, and the gate verdicts its report
@@ -109,6 +143,7 @@ def load_runs(paths: list[str | Path]) -> list[Run]:
 
     Raises:
         StoreError: A path holds no run store, or one this LangGap cannot read.
+        CatalogError: `split` is not a split of a run's catalog.
     """
     runs = []
     for path in paths:
@@ -117,6 +152,8 @@ def load_runs(paths: list[str | Path]) -> list[Run]:
             snapshot = store.meta("gate")
             records = store.records()
             progress = store.meta(PROGRESS) or {}
+        if split is not None:
+            records = split_groups(records, spec.get("catalog") or DEFAULT_CATALOG, split)
         gates = live_gates(spec) if snapshot is None else snapshot_gates(snapshot)
         hashes = None if snapshot is None else list(snapshot["sha256"])
         # Runs stored before the snapshot kept switch verdicts read the live file, as for the plain ones.

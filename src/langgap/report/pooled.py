@@ -16,7 +16,7 @@ from typing import ClassVar
 
 from langgap.errors import LangGapError, ParameterError
 from langgap.report.data import Spec
-from langgap.report.labels import SPLIT_LABEL, SPLIT_ORDER, label
+from langgap.report.labels import SPLIT_LABEL, label, split_order
 from langgap.report.load import load_runs
 from langgap.report.stats import Rate, permutation_floor, permutation_p
 from langgap.report.summary import RunResults, protocol_differences, results
@@ -73,9 +73,8 @@ class PooledRow:
 
 
 def _order(groups: set[str]) -> list[str]:
-    """The splits in catalog order, then any other group sorted, the default task last."""
-    others = sorted(groups - {*SPLIT_ORDER, DEFAULT_TASK})
-    return [g for g in (*SPLIT_ORDER, *others, DEFAULT_TASK) if g in groups]
+    """The splits in table order (`split_order`), the default task last."""
+    return [*split_order(groups - {DEFAULT_TASK}), *([DEFAULT_TASK] if DEFAULT_TASK in groups else [])]
 
 
 def _groups(result: RunResults) -> dict[str, Rate]:
@@ -83,8 +82,11 @@ def _groups(result: RunResults) -> dict[str, Rate]:
     return {**{r.group: r for r in result.by_split}, DEFAULT_TASK: result.default_task}
 
 
-def pool(pools: dict[str, list[str | Path]], *, allow_mismatch: bool = False) -> list[PooledRow]:
-    """Each pool's runs (replicates of one configuration) counted together, in the order of `pools`.
+def pool(
+    pools: dict[str, list[str | Path]], *, allow_mismatch: bool = False, split: str | None = None
+) -> list[PooledRow]:
+    """Each pool's runs (replicates of one configuration) counted together, in the order of `pools`; their groups
+    are a stored split's when `split` names one (`langgap.report.load.load_runs`).
 
     Raises:
         LangGapError: A pool is empty or names a run twice, its runs are of different policies, or (unless
@@ -99,7 +101,7 @@ def pool(pools: dict[str, list[str | Path]], *, allow_mismatch: bool = False) ->
             raise LangGapError(f"pool {name!r} names no run")
         if len(set(resolved)) < len(resolved):
             raise LangGapError(f"pool {name!r} names a run twice: its episodes would be counted twice")
-        replicates = [results(run) for run in load_runs(paths)]
+        replicates = [results(run) for run in load_runs(paths, split=split)]
         policies = sorted({str(r.spec.get("policy", "?")) for r in replicates})
         if len(policies) > 1:
             raise LangGapError(f"pool {name!r} mixes policies ({', '.join(policies)}): a pool is one configuration")

@@ -27,8 +27,8 @@ from langgap.report.data import MERGED, Spec
 from langgap.report.labels import (
     EXTENDED_DIMENSIONS,
     KNOWN_DIMENSIONS,
-    SPLIT_ORDER,
     SUITE_ORDER,
+    split_order,
 )
 from langgap.report.load import Run
 from langgap.report.stats import PairedTest, Rate
@@ -500,7 +500,7 @@ def results(run: Run) -> RunResults:
         by_suite=rates_by(
             given, lambda r: f"{r.suite}/{r.kind}", [f"{s}/{k}" for s in SUITE_ORDER for k in TaskKind], gates
         ),
-        by_split=rates_by(given, lambda r: r.split, SPLIT_ORDER, gates),
+        by_split=rates_by(given, lambda r: r.split, split_order({r.split for r in given}), gates),
         tasks=tasks,
         outcomes=[outcome_row(g, rs) for g, rs in outcome_groups if rs],
         confusion=confusion(given),
