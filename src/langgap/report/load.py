@@ -7,6 +7,7 @@ report. Runs stored before snapshots were kept fall back to the catalog's live v
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -111,21 +112,23 @@ def split_groups(records: list[EpisodeRecord], catalog: str, split: str) -> list
     Raises:
         CatalogError: No such split, or a split of another catalog or of another version of it.
     """
+    parts, outside = _split_parts(catalog, split)
+    return [replace(r, split=parts.get(r.task_id, outside)) for r in records]
+
+
+@functools.cache
+def _split_parts(catalog: str, split: str) -> tuple[dict[str, str], str]:
+    """The group of each trained and held-out task of `split` in `catalog`, and the group of every other task:
+    resolved once for all the runs of a report."""
     name, sep, subset = split.rpartition(":")
     if not (sep and subset.isdigit()):
         name, subset = split, "train"
     tasks = load_catalog(catalog)
     if (of := load_split(name).catalog) != tasks.name:
         raise CatalogError(f"split {name} is of catalog {of}; this run is of {tasks.name}")
-    trained = {t.id for t in tasks.select(f"split:{name}:{subset}")}
-    held_out = {t.id for t in tasks.select(f"split:{name}:heldout")}
-
-    def group(task_id: str) -> str:
-        if task_id in trained:
-            return SPLIT_PARTS[0].format(split)
-        return SPLIT_PARTS[1].format(name) if task_id in held_out else SPLIT_PARTS[2].format(name)
-
-    return [replace(r, split=group(r.task_id)) for r in records]
+    trained, held_out, outside = (part.format(n) for part, n in zip(SPLIT_PARTS, (split, name, name), strict=True))
+    parts = {t.id: held_out for t in tasks.select(f"split:{name}:heldout")}
+    return parts | {t.id: trained for t in tasks.select(f"split:{name}:{subset}")}, outside
 
 
 def load_runs(paths: list[str | Path], *, split: str | None = None) -> list[Run]:
