@@ -167,3 +167,42 @@ def test_the_summary_puts_the_papers_row_beside_an_experiment_of_the_papers_only
     assert "| Set | Tasks | Successes | Success % [95 % CI] |" in mine and not any("Paper" in line for line in mine)
     assert [line.count("|") for line in mine if line.startswith("| trained |")] == [5]
     assert mine[-1] == "Not one of the paper's experiments: no row to compare."
+
+
+SHORT_EXPERIMENT = """\
+name: short
+title: One task whose collection keeps nothing (execution noise no oracle attempt survives)
+train:
+  - {tasks: "spatial/s0/black-bowl-1-on-stove", demos: 1}
+eval:
+  trained: "spatial/s0/black-bowl-1-on-stove"
+episodes: 1
+steps: 1
+lora_rank: 8
+"""
+
+
+def test_a_short_collection_stops_the_experiment_unless_allowed_and_the_summary_says_what_was_kept(tmp_path):
+    """A real collection that keeps fewer demonstrations than asked stops `experiment run` with what to do, every
+    time it is run, until `--allow-short`; `experiment.md` then says what each group kept."""
+    from langgap.training.experiment_run import Settings, summary
+    from tests.support.reports import reader, write_run
+
+    experiment, out = tmp_path / "short.yaml", tmp_path / "out"
+    experiment.write_text(SHORT_EXPERIMENT)
+    args = ("experiment", "run", str(experiment), "--out", str(out), "--noise", "5", "--device", "cpu")
+    stopped = run_cli(*args)  # collects for real: all 13 attempts fail, `collect` exits 1
+    assert stopped.returncode == 2, stopped.stderr
+    last = stopped.stderr.splitlines()[-1]  # after the collection's progress bar
+    assert last.startswith("error: the collect spatial/s0/black-bowl-1-on-stove stage failed (exit 1): ")
+    assert "--allow-short trains on what there is" in last
+    again = run_cli(*args, "--dry-run")  # not collected again, and not trained on either
+    assert again.returncode == 2 and "--allow-short" in again.stderr and again.stderr.count("\n") == 1
+    allowed = run_cli(*args, "--allow-short", "--dry-run")
+    assert allowed.returncode == 0, allowed.stderr
+    assert "] collect spatial/s0/black-bowl-1-on-stove (done)" in allowed.stdout
+    assert "] export spatial/s0/black-bowl-1-on-stove (to run)" in allowed.stdout
+    write_run(out / "eval", "lerobot", reader())
+    text = summary(load_experiment(str(experiment)), load_recipe("act"), Settings(out=out, allow_short=True))
+    kept = "- `spatial/s0/black-bowl-1-on-stove`: 0 of 1 demonstrations kept (1 tasks; fewer than 1: "
+    assert kept + "spatial/s0/black-bowl-1-on-stove 0)" in text.splitlines()

@@ -70,6 +70,10 @@ _SMALL_BC = ("train", "small-bc", "--data", "{collection}", "--out", "{dir}/bc.s
 _LEROBOT = ("train", "lerobot", "exp1", "--dataset-root", "{dir}/data", "--output-dir", "{dir}/out", "--dry-run")
 _EXPERIMENT = ("experiment", "run", "exp1", "--out", "{dir}/exp1", "--dry-run")
 _EXPERIMENT_CHAIN = "tests/test_lerobot_experiment.py::test_act_experiment_runs_end_to_end_and_resumes"
+_SHORT_COLLECTION = (
+    "tests/test_experiments.py::"
+    "test_a_short_collection_stops_the_experiment_unless_allowed_and_the_summary_says_what_was_kept"
+)
 _TINY_SMOLVLM = "tests/test_lerobot_experiment.py::test_smolvla_experiment_trains_on_a_tiny_smolvlm_built_here"
 
 _EVAL_FLAGS = "tests/test_eval.py::test_every_flag_of_a_run_reaches_its_effect"
@@ -470,6 +474,7 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "experiment run --image-size": (Differs(_EXPERIMENT, ("--image-size", "128")),),
     "experiment run --seed": (Differs(_EXPERIMENT, ("--seed", "3")),),
     "experiment run --noise": (Differs(_EXPERIMENT, ("--noise", "0.3")),),
+    "experiment run --allow-short": (ProvenBy(_SHORT_COLLECTION),),
     "experiment run --originals": (Refused((*_EXPERIMENT, "--originals", "{dir}/none"), "not a LeRobot dataset"),),
     "experiment run --device": (Differs(_EXPERIMENT, ("--device", "cpu")),),
     "experiment run --workers": (Differs(_EXPERIMENT, ("--workers", "2")),),

@@ -39,6 +39,11 @@ def add_parser(subparsers) -> None:
     run.add_argument("--seed", type=int, default=0, help="collection seed (attempt j uses env seed SEED+j)")
     run.add_argument("--noise", type=float, default=0.0, metavar="SIGMA", help="demonstrations' execution noise")
     run.add_argument(
+        "--allow-short",
+        action="store_true",
+        help="train on a collection in which some task kept fewer demonstrations than asked (default: stop)",
+    )
+    run.add_argument(
         "--originals", metavar="DIR", help="a local LeRobot dataset of LIBERO's originals to use, not collect"
     )
     run.add_argument("--device", default="cuda", help="where the policy trains and runs (default: cuda)")
@@ -105,6 +110,7 @@ def _settings(args):
         originals=originals,
         device=args.device,
         workers=args.workers,
+        allow_short=args.allow_short,
         overrides=overrides,
     )
 

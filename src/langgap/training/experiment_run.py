@@ -61,6 +61,9 @@ class Settings:
             collecting the experiment's `original` group.
         device: Where the policy trains and runs (`cuda`, `cpu`).
         workers: Worker processes of collection, rendering and evaluation.
+        allow_short: Train on a collection in which some tasks kept fewer demonstrations than asked (the oracle
+            with execution noise can fail every attempt at a task); otherwise such a collection stops the
+            experiment. `experiment.md` says what was kept either way.
         overrides: `lerobot-train` options set last (`steps=2`).
     """
 
@@ -76,6 +79,7 @@ class Settings:
     originals: Path | None = None
     device: str = "cuda"
     workers: int = 1
+    allow_short: bool = False
     overrides: dict[str, str] = field(default_factory=dict)
 
 
@@ -89,6 +93,8 @@ class Stage:
     done: Callable[[], bool]
     stdout: Path | None = None  # where the command's standard output is written (a report)
     clean: Callable[[], None] | None = None  # removes what an interrupted earlier attempt left, before the command
+    accepted: tuple[int, ...] = (0,)  # the exit codes that mean the output was written
+    hints: dict[int, str] = field(default_factory=dict)  # what an exit code that stops the experiment means
 
     def shown(self) -> str:
         """The command as a user would type it."""
@@ -109,7 +115,18 @@ def _collection_done(out: Path, tasks: tuple[str, ...], demos: int, settings: Se
     found = {k: sorted(manifest["tasks"]) if k == "tasks" else manifest.get(k) for k in wanted}
     if found != wanted:
         raise LangGapError(f"{out} holds another collection ({found}, not {wanted}): remove it or choose another out")
+    if not settings.allow_short and any(len(stats["kept"]) < demos for stats in manifest["tasks"].values()):
+        raise LangGapError(f"{out}: {_short(out, demos)}")  # the same answer every time it is run without the flag
     return True
+
+
+def _short(out: Path, demos: int) -> str:
+    """Why a collection with a task that kept fewer than `demos` demonstrations stops the experiment."""
+    listed = out / "collection.json"
+    return (
+        f"some task kept fewer than {demos} demonstrations ({listed} lists each task's): --allow-short trains on "
+        "what there is; a lower --noise keeps more"
+    )
 
 
 def _dataset_done(root: Path, episodes: Callable[[], int], image_size: int) -> bool:
@@ -152,7 +169,7 @@ def plan(experiment: Experiment, recipe: Recipe, settings: Settings, catalog: st
         if settings.originals is not None and group.tasks == TaskKind.ORIGINAL:
             datasets.append(settings.originals)
         else:
-            data = settings.out / "data" / f"group{index}"
+            data = _group_dir(settings, index)
             demos = settings.demos or group.demos
             selected = tuple(t.id for t in tasks.select(group.tasks))
             stages += _data_stages(data, group.tasks, selected, demos, image_size, settings, catalog)
@@ -168,6 +185,32 @@ def plan(experiment: Experiment, recipe: Recipe, settings: Settings, catalog: st
     return stages
 
 
+def _group_dir(settings: Settings, index: int) -> Path:
+    """Where training group `index` is collected."""
+    return settings.out / "data" / f"group{index}"
+
+
+def _trained_on(experiment: Experiment, settings: Settings) -> list[str]:
+    """What each training group's data holds: demonstrations kept of those asked, the tasks that kept fewer."""
+    lines = []
+    for index, group in enumerate(experiment.train):
+        if settings.originals is not None and group.tasks == TaskKind.ORIGINAL:
+            count = _episodes([settings.originals])
+            lines.append(f"- `{group.tasks}`: {count} episodes of {settings.originals} (`--originals`)")
+            continue
+        data = _group_dir(settings, index)
+        if not (data / "collection.json").exists():
+            lines.append(f"- `{group.tasks}`: not collected ({data} holds no collection)")
+            continue
+        manifest = read_manifest(data)
+        asked = manifest["demos"]
+        kept = {task: len(stats["kept"]) for task, stats in manifest["tasks"].items()}
+        short = ", ".join(f"{task} {n}" for task, n in sorted(kept.items()) if n < asked)
+        line = f"- `{group.tasks}`: {sum(kept.values())} of {asked * len(kept)} demonstrations kept ({len(kept)} tasks"
+        lines.append(line + (f"; fewer than {asked}: {short})" if short else ")"))
+    return lines
+
+
 def _data_stages(
     data: Path, selection: str, tasks: tuple[str, ...], demos: int, image_size: int, settings: Settings, catalog: str
 ) -> list[Stage]:
@@ -181,8 +224,16 @@ def _data_stages(
     export += ["--workers", str(settings.workers)]
     dataset = data / LEROBOT_DIR
     exported = partial(_dataset_done, dataset, lambda: len(demo_files(data)), image_size)
+    # `langgap collect` exits 1 when it wrote the collection but some task kept fewer demonstrations than asked
     return [
-        Stage(f"collect {selection}", collect, data, partial(_collection_done, data, tasks, demos, settings)),
+        Stage(
+            f"collect {selection}",
+            collect,
+            data,
+            partial(_collection_done, data, tasks, demos, settings),
+            accepted=(0, 1) if settings.allow_short else (0,),
+            hints={1: _short(data, demos)},
+        ),  # fmt: skip
         Stage(f"export {selection}", export, dataset, exported, clean=_remover(dataset)),
     ]
 
@@ -266,8 +317,9 @@ def run(stages: list[Stage], *, times: Path | None = None, say: Callable[[str], 
                 code = subprocess.call(_executable(stage.command), stdout=sink)
         else:
             code = subprocess.call(_executable(stage.command))
-        if code != 0:
-            raise LangGapError(f"the {stage.name} stage failed (exit {code}): {stage.shown()}")
+        if code not in stage.accepted:
+            meaning = f": {stage.hints[code]}" if code in stage.hints else ""
+            raise LangGapError(f"the {stage.name} stage failed (exit {code}){meaning}: {stage.shown()}")
         if times is not None:
             times.parent.mkdir(parents=True, exist_ok=True)
             with open(times, "a", encoding="utf-8") as sink:
@@ -290,6 +342,9 @@ def summary(experiment: Experiment, recipe: Recipe, settings: Settings, catalog:
         "",
         f"Policy: {recipe.name}{' (tiny, random-weight rehearsal)' if settings.tiny else ''}, tuning "
         f"`{tuning.name}`: trains {tuning.trains}; frozen: {tuning.frozen}.",
+        "",
+        "Trained on:",
+        *_trained_on(experiment, settings),
         "",
         "| Set | Tasks | Successes | Success % [95 % CI] |" + (PAPER_COLUMNS if paper else ""),
         "|---|---|---|---|" + ("---|---|" if paper else ""),
