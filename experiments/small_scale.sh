@@ -13,6 +13,9 @@
 #   diluted-passes  diluted's data, trained until the scene's frames got as many passes as in `mixed` (steps =
 #                   STEPS x diluted's frames / mixed's frames): dilution without fewer passes over the scene
 #   one             one extended task, ONE_TASK, with ONE_DEMOS demonstrations (the paper's exp 1)
+#   NAME-training-vocab  for NAME = original, extended, mixed, diluted: NAME trained with `--vocabulary training`
+#                   (its words only those of its training sentences, as before the vocabulary was fixed from the
+#                   catalogs), on the same demonstrations and seed: what the closed vocabulary changes
 # Each is evaluated on all 13 tasks of the scene on the fixed init states 0..EPISODES-1, beside `blind` (the
 # oracle doing the scene's original task whatever the instruction says: a policy that ignores language).
 # Across three suites, the paper's 16 extended training tasks (langgap99's `train` split: 9 spatial, 3 goal,
@@ -29,7 +32,8 @@
 # STEPS (training steps, default 4000), ONE_TASK (default spatial/s0/black-bowl-1-on-stove), ONE_DEMOS (default
 # 48), EPISODES (per task, default 10), WORKERS (default 2), SEEDS (training seeds, default 0; seed 0 writes
 # <name>.safetensors and runs/<name>, seed N <name>-seedN.*: the spread over seeds is the training noise the
-# episode intervals do not cover), CONFIGS (the policies to train, in order; default all of the above: a subset
+# episode intervals do not cover), CONFIGS (the policies to train, in order; default all of the above, the
+# -training-vocab ones last: a subset
 # runs those rows over every seed first). Per seed, report.md (report-seedN.md) compares the scene's finished
 # policies and report-suites.md (report-suites-seedN.md) the three suites' ones, with `blind`; pooled.md and
 # pooled-suites.md are the results tables (every finished run of each policy pooled over its seeds: `langgap
@@ -47,16 +51,21 @@ EPISODES="${EPISODES:-10}"
 WORKERS="${WORKERS:-2}"
 SEEDS="${SEEDS:-0}"
 SCENE="spatial/s0/*"
-SCENE_POLICIES="original extended mixed diluted diluted-passes one"  # the order of every report and table
+VOCAB_AB="original extended mixed diluted"  # each also trained with the training data's vocabulary
+TRAINING_VOCAB="${VOCAB_AB// /-training-vocab }-training-vocab"
+SCENE_BASE="original extended mixed diluted diluted-passes one"
+SCENE_POLICIES="$SCENE_BASE $TRAINING_VOCAB"  # the order of every report and table
 SUITE_POLICIES="originals suites suites-originals"
-CONFIGS="${CONFIGS:-$SCENE_POLICIES $SUITE_POLICIES}"
+CONFIGS="${CONFIGS:-$SCENE_BASE $SUITE_POLICIES $TRAINING_VOCAB}"  # the vocabulary's A/B last
 declare -A TRAIN=([original]="$SCENE&original" [extended]="$SCENE&train" [mixed]="$SCENE&original,$SCENE&train"
     [diluted]="original,$SCENE&train" [diluted-passes]="original,$SCENE&train" [one]="$ONE_TASK"
     [originals]="original" [suites]="train" [suites-originals]="original,train")
+for name in $VOCAB_AB; do TRAIN[$name-training-vocab]="${TRAIN[$name]}"; done
 # The collections each policy trains on (demos: the scene's original and training tasks).
 declare -A DATA=([original]="demos" [extended]="demos" [mixed]="demos" [diluted]="demos demos-originals"
     [diluted-passes]="demos demos-originals" [one]="demos-one" [originals]="demos demos-originals"
     [suites]="demos demos-suites" [suites-originals]="demos demos-suites demos-originals")
+for name in $VOCAB_AB; do DATA[$name-training-vocab]="${DATA[$name]}"; done
 fail() { echo "error: $*" >&2; exit 2; }
 for name in $CONFIGS; do
     [ -n "${TRAIN[$name]:-}" ] || fail "CONFIGS: unknown policy '$name' (known: $SCENE_POLICIES $SUITE_POLICIES)"
@@ -102,7 +111,7 @@ evaluate() {  # [CATALOG=NAME] evaluate RUN TASKS POLICY [POLICY-ARG]
     touch "$OUT/runs/$1/complete"
 }
 train() {  # train NAME SEED
-    local checkpoint data steps="$STEPS" mixed diluted_frames mixed_frames
+    local checkpoint data steps="$STEPS" mixed diluted_frames mixed_frames vocabulary=catalogs
     checkpoint="$OUT/$1$(suffix "$2").safetensors"
     [ -f "$checkpoint" ] && return
     gather "$1"
@@ -113,8 +122,9 @@ train() {  # train NAME SEED
         mixed_frames=$(frames mixed "${mixed[@]}" --tasks "${TRAIN[mixed]}")
         steps=$(((STEPS * diluted_frames + mixed_frames - 1) / mixed_frames))
     fi
+    [[ "$1" == *-training-vocab ]] && vocabulary=training
     timed "train $1$(suffix "$2") ($steps steps)" langgap train small-bc "${data[@]}" --tasks "${TRAIN[$1]}" \
-        --steps "$steps" --threads 1 --seed "$2" --out "$checkpoint"
+        --steps "$steps" --threads 1 --seed "$2" --vocabulary "$vocabulary" --out "$checkpoint"
 }
 compare() {  # compare FILE BLIND SUFFIX POLICY...: langgap report of each policy's finished run, then BLIND's
     local runs=() name

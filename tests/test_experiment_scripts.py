@@ -36,8 +36,8 @@ def finished_experiment(out: Path, runs: dict[str, str]) -> Path:
 
 def run_script(out: Path, script: Path = SCRIPT, **environment: str) -> subprocess.CompletedProcess:
     path = f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"  # this environment's `langgap`
-    env = {**os.environ, "PATH": path, **environment}
-    env.pop("LANGGAP_SMOKE", None)
+    env = {name: value for name, value in os.environ.items() if name != "LANGGAP_SMOKE"}  # shrunk if asked here
+    env = {**env, "PATH": path, **environment}
     return subprocess.run(["bash", str(script), str(out)], capture_output=True, text=True, cwd=REPO, env=env)
 
 
@@ -117,7 +117,8 @@ SMALL_SCALE = REPO / "experiments" / "small_scale.sh"
         (SWEEP, {"POLICY": "smolvla"}, "POLICY: 'smolvla' is neither small-bc nor small-vla"),
         (SWEEP, {"DEMOS_FROM": "nowhere"}, "DEMOS_FROM: nowhere holds no finished collection"),
         (SMALL_SCALE, {"CONFIGS": "one suits"}, "CONFIGS: unknown policy 'suits' (known: original extended mixed "
-         "diluted diluted-passes one originals suites suites-originals)"),
+         "diluted diluted-passes one original-training-vocab extended-training-vocab mixed-training-vocab "
+         "diluted-training-vocab originals suites suites-originals)"),
         (SMALL_SCALE, {"ONE_DEMOS": "0"}, "ONE_DEMOS: '0' is not a whole number above 0"),
         (SMALL_SCALE, {"STEPS": "4k"}, "STEPS: '4k' is not a whole number above 0"),
         (SMALL_SCALE, {"SEEDS": "0 -1"}, "SEEDS: '-1' is not a whole number"),
@@ -158,3 +159,25 @@ def test_the_small_scale_reports_keep_the_scene_and_the_three_suites_apart_with_
 
     assert pools("pooled.md") == [["| blind", "1"], ["| one", "1"]]
     assert pools("pooled-suites.md") == [["| blind", "1"], ["| originals", "1"], ["| suites", "2"]]
+
+
+def test_a_training_vocab_row_trains_its_policy_with_the_training_datas_words_on_the_same_data(tmp_path):
+    """`mixed-training-vocab` is `mixed` with `--vocabulary training`: same demonstrations and tasks, and the
+    checkpoint says which vocabulary it has (a real run, shrunk by LANGGAP_SMOKE)."""
+    import json
+
+    from safetensors import safe_open
+
+    out = tmp_path / "out"
+    done = run_script(out, SMALL_SCALE, CONFIGS="mixed-training-vocab mixed", LANGGAP_SMOKE="1")
+    assert done.returncode == 0, done.stderr[-3000:]
+
+    def training(name: str) -> dict:
+        with safe_open(str(out / f"{name}.safetensors"), "np") as checkpoint:
+            return json.loads(checkpoint.metadata()["training"])
+
+    ab, mixed = training("mixed-training-vocab"), training("mixed")
+    assert (ab["vocabulary"], mixed["vocabulary"]) == ("training", "catalogs")
+    assert (ab["data"], ab["tasks"], ab["demos"], ab["seed"]) == (mixed["data"], mixed["tasks"], mixed["demos"], 0)
+    assert f"{out}/runs/mixed-training-vocab:" in (out / "report.md").read_text()
+    assert "| mixed-training-vocab | 1 |" in (out / "pooled.md").read_text()
