@@ -45,6 +45,7 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     from langgap.catalog.catalog import load_catalog
     from langgap.demos.collect import CollectConfig, collect
+    from langgap.demos.compact import short_tasks
     from langgap.demos.export import lerobot_available, write_lerobot_dataset
     from langgap.errors import LangGapError
 
@@ -64,19 +65,16 @@ def run(args) -> int:
         max_attempts=args.max_attempts,
     )
     manifest = collect(config, args.out, execution_options(args))
-    short = 0
     print(f"{'task':<48} {'kept':>5} {'attempts':>8} {'success':>8}")
     for task_id, stats in manifest["tasks"].items():
-        kept = len(stats["kept"])
-        short += kept < args.demos
-        print(f"{task_id:<48} {kept:>5} {stats['attempts']:>8} {stats['success_rate']:>8.0%}")
+        print(f"{task_id:<48} {len(stats['kept']):>5} {stats['attempts']:>8} {stats['success_rate']:>8.0%}")
     print(f"wrote the compact form to {args.out}")
     if export:
         path = write_lerobot_dataset(args.out, workers=args.workers, progress=not args.no_progress)
         print(f"wrote the LeRobot dataset to {path}")
     else:
         print("LeRobot is not installed here: wrote the compact form only (export it with `langgap export-lerobot`)")
-    if short:
+    if short := len(short_tasks(manifest)):
         print(f"error: {short} task(s) got fewer than {args.demos} demonstrations", flush=True)
         return 1
     return 0

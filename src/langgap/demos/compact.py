@@ -94,6 +94,13 @@ def load_demo(path: Path) -> Demo:
         raise DemoFileError(f"cannot read demonstration {path}: {exc}") from None
 
 
+def short_tasks(manifest: dict) -> dict[str, int]:
+    """The tasks of a collection's manifest that kept fewer demonstrations than it asked for, with how many
+    each kept."""
+    kept = {task: len(stats["kept"]) for task, stats in manifest["tasks"].items()}
+    return {task: n for task, n in sorted(kept.items()) if n < manifest["demos"]}
+
+
 def read_manifest(root: Path) -> dict:
     path = Path(root) / MANIFEST
     if not path.is_file():

@@ -31,7 +31,7 @@ from functools import partial
 from pathlib import Path
 
 from langgap.catalog.catalog import DEFAULT_CATALOG, load_catalog
-from langgap.demos.compact import LEROBOT_DIR, demo_files, read_manifest
+from langgap.demos.compact import LEROBOT_DIR, demo_files, read_manifest, short_tasks
 from langgap.demos.export import FPS
 from langgap.errors import LangGapError
 from langgap.training.lerobot_train import TINY_VLM, Experiment, Recipe, train_command, train_options
@@ -115,7 +115,7 @@ def _collection_done(out: Path, tasks: tuple[str, ...], demos: int, settings: Se
     found = {k: sorted(manifest["tasks"]) if k == "tasks" else manifest.get(k) for k in wanted}
     if found != wanted:
         raise LangGapError(f"{out} holds another collection ({found}, not {wanted}): remove it or choose another out")
-    if not settings.allow_short and any(len(stats["kept"]) < demos for stats in manifest["tasks"].values()):
+    if not settings.allow_short and short_tasks(manifest):
         raise LangGapError(f"{out}: {_short(out, demos)}")  # the same answer every time it is run without the flag
     return True
 
@@ -203,10 +203,10 @@ def _trained_on(experiment: Experiment, settings: Settings) -> list[str]:
             lines.append(f"- `{group.tasks}`: not collected ({data} holds no collection)")
             continue
         manifest = read_manifest(data)
-        asked = manifest["demos"]
-        kept = {task: len(stats["kept"]) for task, stats in manifest["tasks"].items()}
-        short = ", ".join(f"{task} {n}" for task, n in sorted(kept.items()) if n < asked)
-        line = f"- `{group.tasks}`: {sum(kept.values())} of {asked * len(kept)} demonstrations kept ({len(kept)} tasks"
+        asked, tasks = manifest["demos"], manifest["tasks"]
+        kept = sum(len(stats["kept"]) for stats in tasks.values())
+        short = ", ".join(f"{task} {n}" for task, n in short_tasks(manifest).items())
+        line = f"- `{group.tasks}`: {kept} of {asked * len(tasks)} demonstrations kept ({len(tasks)} tasks"
         lines.append(line + (f"; fewer than {asked}: {short})" if short else ")"))
     return lines
 
