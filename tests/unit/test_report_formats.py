@@ -126,3 +126,22 @@ def test_runs_from_before_the_blas_kernel_was_recorded_pair_with_runs_that_recor
     other = write_run(tmp_path / "c", "my-vla", reader(), physics={"mujoco": "3.2.3", "blas": "SkylakeX"})
     a, b, c = (results(run) for run in load_runs([older, newer, other]))
     assert protocol_differences(a, b) == [] and protocol_differences(b, c) == ["physics"]
+
+
+def test_a_report_with_its_html_page_reads_each_run_once(runs, tmp_path, monkeypatch, capsys):
+    from langgap.cli.main import main
+    from langgap.report import load
+    from langgap.store import RunStore
+
+    opened = []
+    real_open = RunStore.open.__func__
+
+    def counted(cls, path, *args, **kwargs):
+        opened.append(str(path))
+        return real_open(cls, path, *args, **kwargs)
+
+    monkeypatch.setattr(load.RunStore, "open", classmethod(counted))
+    assert main(["report", str(runs[0]), "--compare", str(runs[1]), "--html", str(tmp_path / "page")]) == 0
+    assert sorted(opened) == sorted(map(str, runs))  # the text and the page are two views of one reading
+    assert (tmp_path / "page" / "index.html").exists()
+    assert capsys.readouterr().out.startswith(render(runs, "md"))

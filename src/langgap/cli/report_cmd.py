@@ -80,7 +80,7 @@ _NOT_POOLED = ("run", "compare", "summary", "no_published", "html", "plots", "ep
 
 
 def run(args) -> int:
-    from langgap.report import diagnosis_text, load_runs, pooled_text, render, summarize
+    from langgap.report import format_summary, load_runs, pooled_text, summarize
 
     if args.pool:
         given = [name for name in _NOT_POOLED if getattr(args, name)]
@@ -93,20 +93,14 @@ def run(args) -> int:
         raise LangGapError("name a run directory (or pool runs with --pool LABEL=RUN,RUN...)")
     paths = [*args.run, *args.compare]
     published = not args.no_published
-    if args.summary:
-        if args.format not in DIAGNOSIS_FORMATS:
-            raise LangGapError(
-                f"--summary shows the diagnosis as {' or '.join(DIAGNOSIS_FORMATS)}; --format {args.format} holds "
-                "every number of the full report: drop --summary"
-            )
-        text = diagnosis_text(
-            paths, args.format, published=published, allow_mismatch=args.allow_mismatch, split=args.split
+    if args.summary and args.format not in DIAGNOSIS_FORMATS:
+        raise LangGapError(
+            f"--summary shows the diagnosis as {' or '.join(DIAGNOSIS_FORMATS)}; --format {args.format} holds "
+            "every number of the full report: drop --summary"
         )
-    else:
-        text = render(paths, args.format, published=published, allow_mismatch=args.allow_mismatch, split=args.split)
-    print(text, end="")
-    if args.html or args.plots:
-        summary = summarize(load_runs(paths, split=args.split), allow_mismatch=args.allow_mismatch)
+    # Read once: the text, --html and --plots are three views of one summary.
+    summary = summarize(load_runs(paths, split=args.split), allow_mismatch=args.allow_mismatch)
+    print(format_summary(summary, args.format, published=published, diagnosis=args.summary), end="")
     if args.html:
         from langgap.report.html import write_html
         from langgap.report.published import load_published

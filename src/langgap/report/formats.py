@@ -172,7 +172,7 @@ def render(
     adds the paper's results as reference rows to the formats that show tables; `allow_mismatch`
     pairs runs whose protocols differ; `split` groups episodes by a stored split (`load_runs`)."""
     summary = summarize(load_runs(paths, split=split), allow_mismatch=allow_mismatch)
-    return FORMATS[fmt](summary, load_published() if published else None)
+    return format_summary(summary, fmt, published=published)
 
 
 # The formats that show the short diagnosis (`report --summary`): json and csv hold every number already.
@@ -194,8 +194,26 @@ def diagnosis_text(
     (`fmt`: a name in `DIAGNOSIS_FORMATS`; `allow_mismatch` pairs runs whose protocols differ; `split` groups
     episodes by a stored split: `load_runs`)."""
     summary = summarize(load_runs(paths, split=split), allow_mismatch=allow_mismatch)
+    return format_summary(summary, fmt, published=published, diagnosis=True)
+
+
+def format_summary(summary: Summary, fmt: str = "md", *, published: bool = True, diagnosis: bool = False) -> str:
+    """A summary already made, as text: what `render` (or, with `diagnosis`, `diagnosis_text`) prints, for a
+    caller that also needs the summary itself (the CLI's `--html` and `--plots`), so the runs are read once.
+
+    Args:
+        summary: What `summarize` made of the runs.
+        fmt: A name in `FORMATS` (with `diagnosis`, in `DIAGNOSIS_FORMATS`).
+        published: Add the paper's results as reference rows to the formats that show tables.
+        diagnosis: The short diagnosis instead of the full report.
+
+    Returns:
+        The report's text.
+    """
     reference = load_published() if published else None
-    return DIAGNOSIS_FORMATS[fmt](summary, reference, DIAGNOSIS)
+    if diagnosis:
+        return DIAGNOSIS_FORMATS[fmt](summary, reference, DIAGNOSIS)
+    return FORMATS[fmt](summary, reference)
 
 
 def _pooled_csv(rows: list[PooledRow]) -> str:
