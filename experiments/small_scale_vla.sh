@@ -64,11 +64,11 @@ collect() {  # collect DIR SELECTION DEMOS
         --workers "$WORKERS" --seed 1000 --format compact --no-progress || [ $? -eq 1 ]
 }
 images() {  # images DIR: both cameras at SIZE px, rendered by replaying the demonstrations' states
-    [ -f "$1/hdf5/complete" ] && return
+    [ -f "$1/hdf5/complete-$SIZE" ] && return  # a render at another size is not this one
     # --resume: the tasks an interrupted render finished are kept (checked to be of this collection and SIZE).
     timed "images $(basename "$1")" langgap export-hdf5 "$1" --images --image-size "$SIZE" --workers "$WORKERS" \
         --no-progress --resume
-    touch "$1/hdf5/complete"
+    touch "$1/hdf5/complete-$SIZE"
 }
 collect "$OUT/demos" "$SCENE&original,$SCENE&train" "$DEMOS"
 images "$OUT/demos"

@@ -24,7 +24,7 @@ def finished_experiment(out: Path, runs: dict[str, str]) -> Path:
     """OUT as the script leaves it after collecting, rendering and evaluating `runs` (run name -> policy)."""
     (out / "demos" / "hdf5").mkdir(parents=True)
     (out / "demos" / "collection.json").write_text("{}")
-    (out / "demos" / "hdf5" / "complete").touch()
+    (out / "demos" / "hdf5" / "complete-96").touch()
     for name, policy in runs.items():
         records = memoriser(sees_state=True, sees_goal=True) if policy == "blind" else reader()
         write_run(out / "runs" / name, policy, records)
@@ -181,3 +181,14 @@ def test_a_training_vocab_row_trains_its_policy_with_the_training_datas_words_on
     assert (ab["data"], ab["tasks"], ab["demos"], ab["seed"]) == (mixed["data"], mixed["tasks"], mixed["demos"], 0)
     assert f"{out}/runs/mixed-training-vocab:" in (out / "report.md").read_text()
     assert "| mixed-training-vocab | 1 |" in (out / "pooled.md").read_text()
+
+
+def test_a_render_at_another_size_is_not_taken_for_the_finished_one(tmp_path):
+    # OUT holds a finished 96 px render (and every run): asked for 64 px, the script renders again, and this
+    # collection (an empty manifest) cannot be rendered, so it stops there, before training or evaluating.
+    out = finished_experiment(tmp_path / "out", {"blind": "blind", "extended": "small-vla"})
+    done = run_script(out, CONFIGS="extended", SEEDS="0", SIZE="64")
+    assert done.returncode != 0
+    assert "is not a collection's manifest" in done.stderr, done.stderr
+    assert not (out / "demos" / "hdf5" / "complete-64").exists()
+    assert run_script(out, CONFIGS="extended", SEEDS="0").returncode == 0  # at 96 px nothing is rendered again

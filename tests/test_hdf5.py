@@ -186,6 +186,10 @@ def test_cli_refuses_to_overwrite_and_rejects_what_is_not_a_collection(tiny_coll
     broken = run_cli("export-hdf5", str(tmp_path / "broken"))
     assert broken.returncode == 2 and len(broken.stderr.splitlines()) == 1
     assert broken.stderr.startswith(f"error: cannot read {tmp_path / 'broken' / 'collection.json'}")
+    (tmp_path / "broken" / "collection.json").write_text("{}")  # JSON, but no collection's manifest
+    empty = run_cli("export-hdf5", str(tmp_path / "broken"))
+    assert empty.returncode == 2 and len(empty.stderr.splitlines()) == 1
+    assert empty.stderr.startswith(f"error: {tmp_path / 'broken' / 'collection.json'} is not a collection's manifest")
 
 
 def test_resume_keeps_the_finished_files_and_writes_the_rest(pair, tmp_path):

@@ -108,9 +108,29 @@ def read_manifest(root: Path) -> dict:
             f"{root} is not a demonstration collection (no {MANIFEST}); make one with `langgap collect`"
         )
     try:
-        return json.loads(path.read_text())
+        manifest = json.loads(path.read_text())
     except (OSError, ValueError) as exc:
         raise DemoFileError(f"cannot read {path}: {exc}") from None
+    problem = _manifest_problem(manifest)
+    if problem:
+        raise DemoFileError(f"{path} is not a collection's manifest ({problem}); make one with `langgap collect`")
+    return manifest
+
+
+def _manifest_problem(manifest: object) -> str | None:
+    """What keeps a parsed `collection.json` from being read as one (None: nothing): the fields every reader
+    uses, the kept seeds of each task above all."""
+    if not isinstance(manifest, dict):
+        return f"a JSON {type(manifest).__name__}, not an object"
+    missing = [key for key in ("catalog", "demos", "tasks") if key not in manifest]
+    if missing:
+        return f"no {', '.join(missing)}"
+    tasks = manifest["tasks"]
+    if not isinstance(tasks, dict) or not all(
+        isinstance(s, dict) and isinstance(s.get("kept"), list) for s in tasks.values()
+    ):
+        return "`tasks` is not each task's kept seeds"
+    return None
 
 
 def write_manifest(root: Path, manifest: dict) -> None:
