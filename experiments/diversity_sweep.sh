@@ -80,6 +80,8 @@ mkdir -p "$OUT"
 source "$(dirname "$0")/timed.sh"  # timed STEP COMMAND...: run it, then append "STEP<TAB>seconds" to OUT/times.tsv
 # shellcheck source=experiments/frames.sh
 source "$(dirname "$0")/frames.sh"  # frames KEY TRAIN-ARG...: the training frames of that data (OUT/frames.tsv)
+# shellcheck source=experiments/images.sh
+source "$(dirname "$0")/images.sh"  # images DIR: both cameras at SIZE px into DIR/hdf5, once per size
 
 DATA="${DEMOS_FROM:-$OUT/demos}"
 if [ ! -f "$DATA/collection.json" ]; then
@@ -89,13 +91,7 @@ if [ ! -f "$DATA/collection.json" ]; then
         --noise "$NOISE" --out "$OUT/demos" --workers "$WORKERS" --seed 1000 --format compact --no-progress \
         || [ $? -eq 1 ]
 fi
-if [ "$POLICY" = small-vla ] && [ ! -f "$DATA/hdf5/complete-$SIZE" ]; then
-    # Both cameras at SIZE px, rendered by replaying the demonstrations' states (--resume: the tasks an
-    # interrupted render finished are kept, checked to be of this collection and size).
-    timed "images ($SIZE px)" langgap export-hdf5 "$DATA" --images --image-size "$SIZE" --workers "$WORKERS" \
-        --no-progress --resume
-    touch "$DATA/hdf5/complete-$SIZE"
-fi
+if [ "$POLICY" = small-vla ]; then images "$DATA"; fi  # both cameras at SIZE px, rendered once
 
 steps() {  # steps K: ceil(PASSES x frames_K / BATCH), capped at MAX_STEPS
     local n seen

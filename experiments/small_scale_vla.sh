@@ -55,6 +55,8 @@ mkdir -p "$OUT"
 
 # shellcheck source=experiments/timed.sh
 source "$(dirname "$0")/timed.sh"  # timed STEP COMMAND...: run it, then append "STEP<TAB>seconds" to OUT/times.tsv
+# shellcheck source=experiments/images.sh
+source "$(dirname "$0")/images.sh"  # images DIR: both cameras at SIZE px into DIR/hdf5, once per size
 
 collect() {  # collect DIR SELECTION DEMOS
     [ -f "$1/collection.json" ] && return
@@ -62,13 +64,6 @@ collect() {  # collect DIR SELECTION DEMOS
     # what there is.
     timed "collect $(basename "$1")" langgap collect --tasks "$2" --demos "$3" --noise "$NOISE" --out "$1" \
         --workers "$WORKERS" --seed 1000 --format compact --no-progress || [ $? -eq 1 ]
-}
-images() {  # images DIR: both cameras at SIZE px, rendered by replaying the demonstrations' states
-    [ -f "$1/hdf5/complete-$SIZE" ] && return  # a render at another size is not this one
-    # --resume: the tasks an interrupted render finished are kept (checked to be of this collection and SIZE).
-    timed "images $(basename "$1")" langgap export-hdf5 "$1" --images --image-size "$SIZE" --workers "$WORKERS" \
-        --no-progress --resume
-    touch "$1/hdf5/complete-$SIZE"
 }
 collect "$OUT/demos" "$SCENE&original,$SCENE&train" "$DEMOS"
 images "$OUT/demos"

@@ -98,7 +98,7 @@ def run(args) -> int:
             f"--summary shows the diagnosis as {' or '.join(DIAGNOSIS_FORMATS)}; --format {args.format} holds "
             "every number of the full report: drop --summary"
         )
-    # Read once: the text, --html and --plots are three views of one summary.
+    # The text, --html and --plots are three views of one summary, read once.
     summary = summarize(load_runs(paths, split=args.split), allow_mismatch=args.allow_mismatch)
     print(format_summary(summary, args.format, published=published, diagnosis=args.summary), end="")
     if args.html:

@@ -65,7 +65,7 @@ def _shrink_to_collected(args) -> str | None:
     from langgap.demos.compact import read_manifest
 
     selected = [t.id for t in load_catalog(args.catalog or DEFAULT_CATALOG).select(args.tasks)]
-    attempted = {task for root in args.data for task in read_manifest(root).get("tasks", {})}
+    attempted = {task for root in args.data for task in read_manifest(root)["tasks"]}
     kept = [t for t in selected if t in attempted]
     if not kept or len(kept) == len(selected):
         return None

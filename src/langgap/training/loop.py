@@ -86,7 +86,7 @@ def selected(config: TrainConfig, demos: Sequence[Item], log: Callable[[str], No
         wanted = set(config.tasks)
         kept = [d for d in kept if d.task_id in wanted]
         missing = wanted - {d.task_id for d in kept}
-        attempted = {task for root in config.data for task in read_manifest(Path(root)).get("tasks", {})}
+        attempted = {task for root in config.data for task in read_manifest(Path(root))["tasks"]}
         never = missing - attempted
         if never:
             raise LangGapError(f"no demonstrations of {len(never)} selected task(s), e.g. {sorted(never)[0]}")
