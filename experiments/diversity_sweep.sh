@@ -24,7 +24,8 @@
 # task, default 10), WORKERS (default 2), THREADS (training threads, default 1). With LANGGAP_SMOKE set (every
 # command shrunk: langgap.cli.smoke), the sweep runs the first K, width and seed only, on that subset's tasks.
 # POLICY (default small-bc; small-vla sees both cameras instead of the simulator's state: the demonstrations'
-# images are rendered first, at SIZE px, default 96, into the collection), DEMOS_FROM (a finished collection of
+# images are rendered at SIZE px, default 96, into the collection before the first training: checkpoints trained
+# elsewhere, e.g. on a GPU machine and put in OUT under the sweep's names, are only evaluated), DEMOS_FROM (a finished collection of
 # the pool to train on instead of collecting OUT/demos: another sweep's, to compare policies on the same data).
 # Every step's wall time is appended to OUT/times.tsv. The results: OUT/pooled-<set>.md (`langgap report --pool`
 # of each set: compositional, novel-word, trained; .json beside), OUT/sweep.md (each set's success against K per
@@ -91,7 +92,6 @@ if [ ! -f "$DATA/collection.json" ]; then
         --noise "$NOISE" --out "$OUT/demos" --workers "$WORKERS" --seed 1000 --format compact --no-progress \
         || [ $? -eq 1 ]
 fi
-if [ "$POLICY" = small-vla ]; then images "$DATA"; fi  # both cameras at SIZE px, rendered once
 
 steps() {  # steps K: ceil(PASSES x frames_K / BATCH), capped at MAX_STEPS
     local n seen
@@ -114,6 +114,9 @@ evaluate() {  # evaluate RUN TASKS POLICY [POLICY-ARG...]: one run of EPISODES p
 train() {  # train K WIDTH SEED
     local name="k$1-d$2$(suffix "$3")" config="$OUT/width-$2.yaml" n
     [ -f "$OUT/$name.safetensors" ] && return
+    # small-vla: both cameras at SIZE px, rendered once, before the first training that needs them (a sweep
+    # whose checkpoints were trained elsewhere, e.g. on a GPU machine, only evaluates and renders nothing)
+    if [ "$POLICY" = small-vla ]; then images "$DATA"; fi
     printf 'model:\n  d_model: %s\n' "$2" > "$config"
     [ "$POLICY" = small-vla ] && printf '  image_size: %s\n' "$SIZE" >> "$config"
     n=$(steps "$1")

@@ -194,11 +194,17 @@ def test_a_render_at_another_size_is_not_taken_for_the_finished_one(tmp_path):
     assert run_script(out, CONFIGS="extended", SEEDS="0").returncode == 0  # at 96 px nothing is rendered again
 
 
-def test_the_sweep_with_small_vla_renders_its_collection_before_training(tmp_path):
-    # Every run of K = 1 is finished, but no render is marked: with small-vla the sweep renders first (the shared
-    # `images` of experiments/images.sh), and this collection (an empty manifest) cannot be rendered.
+def test_the_sweep_with_small_vla_renders_its_collection_before_training_and_only_then(tmp_path):
+    # Every run of K = 1 is finished and no render is marked. With its checkpoint there (trained elsewhere, e.g.
+    # on a GPU machine), small-vla's sweep renders nothing: it only evaluates and writes its tables.
     out = finished_sweep(tmp_path / "out", {0: "reader"})
+    done = run_script(out, SWEEP, POLICY="small-vla", KS="1", WIDTHS="64", SEEDS="0")
+    assert done.returncode == 0, done.stderr
+    assert not (out / "times.tsv").exists()
+    # Without it, the sweep renders before training (the shared `images` of experiments/images.sh), and this
+    # collection (an empty manifest) cannot be rendered, so it stops there.
+    (out / "k1-d64.safetensors").unlink()
     done = run_script(out, SWEEP, POLICY="small-vla", KS="1", WIDTHS="64", SEEDS="0")
     assert done.returncode != 0
     assert "is not a collection's manifest" in done.stderr, done.stderr
-    assert run_script(out, SWEEP, KS="1", WIDTHS="64", SEEDS="0").returncode == 0  # small-bc reads no images
+    assert not (out / "k1-d64.safetensors").exists()
