@@ -21,7 +21,8 @@
 # (a cap on every policy's steps, for a quick try; default none), KS (the subsets, default "1 3 6 12 24"), WIDTHS
 # (d_model of each width, default "64 128"; a multiple of the model's 4 heads), SEEDS (training seeds, default
 # "0 1 2"; seed 0 writes k<K>-d<W>.safetensors and runs/k<K>-d<W>-<set>, seed N k<K>-d<W>-seedN.*), EPISODES (per
-# task, default 10), WORKERS (default 2), THREADS (training threads, default 1). With LANGGAP_SMOKE set (every
+# task, default 10), WORKERS (default 2), THREADS (training threads, default 1), DEVICE (where training runs: cpu,
+# the default, or cuda[:N]; evaluation stays on the CPU workers). With LANGGAP_SMOKE set (every
 # command shrunk: langgap.cli.smoke), the sweep runs the first K, width and seed only, on that subset's tasks.
 # POLICY (default small-bc; small-vla sees both cameras instead of the simulator's state: the demonstrations'
 # images are rendered at SIZE px, default 96, into the collection before the first training: checkpoints trained
@@ -44,6 +45,7 @@ SEEDS="${SEEDS:-0 1 2}"
 EPISODES="${EPISODES:-10}"
 WORKERS="${WORKERS:-2}"
 THREADS="${THREADS:-1}"
+DEVICE="${DEVICE:-cpu}"
 POLICY="${POLICY:-small-bc}"
 SIZE="${SIZE:-96}"
 DEMOS_FROM="${DEMOS_FROM:-}"
@@ -64,6 +66,7 @@ done
 for seed in $SEEDS; do [[ "$seed" =~ ^[0-9]+$ ]] || fail "SEEDS: '$seed' is not a whole number"; done
 [[ "$NOISE" =~ ^[0-9]*\.?[0-9]+$ ]] || fail "NOISE: '$NOISE' is not a number"
 [[ " small-bc small-vla " == *" $POLICY "* ]] || fail "POLICY: '$POLICY' is neither small-bc nor small-vla"
+[[ "$DEVICE" =~ ^(cpu|cuda(:[0-9]+)?)$ ]] || fail "DEVICE: '$DEVICE' is neither cpu nor cuda[:N]"
 whole SIZE "$SIZE"
 if [ -n "$DEMOS_FROM" ]; then
     [ -f "$DEMOS_FROM/collection.json" ] || fail "DEMOS_FROM: $DEMOS_FROM holds no finished collection"
@@ -121,7 +124,7 @@ train() {  # train K WIDTH SEED
     [ "$POLICY" = small-vla ] && printf '  image_size: %s\n' "$SIZE" >> "$config"
     n=$(steps "$1")
     timed "train $name ($n steps)" langgap train "$POLICY" --config "$config" --data "$DATA" --catalog full \
-        --tasks "split:$COMPOSITIONAL:$1" --steps "$n" --batch-size "$BATCH" --threads "$THREADS" --seed "$3" \
+        --tasks "split:$COMPOSITIONAL:$1" --steps "$n" --batch-size "$BATCH" --threads "$THREADS" --device "$DEVICE" --seed "$3" \
         --out "$OUT/$name.safetensors"
 }
 

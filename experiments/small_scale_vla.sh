@@ -19,9 +19,10 @@
 #   experiments/small_scale_vla.sh [OUT]     (default OUT: runs/small_scale_vla; re-running skips finished steps)
 # Environment: DEMOS (per task, default 12), ORIGINAL_DEMOS (per other scene's original task, for `diluted`; default
 # DEMOS), NOISE (execution noise of the demonstrations, default 0.3), SIZE (image size, default 96), STEPS (training
-# steps, default 3000), BATCH (frames per step, default 64), THREADS (training threads, default 2), EPISODES (per
-# task, default 10), WORKERS (default 2), SEEDS (training seeds, default "0 1 2"; seed 0 writes <name>.safetensors
-# and runs/<name>, seed N <name>-seedN.*), CONFIGS (the policies to train, in order; default "original extended mixed
+# steps, default 3000), BATCH (frames per step, default 64), THREADS (training threads, default 2), DEVICE (where
+# training runs: cpu, the default, or cuda[:N]; evaluation stays on the CPU workers), EPISODES (per task, default
+# 10), WORKERS (default 2), SEEDS (training seeds, default "0 1 2"; seed 0 writes <name>.safetensors and
+# runs/<name>, seed N <name>-seedN.*), CONFIGS (the policies to train, in order; default "original extended mixed
 # diluted": a subset runs one row over every seed first). Each seed's report (OUT/report.md, OUT/report-seedN.md)
 # compares every finished policy of that seed, in that order, those of earlier invocations too, with `blind`.
 # Every step's wall time is appended to OUT/times.tsv; OUT/pooled.md is the results table (every finished
@@ -36,6 +37,7 @@ SIZE="${SIZE:-96}"
 STEPS="${STEPS:-3000}"
 BATCH="${BATCH:-64}"
 THREADS="${THREADS:-2}"
+DEVICE="${DEVICE:-cpu}"
 EPISODES="${EPISODES:-10}"
 WORKERS="${WORKERS:-2}"
 SEEDS="${SEEDS:-0 1 2}"
@@ -47,6 +49,7 @@ declare -A TRAIN=([original]="$SCENE&original" [extended]="$SCENE&train" [mixed]
 for name in $CONFIGS; do
     [ -n "${TRAIN[$name]:-}" ] || { echo "error: CONFIGS: unknown policy '$name' (known: $POLICIES)" >&2; exit 2; }
 done
+[[ "$DEVICE" =~ ^(cpu|cuda(:[0-9]+)?)$ ]] || { echo "error: DEVICE: '$DEVICE' is neither cpu nor cuda[:N]" >&2; exit 2; }
 if [ -n "${LANGGAP_SMOKE:-}" ] && [ "$SEEDS" != "${SEEDS%% *}" ]; then  # every command shrinks itself; so do the seeds
     echo "note: LANGGAP_SMOKE is set, so this script is shrunk: SEEDS '$SEEDS' -> '${SEEDS%% *}'" >&2
     SEEDS="${SEEDS%% *}"
@@ -80,7 +83,7 @@ train() {  # train NAME SEED
     [ -f "$checkpoint" ] && return
     [ "$1" = diluted ] && data+=(--data "$OUT/demos-originals")
     timed "train $1$(suffix "$2")" langgap train small-vla "${data[@]}" --tasks "${TRAIN[$1]}" --steps "$STEPS" \
-        --batch-size "$BATCH" --threads "$THREADS" --seed "$2" --out "$checkpoint"
+        --batch-size "$BATCH" --threads "$THREADS" --device "$DEVICE" --seed "$2" --out "$checkpoint"
 }
 
 evaluate blind "$SCENE" blind

@@ -116,6 +116,8 @@ SMALL_SCALE = REPO / "experiments" / "small_scale.sh"
         (SWEEP, {"SEEDS": "0 one"}, "SEEDS: 'one' is not a whole number"),
         (SWEEP, {"POLICY": "smolvla"}, "POLICY: 'smolvla' is neither small-bc nor small-vla"),
         (SWEEP, {"DEMOS_FROM": "nowhere"}, "DEMOS_FROM: nowhere holds no finished collection"),
+        (SWEEP, {"DEVICE": "gpu"}, "DEVICE: 'gpu' is neither cpu nor cuda[:N]"),
+        (SCRIPT, {"DEVICE": "cuda0"}, "DEVICE: 'cuda0' is neither cpu nor cuda[:N]"),
         (SMALL_SCALE, {"CONFIGS": "one suits"}, "CONFIGS: unknown policy 'suits' (known: original extended mixed "
          "diluted diluted-passes one original-training-vocab extended-training-vocab mixed-training-vocab "
          "diluted-training-vocab originals suites suites-originals)"),
@@ -192,6 +194,17 @@ def test_a_render_at_another_size_is_not_taken_for_the_finished_one(tmp_path):
     assert "is not a collection's manifest" in done.stderr, done.stderr
     assert not (out / "demos" / "hdf5" / "complete-64").exists()
     assert run_script(out, CONFIGS="extended", SEEDS="0").returncode == 0  # at 96 px nothing is rendered again
+
+
+def test_the_sweeps_device_reaches_its_training(tmp_path):
+    # K = 1's checkpoint is missing, so the sweep trains it, on a device no machine has: `langgap train` refuses
+    # it by name before reading the demonstrations (which this OUT does not hold).
+    out = finished_sweep(tmp_path / "out", {0: "reader"})
+    (out / "k1-d64.safetensors").unlink()
+    done = run_script(out, SWEEP, KS="1", WIDTHS="64", SEEDS="0", DEVICE="cuda:99")
+    assert done.returncode != 0
+    assert "error: --device cuda:99: PyTorch sees" in done.stderr, done.stderr
+    assert not (out / "k1-d64.safetensors").exists()
 
 
 def test_the_sweep_with_small_vla_renders_its_collection_before_training_and_only_then(tmp_path):

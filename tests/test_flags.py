@@ -130,3 +130,24 @@ def test_small_bc_training_options_reach_the_config(tmp_path, kind):
     )
     assert (flags.lr, flags.seed, flags.loss, flags.device) == (0.01, 9, "mse", "cpu")
     assert flags.torch_device().type == "cpu"  # the device the trainer moves the model to
+
+
+@pytest.mark.parametrize(
+    ("available", "count", "message"),
+    [
+        (False, 0, "device cuda:1: PyTorch sees no CUDA device on this machine"),
+        (True, 1, "device cuda:1: PyTorch sees 1 CUDA device(s) on this machine, numbered from 0"),
+    ],
+)
+def test_a_cuda_device_this_machine_lacks_is_refused_before_training(monkeypatch, available, count, message):
+    # What PyTorch reports of the machine's GPUs is set here (this machine may have none); the check is LangGap's.
+    import torch
+
+    from langgap.errors import ParameterError
+    from langgap.training.loop import TrainConfig
+
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: available)
+    monkeypatch.setattr(torch.cuda, "device_count", lambda: count)
+    with pytest.raises(ParameterError) as raised:
+        TrainConfig(data=("d",), device="cuda:1").torch_device()
+    assert str(raised.value) == message

@@ -56,6 +56,12 @@ class TrainConfig:
             raise ParameterError("{device} {name}: {exc}", name=self.device, exc=exc) from None
         if device.type == "cuda" and not torch.cuda.is_available():
             raise ParameterError("{device} {name}: PyTorch sees no CUDA device on this machine", name=self.device)
+        if device.type == "cuda" and device.index is not None and device.index >= torch.cuda.device_count():
+            raise ParameterError(
+                "{device} {name}: PyTorch sees {count} CUDA device(s) on this machine, numbered from 0",
+                name=self.device,
+                count=torch.cuda.device_count(),
+            )
         if device.type not in ("cpu", "cuda"):
             raise ParameterError("{device} {name}: only cpu and cuda are supported", name=self.device)
         return device
