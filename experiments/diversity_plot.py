@@ -1,13 +1,15 @@
 """The diversity sweep's table and figure, from the pooled tables experiments/diversity_sweep.sh writes.
 
-    python experiments/diversity_plot.py OUT [--figure PNG]
+    python experiments/diversity_plot.py OUT [--figure PNG] [--beside LABEL=DIR ...]
 
 Reads OUT/pooled-<set>.json (`langgap report --pool --format json` of each set: compositional, novel-word,
 trained; one pool per K and width, labelled `k<K>-d<W>`, its runs the training seeds, and `blind`) and writes
 OUT/sweep.md (a row per K and width: each set's success with its Wilson 95 % interval over the pooled episodes,
 then each seed's successes) and the figure (default OUT/sweep.png: each set's success against K, a line per width,
 the intervals as bars, `blind` dashed). A pool's report groups its episodes by the catalog's own split (original,
-training, held-out), which is not the sweep's: here every group of a run is counted together.
+training, held-out), which is not the sweep's: here every group of a run is counted together. `--beside LABEL=DIR`
+adds another sweep's points on the same tasks (e.g. `small-vla=runs/diversity_sweep_vla`: the same sweep with
+another policy), as squares and as rows after OUT's, their width column naming LABEL.
 """
 
 from __future__ import annotations
@@ -84,17 +86,20 @@ def policies(table: dict[str, dict[str, Cell]]) -> list[tuple[int, int]]:
     return sorted(found, key=lambda kw: (kw[1], kw[0]))
 
 
-def markdown(table: dict[str, dict[str, Cell]]) -> str:
-    """The sweep's table: `blind` first, then a row per width and K."""
+def markdown(table: dict[str, dict[str, Cell]], beside: dict[str, dict[str, dict[str, Cell]]] | None = None) -> str:
+    """The sweep's table: `blind` first, then a row per width and K; then those of each sweep `beside` (label ->
+    its table), the label in the width column."""
     head = "| K | width (d_model) | " + " | ".join(f"{SETS[s]} %" for s in SETS) + " |"
     lines = [head, "|" + "---|" * (2 + len(SETS))]
 
-    def row(k: str, width: str, label: str) -> str:
-        texts = [table[s][label].text() if label in table.get(s, {}) else "–" for s in SETS]
+    def row(of: dict[str, dict[str, Cell]], k: str, width: str, label: str) -> str:
+        texts = [of[s][label].text() if label in of.get(s, {}) else "–" for s in SETS]
         return f"| {k} | {width} | " + " | ".join(texts) + " |"
 
-    lines.append(row("`blind`", "–", "blind"))
-    lines += [row(str(k), str(width), f"k{k}-d{width}") for k, width in policies(table)]
+    lines.append(row(table, "`blind`", "–", "blind"))
+    lines += [row(table, str(k), str(width), f"k{k}-d{width}") for k, width in policies(table)]
+    for name, other in (beside or {}).items():
+        lines += [row(other, str(k), f"{width}, {name}", f"k{k}-d{width}") for k, width in policies(other)]
     return "\n".join(lines) + "\n"
 
 
@@ -106,29 +111,34 @@ def seeds_text(points: list[tuple[int, Cell]]) -> str:
     return f"{counts[0]}–{counts[-1]} seeds per point"
 
 
-def figure(table: dict[str, dict[str, Cell]], path: Path) -> None:
-    """A panel per set: success against K (log scale), a line per width with its intervals, `blind` dashed."""
+def figure(
+    table: dict[str, dict[str, Cell]], path: Path, beside: dict[str, dict[str, dict[str, Cell]]] | None = None
+) -> None:
+    """A panel per set: success against K (log scale), a line per width with its intervals, `blind` dashed; each
+    sweep `beside` (label -> its table) as squares, its label in the legend."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    pairs = policies(table)
-    widths = sorted({w for _, w in pairs})
-    ks = sorted({k for k, _ in pairs})
+    lines = [(f"d_model {w}", "o", table, w) for w in sorted({w for _, w in policies(table)})]
+    for name, other in (beside or {}).items():
+        lines += [(f"{name}, d_model {w}", "s", other, w) for w in sorted({w for _, w in policies(other)})]
+    ks = sorted({k for _, _, of, _ in lines for k, _ in policies(of)})
     fig, axes = plt.subplots(1, len(SETS), figsize=(4.2 * len(SETS), 3.6), sharey=True)
     for ax, s in zip(axes, SETS, strict=True):
-        by_label = table.get(s, {})
-        for offset, width in enumerate(widths):
+        for offset, (name, marker, of, width) in enumerate(lines):
+            by_label = of.get(s, {})
             points = [(k, by_label[f"k{k}-d{width}"]) for k in ks if f"k{k}-d{width}" in by_label]
             if not points:
                 continue
-            shift = 1 + 0.06 * (offset - (len(widths) - 1) / 2)  # side by side, so both widths' bars show
+            shift = 1 + 0.06 * (offset - (len(lines) - 1) / 2)  # side by side, so every line's bars show
             x = [k * shift for k, _ in points]
             y = [100 * c.rate for _, c in points]
             low = [100 * (c.rate - c.interval[0]) for _, c in points]
             high = [100 * (c.interval[1] - c.rate) for _, c in points]
-            ax.errorbar(x, y, yerr=[low, high], marker="o", capsize=3, label=f"d_model {width} ({seeds_text(points)})")
+            ax.errorbar(x, y, yerr=[low, high], marker=marker, capsize=3, label=f"{name} ({seeds_text(points)})")
+        by_label = table.get(s, {})
         if "blind" in by_label:
             ax.axhline(100 * by_label["blind"].rate, color="grey", linestyle="--", label="blind")
         ax.set_xscale("log")
@@ -149,10 +159,23 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("out", type=Path, help="the sweep's output directory")
     parser.add_argument("--figure", type=Path, help="where the PNG goes (default: OUT/sweep.png)")
+    parser.add_argument(
+        "--beside",
+        action="append",
+        default=[],
+        metavar="LABEL=DIR",
+        help="another sweep's OUT on the same tasks, drawn beside this one (e.g. small-vla=runs/diversity_sweep_vla)",
+    )
     args = parser.parse_args(argv)
+    beside = {}
+    for item in args.beside:
+        name, _, directory = item.partition("=")
+        if not name or not directory or not read(Path(directory)):
+            parser.error(f"--beside {item}: expected LABEL=DIR, DIR a sweep's OUT with pooled tables")
+        beside[name] = read(Path(directory))
     table = read(args.out)
-    (args.out / "sweep.md").write_text(markdown(table))
-    figure(table, args.figure or args.out / "sweep.png")
+    (args.out / "sweep.md").write_text(markdown(table, beside))
+    figure(table, args.figure or args.out / "sweep.png", beside)
     return 0
 
 

@@ -104,6 +104,32 @@ def test_the_sweeps_table_counts_every_group_of_a_run_and_each_seed_beside_the_p
     assert (out / "sweep.png").read_bytes()[:4] == b"\x89PNG"
 
 
+def test_the_sweeps_table_and_figure_take_another_sweep_beside_it(tmp_path):
+    # Two finished sweeps of K = 1 at width 64 (as if of two policies): the reader's and the memoriser's.
+    one, other = finished_sweep(tmp_path / "one", {0: "reader"}), finished_sweep(tmp_path / "other", {0: "memoriser"})
+    for out in (one, other):
+        assert run_script(out, SWEEP, KS="1", WIDTHS="64", SEEDS="0").returncode == 0
+    plot = [sys.executable, str(REPO / "experiments" / "diversity_plot.py"), str(one)]
+    done = subprocess.run([*plot, "--beside", f"small-vla={other}"], capture_output=True, text=True, cwd=REPO)
+    assert done.returncode == 0, done.stderr
+
+    def cell(successes: int, episodes: int) -> str:
+        low, high = wilson(successes, episodes)
+        return f"{100 * successes / episodes:.1f} [{100 * low:.1f}, {100 * high:.1f}]; {successes} of {episodes}"
+
+    rows = (one / "sweep.md").read_text().splitlines()
+    reader, memoriser = cell(11, 12), cell(4, 11)
+    assert rows[3:] == [f"| 1 | 64 | {reader} | {reader} | {reader} |", f"| 1 | 64, small-vla | {memoriser} | "
+                        f"{memoriser} | {memoriser} |"]  # fmt: skip
+    alone = subprocess.run([*plot, "--figure", str(tmp_path / "alone.png")], capture_output=True, cwd=REPO)
+    assert alone.returncode == 0
+    assert (one / "sweep.png").read_bytes()[:4] == b"\x89PNG"  # and the other sweep's points are drawn in it:
+    assert (one / "sweep.png").read_bytes() != (tmp_path / "alone.png").read_bytes()
+    refused = subprocess.run([*plot, "--beside", str(other)], capture_output=True, text=True, cwd=REPO)
+    assert refused.returncode == 2
+    assert f"error: --beside {other}: expected LABEL=DIR" in refused.stderr
+
+
 SMALL_SCALE = REPO / "experiments" / "small_scale.sh"
 
 
