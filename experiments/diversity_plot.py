@@ -170,9 +170,9 @@ def main(argv: list[str] | None = None) -> int:
     beside = {}
     for item in args.beside:
         name, _, directory = item.partition("=")
-        if not name or not directory or not read(Path(directory)):
+        beside[name] = read(Path(directory)) if name and directory else {}
+        if not beside[name]:
             parser.error(f"--beside {item}: expected LABEL=DIR, DIR a sweep's OUT with pooled tables")
-        beside[name] = read(Path(directory))
     table = read(args.out)
     (args.out / "sweep.md").write_text(markdown(table, beside))
     figure(table, args.figure or args.out / "sweep.png", beside)

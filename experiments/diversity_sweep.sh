@@ -26,8 +26,9 @@
 # command shrunk: langgap.cli.smoke), the sweep runs the first K, width and seed only, on that subset's tasks.
 # POLICY (default small-bc; small-vla sees both cameras instead of the simulator's state: the demonstrations'
 # images are rendered at SIZE px, default 96, into the collection before the first training: checkpoints trained
-# elsewhere, e.g. on a GPU machine and put in OUT under the sweep's names, are only evaluated), DEMOS_FROM (a finished collection of
-# the pool to train on instead of collecting OUT/demos: another sweep's, to compare policies on the same data).
+# elsewhere, e.g. on a GPU machine and put in OUT under the sweep's names, are only evaluated), DEMOS_FROM (a
+# finished collection of the pool to train on instead of collecting OUT/demos: another sweep's, to compare
+# policies on the same data).
 # Every step's wall time is appended to OUT/times.tsv. The results: OUT/pooled-<set>.md (`langgap report --pool`
 # of each set: compositional, novel-word, trained; .json beside), OUT/sweep.md (each set's success against K per
 # width, every split group of a run counted together) and OUT/sweep.png (experiments/diversity_plot.py).
