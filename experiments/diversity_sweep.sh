@@ -125,8 +125,8 @@ train() {  # train K WIDTH SEED
     [ "$POLICY" = small-vla ] && printf '  image_size: %s\n' "$SIZE" >> "$config"
     n=$(steps "$1")
     timed "train $name ($n steps)" langgap train "$POLICY" --config "$config" --data "$DATA" --catalog full \
-        --tasks "split:$COMPOSITIONAL:$1" --steps "$n" --batch-size "$BATCH" --threads "$THREADS" --device "$DEVICE" --seed "$3" \
-        --out "$OUT/$name.safetensors"
+        --tasks "split:$COMPOSITIONAL:$1" --steps "$n" --batch-size "$BATCH" --threads "$THREADS" \
+        --device "$DEVICE" --seed "$3" --out "$OUT/$name.safetensors"
 }
 
 # blind's episodes that start alike are one rollout judged for each task: a few minutes for all three sets.

@@ -49,7 +49,10 @@ declare -A TRAIN=([original]="$SCENE&original" [extended]="$SCENE&train" [mixed]
 for name in $CONFIGS; do
     [ -n "${TRAIN[$name]:-}" ] || { echo "error: CONFIGS: unknown policy '$name' (known: $POLICIES)" >&2; exit 2; }
 done
-[[ "$DEVICE" =~ ^(cpu|cuda(:[0-9]+)?)$ ]] || { echo "error: DEVICE: '$DEVICE' is neither cpu nor cuda[:N]" >&2; exit 2; }
+if [[ ! "$DEVICE" =~ ^(cpu|cuda(:[0-9]+)?)$ ]]; then
+    echo "error: DEVICE: '$DEVICE' is neither cpu nor cuda[:N]" >&2
+    exit 2
+fi
 if [ -n "${LANGGAP_SMOKE:-}" ] && [ "$SEEDS" != "${SEEDS%% *}" ]; then  # every command shrinks itself; so do the seeds
     echo "note: LANGGAP_SMOKE is set, so this script is shrunk: SEEDS '$SEEDS' -> '${SEEDS%% *}'" >&2
     SEEDS="${SEEDS%% *}"
