@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # The diversity sweep: does more same-scene semantic diversity make held-out compositions work, or does capacity
-# run out? With langgap commands only (collect -> train -> eval -> report), on the `full` catalog's spatial/s0 scene
-# and its two shipped splits (docs/splits.md):
+# run out? With langgap commands only (collect -> train -> eval -> report), on one scene of the `full` catalog
+# (SCENE, default spatial/s0) and its two shipped splits (docs/splits.md), for spatial/s0:
 #   full-spatial-s0-compositional   a pool of 24 training tasks with nested subsets of K = 1, 3, 6, 12, 24 tasks,
 #                                   and 4 held-out tasks that combine parts seen in the pool in a new way
 #   full-spatial-s0-novel-word      3 held-out tasks whose sentence holds a word no pool sentence holds
-# Training data = oracle demonstrations of the pool's 24 tasks from fresh placements (never the evaluation init
+# (SCENE=goal/s8: full-goal-s8-compositional, a pool of 20 with subsets of 1, 3, 6, 12, 20, and 4 held out; and
+# full-goal-s8-novel-word, 3 held out.) Training data = oracle demonstrations of the pool's tasks from fresh
+# placements (never the evaluation init
 # states). For each K, POLICY trains on the K-task subset's demonstrations for an equal number of passes over
 # its frames: steps = ceil(PASSES x frames_K / BATCH), frames_K read from the collection (`langgap train` prints
 # it; OUT/frames.tsv keeps it). Two model widths (d_model), several training seeds. Each policy is evaluated on
@@ -16,14 +18,16 @@
 # are written again after each K. So the first seed's curves come first, from K = 1 up, then the next seed's.
 #
 #   experiments/diversity_sweep.sh [OUT]     (default OUT: runs/diversity_sweep; re-running skips finished steps)
-# Environment: DEMOS (per task, default 12), NOISE (execution noise of the demonstrations, default 0.3), PASSES
+# Environment: SCENE (default spatial/s0: a scene with shipped splits full-<suite>-<sN>-compositional and
+# -novel-word), DEMOS (per task, default 12), NOISE (execution noise of the demonstrations, default 0.3), PASSES
 # (passes over each policy's frames, a whole number, default 18), BATCH (frames per step, default 128), MAX_STEPS
-# (a cap on every policy's steps, for a quick try; default none), KS (the subsets, default "1 3 6 12 24"), WIDTHS
-# (d_model of each width, default "64 128"; a multiple of the model's 4 heads), SEEDS (training seeds, default
-# "0 1 2"; seed 0 writes k<K>-d<W>.safetensors and runs/k<K>-d<W>-<set>, seed N k<K>-d<W>-seedN.*), EPISODES (per
-# task, default 10), WORKERS (default 2), THREADS (training threads, default 1), DEVICE (where training runs: cpu,
-# the default, or cuda[:N]; evaluation stays on the CPU workers). With LANGGAP_SMOKE set (every
-# command shrunk: langgap.cli.smoke), the sweep runs the first K, width and seed only, on that subset's tasks.
+# (a cap on every policy's steps, for a quick try; default none), KS (the subsets, default: every one the
+# compositional split stores), WIDTHS (d_model of each width, default "64 128"; a multiple of the model's 4
+# heads), SEEDS (training seeds, default "0 1 2"; seed 0 writes k<K>-d<W>.safetensors and runs/k<K>-d<W>-<set>,
+# seed N k<K>-d<W>-seedN.*), EPISODES (per task, default 10), WORKERS (default 2), THREADS (training threads,
+# default 1), DEVICE (where training runs: cpu, the default, or cuda[:N]; evaluation stays on the CPU workers).
+# With LANGGAP_SMOKE set (every command shrunk: langgap.cli.smoke), the sweep runs the first K, width and seed
+# only, on that subset's tasks.
 # POLICY (default small-bc; small-vla sees both cameras instead of the simulator's state: the demonstrations'
 # images are rendered at SIZE px, default 96, into the collection before the first training: checkpoints trained
 # elsewhere, e.g. on a GPU machine and put in OUT under the sweep's names, are only evaluated), DEMOS_FROM (a
@@ -40,7 +44,8 @@ NOISE="${NOISE:-0.3}"
 PASSES="${PASSES:-18}"
 BATCH="${BATCH:-128}"
 MAX_STEPS="${MAX_STEPS:-}"
-KS="${KS:-1 3 6 12 24}"
+KS="${KS:-}"  # default: the split's subsets (below)
+SCENE="${SCENE:-spatial/s0}"
 WIDTHS="${WIDTHS:-64 128}"
 SEEDS="${SEEDS:-0 1 2}"
 EPISODES="${EPISODES:-10}"
@@ -50,11 +55,18 @@ DEVICE="${DEVICE:-cpu}"
 POLICY="${POLICY:-small-bc}"
 SIZE="${SIZE:-96}"
 DEMOS_FROM="${DEMOS_FROM:-}"
-COMPOSITIONAL="full-spatial-s0-compositional"
-NOVEL="full-spatial-s0-novel-word"
-SUBSETS="1 3 6 12 24"  # the compositional split's nested subsets
+COMPOSITIONAL="full-${SCENE//\//-}-compositional"
+NOVEL="full-${SCENE//\//-}-novel-word"
 
 fail() { echo "error: $*" >&2; exit 2; }
+subsets() {  # the compositional split's nested subsets, smallest first
+    langgap splits show "$COMPOSITIONAL" --json | python -c 'import json, sys
+print(" ".join(sorted(json.load(sys.stdin)["subsets"], key=int)))'
+}
+if ! SUBSETS=$(subsets 2>/dev/null) || ! langgap splits show "$NOVEL" > /dev/null 2>&1; then
+    fail "SCENE: $SCENE has no shipped sweep splits ($COMPOSITIONAL and $NOVEL; docs/splits.md makes them)"
+fi
+KS="${KS:-$SUBSETS}"
 whole() { [[ "$2" =~ ^[1-9][0-9]*$ ]] || fail "$1: '$2' is not a whole number above 0"; }
 for name in DEMOS PASSES BATCH EPISODES WORKERS THREADS ${MAX_STEPS:+MAX_STEPS}; do whole "$name" "${!name}"; done
 for k in $KS; do

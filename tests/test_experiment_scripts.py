@@ -137,6 +137,10 @@ SMALL_SCALE = REPO / "experiments" / "small_scale.sh"
     ("script", "setting", "message"),
     [
         (SWEEP, {"KS": "1 5"}, "KS: full-spatial-s0-compositional has no subset of '5' tasks (it has: 1 3 6 12 24)"),
+        (SWEEP, {"SCENE": "goal/s8", "KS": "24"},
+         "KS: full-goal-s8-compositional has no subset of '24' tasks (it has: 1 3 6 12 20)"),
+        (SWEEP, {"SCENE": "object/s0"}, "SCENE: object/s0 has no shipped sweep splits (full-object-s0-compositional "
+         "and full-object-s0-novel-word; docs/splits.md makes them)"),
         (SWEEP, {"WIDTHS": "64 130"}, "WIDTHS: 130 is not a multiple of the model's 4 heads"),
         (SWEEP, {"PASSES": "1.5"}, "PASSES: '1.5' is not a whole number above 0"),
         (SWEEP, {"SEEDS": "0 one"}, "SEEDS: 'one' is not a whole number"),

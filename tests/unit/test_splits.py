@@ -46,10 +46,18 @@ def _assert_compositional(split) -> None:
         assert pairs - seen_pairs, f"{task_id}: no pair of it is new"
 
 
-def test_the_shipped_compositional_split_holds_out_new_combinations_of_seen_words_and_parts():
-    split = load_split(COMPOSITIONAL)
+# The sweep's shipped splits, one pair per scene: (compositional, novel-word, its pool size, the scene's doable tasks)
+SWEEP_SPLITS = [
+    (COMPOSITIONAL, NOVEL_WORD, 24, 31, "spatial/s0"),
+    ("full-goal-s8-compositional", "full-goal-s8-novel-word", 20, 27, "goal/s8"),
+]
+
+
+@pytest.mark.parametrize(("compositional", "pool_size"), [(c, n) for c, _, n, _, _ in SWEEP_SPLITS])
+def test_the_shipped_compositional_splits_hold_out_new_combinations_of_seen_words_and_parts(compositional, pool_size):
+    split = load_split(compositional)
     _assert_compositional(split)
-    assert (len(split.train), len(split.heldout)) == (24, 4)
+    assert (len(split.train), len(split.heldout)) == (pool_size, 4)
 
 
 def test_a_generated_compositional_split_does_too():
@@ -80,10 +88,13 @@ def test_novel_word_splits_hold_out_a_sentence_with_a_word_training_never_says()
     }
 
 
-def test_the_sweep_trains_on_nested_subsets_of_a_pool_that_holds_no_held_out_task():
-    pool, novel = load_split(COMPOSITIONAL), load_split(NOVEL_WORD)
+@pytest.mark.parametrize(("compositional", "novel_word", "pool_size", "doable", "scene"), SWEEP_SPLITS)
+def test_the_sweep_trains_on_nested_subsets_of_a_pool_that_holds_no_held_out_task(
+    compositional, novel_word, pool_size, doable, scene
+):
+    pool, novel = load_split(compositional), load_split(novel_word)
     full = load_catalog("full")
-    assert sorted(pool.subsets) == [1, 3, 6, 12, 24]
+    assert sorted(pool.subsets) == [1, 3, 6, 12, pool_size]
     previous: tuple[str, ...] = ()
     for size, ids in sorted(pool.subsets.items()):
         assert len(ids) == size and ids[: len(previous)] == previous and set(ids) <= set(pool.train)
@@ -91,12 +102,13 @@ def test_the_sweep_trains_on_nested_subsets_of_a_pool_that_holds_no_held_out_tas
     assert set(previous) == set(pool.train)
     assert not set(pool.train) & (set(pool.heldout) | set(novel.heldout))
     assert all(_words(full, [i]) - _words(full, pool.train) for i in novel.heldout)
-    every = {t.id for t in full.select("spatial/s0/*&feasible")}
-    assert set(pool.train) | set(pool.heldout) | set(novel.heldout) == every and len(every) == 31
+    every = {t.id for t in full.select(f"{scene}/*&feasible")}
+    assert set(pool.train) | set(pool.heldout) | set(novel.heldout) == every and len(every) == doable
 
 
 def test_every_shipped_split_checks():
-    assert set(available_splits()) >= {COMPOSITIONAL, NOVEL_WORD, "langgap99-instruction"}
+    sweeps = {name for compositional, novel_word, *_ in SWEEP_SPLITS for name in (compositional, novel_word)}
+    assert set(available_splits()) >= {*sweeps, "langgap99-instruction"}
     assert {name: check(load_split(name)) for name in available_splits()} == {n: [] for n in available_splits()}
     paper = load_split("langgap99-instruction")
     assert (len(paper.train), len(paper.heldout)) == (16, 43)  # the paper's instruction-level split
