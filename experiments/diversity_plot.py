@@ -1,6 +1,6 @@
 """The diversity sweep's table and figure, from the pooled tables experiments/diversity_sweep.sh writes.
 
-    python experiments/diversity_plot.py OUT [--figure PNG] [--beside LABEL=DIR ...]
+    python experiments/diversity_plot.py OUT [--figure PNG] [--beside LABEL=DIR ...] [--label LABEL]
 
 Reads OUT/pooled-<set>.json (`langgap report --pool --format json` of each set: compositional, novel-word,
 trained; one pool per K and width, labelled `k<K>-d<W>`, its runs the training seeds, and `blind`) and writes
@@ -9,7 +9,8 @@ then each seed's successes) and the figure (default OUT/sweep.png: each set's su
 the intervals as bars, `blind` dashed). A pool's report groups its episodes by the catalog's own split (original,
 training, held-out), which is not the sweep's: here every group of a run is counted together. `--beside LABEL=DIR`
 adds another sweep's points on the same tasks (e.g. `small-vla=runs/diversity_sweep_vla`: the same sweep with
-another policy), as squares and as rows after OUT's, their width column naming LABEL.
+another policy), as squares and as rows after OUT's, their width column naming LABEL; `--label` names OUT's own
+policy in the legend.
 """
 
 from __future__ import annotations
@@ -112,16 +113,20 @@ def seeds_text(points: list[tuple[int, Cell]]) -> str:
 
 
 def figure(
-    table: dict[str, dict[str, Cell]], path: Path, beside: dict[str, dict[str, dict[str, Cell]]] | None = None
+    table: dict[str, dict[str, Cell]],
+    path: Path,
+    beside: dict[str, dict[str, dict[str, Cell]]] | None = None,
+    label: str | None = None,
 ) -> None:
     """A panel per set: success against K (log scale), a line per width with its intervals, `blind` dashed; each
-    sweep `beside` (label -> its table) as squares, its label in the legend."""
+    sweep `beside` (label -> its table) as squares, its label in the legend (and `label`, if given, OUT's)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    lines = [(f"d_model {w}", "o", table, w) for w in sorted({w for _, w in policies(table)})]
+    own = f"{label}, " if label else ""
+    lines = [(f"{own}d_model {w}", "o", table, w) for w in sorted({w for _, w in policies(table)})]
     for name, other in (beside or {}).items():
         lines += [(f"{name}, d_model {w}", "s", other, w) for w in sorted({w for _, w in policies(other)})]
     ks = sorted({k for _, _, of, _ in lines for k, _ in policies(of)})
@@ -166,6 +171,7 @@ def main(argv: list[str] | None = None) -> int:
         metavar="LABEL=DIR",
         help="another sweep's OUT on the same tasks, drawn beside this one (e.g. small-vla=runs/diversity_sweep_vla)",
     )
+    parser.add_argument("--label", help="OUT's policy, named in the figure's legend when --beside adds another")
     args = parser.parse_args(argv)
     beside = {}
     for item in args.beside:
@@ -175,7 +181,7 @@ def main(argv: list[str] | None = None) -> int:
             parser.error(f"--beside {item}: expected LABEL=DIR, DIR a sweep's OUT with pooled tables")
     table = read(args.out)
     (args.out / "sweep.md").write_text(markdown(table, beside))
-    figure(table, args.figure or args.out / "sweep.png", beside)
+    figure(table, args.figure or args.out / "sweep.png", beside, args.label)
     return 0
 
 

@@ -125,6 +125,10 @@ def test_the_sweeps_table_and_figure_take_another_sweep_beside_it(tmp_path):
     assert alone.returncode == 0
     assert (one / "sweep.png").read_bytes()[:4] == b"\x89PNG"  # and the other sweep's points are drawn in it:
     assert (one / "sweep.png").read_bytes() != (tmp_path / "alone.png").read_bytes()
+    labelled = subprocess.run([*plot, "--beside", f"small-vla={other}", "--label", "small-bc", "--figure",
+                               str(tmp_path / "labelled.png")], cwd=REPO)  # fmt: skip
+    assert labelled.returncode == 0
+    assert (tmp_path / "labelled.png").read_bytes() != (one / "sweep.png").read_bytes()  # the legend names it
     refused = subprocess.run([*plot, "--beside", str(other)], capture_output=True, text=True, cwd=REPO)
     assert refused.returncode == 2
     assert f"error: --beside {other}: expected LABEL=DIR" in refused.stderr
