@@ -209,3 +209,14 @@ def test_generate_writes_a_file_that_shows_and_checks(tmp_path, capsys):
     assert main(["splits", "check", str(out)]) == 0 and f"{out}: ok" in capsys.readouterr().out
     assert main(["splits", "show", str(out)]) == 0 and "[unseen: " in capsys.readouterr().out
     assert main(["splits", "show", str(out), "--json"]) == 0 and json.loads(capsys.readouterr().out) == data
+
+
+def test_show_marks_a_held_out_task_that_says_a_libero_sentence(capsys):
+    # goal/s8's own original, and goal/s3's sentence on the shared LIBERO-goal layout: held out from the pool only
+    assert main(["splits", "show", "full-goal-s8-compositional"]) == 0
+    out = capsys.readouterr().out
+    marked = {line.split()[0] for line in out.splitlines() if line.endswith("a LIBERO sentence]")}
+    assert marked == {"goal/s8/black-bowl-on-plate", "goal/s8/black-bowl-in-cabinet-top-drawer"}
+    assert "2 held-out task(s) say a LIBERO task's sentence" in out
+    assert main(["splits", "show", COMPOSITIONAL]) == 0
+    assert "LIBERO" not in capsys.readouterr().out

@@ -10,6 +10,11 @@ Three kinds, each with a rule `check` verifies on the stored split:
   occurs in the training tasks, in other combinations.
 * `novel-word`: every held-out task's sentence holds a word that no training sentence holds.
 
+The rules are about the split's own training tasks: a task is held out from them, not from LIBERO. A held-out
+task may say a LIBERO task's sentence (`libero_sentences`; LIBERO-goal's ten tasks share one layout, so each
+goal scene holds the other nine's sentences, and a spatial scene can hold a goal task's), which a policy
+fine-tuned on LIBERO has trained on; `langgap splits show` marks each.
+
 A split also stores nested training subsets (`subsets`: size -> the first tasks of its training tasks in a
 seeded order), so that a sweep over the number of training tasks draws the same tasks every time and each
 larger set holds the smaller. Shipped splits live in `registry/splits/`, beside the catalogs; a split file of
@@ -75,6 +80,12 @@ def compositional_problem(task: Task, train: list[Task], style: str) -> str | No
     if missing := components(task) - _union(components(t) for t in train):
         return f"components never in training: {', '.join(f'{r} {n}' for r, n in sorted(missing))}"
     return None
+
+
+def libero_sentences(catalog: Catalog) -> set[str]:
+    """The sentences of `catalog`'s original (LIBERO) tasks in LIBERO's own style: what a policy fine-tuned on
+    LIBERO has read."""
+    return {t.instruction() for t in catalog if t.kind == vocabulary.TaskKind.ORIGINAL}
 
 
 def novel_words(task: Task, train: list[Task], style: str) -> set[str]:

@@ -6,7 +6,7 @@ import json
 
 from langgap.catalog.catalog import DEFAULT_CATALOG, catalog_hash, load_catalog
 from langgap.catalog.split_files import SPLIT_KINDS, available_splits, load_split, save_split
-from langgap.catalog.splits import check, generate, novel_words
+from langgap.catalog.splits import check, generate, libero_sentences, novel_words
 from langgap.catalog.task import DEFAULT_STYLE, INSTRUCTION_STYLES
 from langgap.errors import LangGapError
 from langgap.vocabulary import Split
@@ -89,12 +89,24 @@ def run_show(args) -> int:
     print(f"{split.name}: {split.kind} split of catalog {split.catalog} (registry {split.catalog_sha256[:12]})")
     print(f"rule: {json.dumps(split.rule)}")
     train = [catalog.get(i) for i in split.train]
+    libero = libero_sentences(catalog)
+    known = [i for i in split.heldout if catalog.get(i).instruction() in libero]
     for part, ids in (("train", split.train), ("heldout", split.heldout)):
         print(f"\n{part} ({len(ids)}):")
         for task in map(catalog.get, ids):
-            unseen = sorted(novel_words(task, train, split.style)) if part == Split.HELDOUT else []
-            note = f"   [unseen: {', '.join(unseen)}]" if unseen else ""
+            notes = []
+            if part == Split.HELDOUT:
+                if unseen := sorted(novel_words(task, train, split.style)):
+                    notes.append(f"unseen: {', '.join(unseen)}")
+                if task.id in known:
+                    notes.append("a LIBERO sentence")
+            note = f"   [{'; '.join(notes)}]" if notes else ""
             print(f"  {task.id:50} {task.instruction(split.style)}{note}")
+    if known:
+        print(
+            f"\n{len(known)} held-out task(s) say a LIBERO task's sentence: held out from this split's training, "
+            "not from LIBERO's (a policy fine-tuned on LIBERO has trained on them)"
+        )
     for size, ids in sorted(split.subsets.items()):
         print(f"\nsubset {size}: {', '.join(ids)}")
     return 0
