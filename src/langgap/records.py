@@ -199,11 +199,16 @@ def classify(
 
 
 def achieved(record: EpisodeRecord) -> str:
-    """The task an episode accomplished: its own, else the scene task whose goal became true first, else `none`."""
+    """The task an episode accomplished: its own, else the scene task whose goal became true first, else `none`.
+
+    Goals reached at the same step go to a task beside the episode's own (the same id up to its last `/`), then
+    by name: LIBERO-goal's scenes share one layout, so a goal reached there is every one of those scenes' task.
+    """
     if record.success:
         return record.task_id
     if record.reached:
-        return min(record.reached.items(), key=lambda kv: (kv[1], kv[0]))[0]
+        home = record.task_id.rpartition("/")[0]
+        return min(record.reached.items(), key=lambda kv: (kv[1], kv[0].rpartition("/")[0] != home, kv[0]))[0]
     return "none"
 
 

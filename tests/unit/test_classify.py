@@ -95,6 +95,11 @@ def test_achieved_is_the_own_task_else_the_earliest_goal_then_name():
     assert achieved(_record(reached={"a": 20, "z": 3})) == "z"  # the earliest step first, the name only on ties
     assert achieved(_record(reached={SOURCE: 9})) == SOURCE
     assert achieved(_record()) == "none"
+    # one goal of a shared layout (LIBERO-goal's) is every scene's task: the episode's own scene names it
+    shared = {"goal/s0/bowl-on-stove": 7, "goal/s8/bowl-on-stove": 7, "goal/s9/bowl-on-stove": 7}
+    assert achieved(_record(task_id="goal/s8/bowl-on-plate", reached=shared)) == "goal/s8/bowl-on-stove"
+    earlier = {**shared, "goal/s1/plate-on-stove": 6}
+    assert achieved(_record(task_id="goal/s8/bowl-on-plate", reached=earlier)) == "goal/s1/plate-on-stove"
 
 
 def test_the_outcome_names_are_the_stored_strings():
