@@ -243,3 +243,25 @@ def test_switching_task_within_a_scene_equals_a_fresh_env(catalog):
             shared.switch_task(catalog.get("goal/s1/black-bowl-on-stove"))
         shared.switch_task(target)
         assert episode(shared) == expected
+
+
+def test_a_goal_watched_under_many_names_is_evaluated_once_a_step(env, monkeypatch):
+    """A `full` goal scene watches each goal under ten names (LIBERO-goal's scenes share one layout): the watch
+    reads a goal's atoms once a step however many names it has."""
+    from langgap.engine.watch import SceneWatch
+
+    env.reset(0, seed=0)
+    env.settle()
+    goal, calls = env.task.goal, []
+    read = env.predicate_holds
+    monkeypatch.setattr(env, "predicate_holds", lambda atom: calls.append(atom) or read(atom))
+    counts = []
+    for names in (["a"], ["a", "b", "c"]):
+        watch = SceneWatch(env, dict.fromkeys(names, goal))
+        calls.clear()
+        for _ in range(3):
+            env.step(np.zeros(7))
+            watch.observe()
+        counts.append(len(calls))
+        assert watch.at_start == [] and watch.reached == {}
+    assert counts[0] == counts[1] > 0

@@ -22,18 +22,25 @@ class SceneWatch:
         self._env = env
         self.goals = dict(goals)
         self.at_start = self.holding()
-        self._pending = {name: GoalProgress(goal) for name, goal in self.goals.items() if name not in self.at_start}
+        # Names of one goal share its progress, so each distinct goal is evaluated once a step: LIBERO-goal's ten
+        # scenes share one layout, and a `full` goal scene watches each of its goals under ten names.
+        names: dict[Goal, list[str]] = {}
+        for name, goal in self.goals.items():
+            if name not in self.at_start:
+                names.setdefault(goal, []).append(name)
+        self._pending = [(GoalProgress(goal), shared) for goal, shared in names.items()]
         self._order = OrderWatch(env, env.task.goal)
         self.reached: dict[str, int] = {}
-        for progress in self._pending.values():
+        for progress, _ in self._pending:
             progress.observe(0, env.predicate_holds)
 
     def observe(self) -> None:
         """Record the state after the env's latest step."""
         step, truth = self._env.steps, self._env.predicate_holds
-        for name, progress in self._pending.items():
-            if progress.observe(step, truth) and name not in self.reached:
-                self.reached[name] = step
+        for progress, shared in self._pending:
+            if progress.observe(step, truth):
+                for name in shared:
+                    self.reached.setdefault(name, step)
         self._order.observe()
 
     def holding(self) -> list[str]:
