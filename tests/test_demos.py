@@ -102,3 +102,34 @@ def test_collect_cli_without_lerobot_writes_compact_form(tmp_path):
     assert len(demo_files(tmp_path / "c")) == 1
     again = run_cli("collect", "--tasks", TINY_TASK, "--demos", "1", "--out", str(tmp_path / "c"))
     assert again.returncode == 2 and again.stderr.startswith("error: ") and len(again.stderr.splitlines()) == 1
+
+
+def test_a_split_check_finds_the_held_out_goals_a_collection_passes_through(tiny_collection, tmp_path, capsys):
+    import dataclasses
+
+    from langgap.catalog.catalog import load_catalog
+    from langgap.catalog.split_files import load_split, save_split
+    from langgap.cli.main import main
+    from langgap.demos.reach import goals_reached
+
+    full = load_catalog("full")  # the collection is langgap99's: scenes are matched by key, not by catalog
+    own, other = full.get(TINY_TASK), full.get("spatial/s0/open-cabinet-top-drawer")
+    elsewhere = full.get("goal/s8/black-bowl-on-plate")
+    found = goals_reached(tiny_collection, [own, other, elsewhere])
+    assert found.demonstrations == {TINY_TASK: 2} and found.total == found.replayed == 2
+    assert found.reached == {TINY_TASK: {TINY_TASK: 2}}  # a demonstration reaches its own goal, and no other here
+    assert goals_reached(tiny_collection, [elsewhere]).replayed == 0  # another scene's goal: nothing replayed
+
+    # The shipped split's held-out goals are not reached by these two demonstrations; a split holding the
+    # demonstrated task out is caught twice: its demonstrations, and its goal reached.
+    assert main(["splits", "check", "full-spatial-s0-compositional", "--demos", str(tiny_collection)]) == 0
+    assert "2 set in a held-out task's scene, replayed state by state" in capsys.readouterr().out
+    pool = load_split("full-spatial-s0-compositional")
+    leaky = dataclasses.replace(
+        pool, train=tuple(t for t in pool.train if t != TINY_TASK), heldout=(*pool.heldout, TINY_TASK), subsets={}
+    )
+    path = save_split(leaky, tmp_path / "leaky.json")
+    assert main(["splits", "check", str(path), "--demos", str(tiny_collection)]) == 1
+    out = capsys.readouterr().out
+    assert f"demonstrates held-out task {TINY_TASK} (2 demonstration(s))" in out
+    assert f"held-out goal {TINY_TASK} is reached by 2 of 2 demonstration(s) ({TINY_TASK} 2)" in out

@@ -44,6 +44,12 @@ def add_parser(subparsers) -> None:
 
     verify = verbs.add_parser("check", help="verify splits against their rule and their catalog (default: shipped)")
     verify.add_argument("split", nargs="*", help="shipped split names or split files")
+    verify.add_argument(
+        "--demos",
+        metavar="DIR",
+        help="also replay this collection's demonstrations: does any pass through a held-out task's goal, or "
+        "demonstrate a held-out task?",
+    )
     verify.set_defaults(handler=run_check)
 
 
@@ -115,9 +121,34 @@ def run_show(args) -> int:
 def run_check(args) -> int:
     failed = 0
     for name in args.split or available_splits():
-        problems = check(load_split(name))
+        split = load_split(name)
+        problems = check(split)
+        if args.demos:
+            problems += _collection_problems(split, args.demos)
         print(f"{name}: {'ok' if not problems else f'{len(problems)} problem(s)'}")
         for problem in problems:
             print(f"  {problem}")
         failed += bool(problems)
     return 1 if failed else 0
+
+
+def _collection_problems(split, root: str) -> list[str]:
+    """`splits check --demos`: the held-out tasks a collection demonstrates, or whose goals it passes through."""
+    from langgap.demos.reach import goals_reached
+
+    heldout = [load_catalog(split.catalog).get(i) for i in split.heldout]
+    found = goals_reached(root, heldout)
+    print(
+        f"{split.name}: {root} holds {found.total} demonstration(s) of {len(found.demonstrations)} task(s); "
+        f"{found.replayed} set in a held-out task's scene, replayed state by state"
+    )
+    problems = [f"{root} demonstrates held-out task {i} ({found.demonstrations[i]} demonstration(s))"
+                for i in split.heldout if found.demonstrations[i]]  # fmt: skip
+    for goal_id in split.heldout:
+        if by := found.reached.get(goal_id):
+            tasks = ", ".join(f"{task} {n}" for task, n in by.most_common())
+            problems.append(
+                f"held-out goal {goal_id} is reached by {sum(by.values())} of {found.total} demonstration(s) "
+                f"({tasks}): held out by its sentence, not from the collection's states"
+            )
+    return problems

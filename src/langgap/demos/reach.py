@@ -1,0 +1,93 @@
+"""Which goals a collection's demonstrations pass through, state by state.
+
+A split holds a task out by its sentence; a collection can still show its outcome. Pushing the plate to the
+front of the stove can leave the cream cheese there too, so a policy trained on that demonstration has seen
+the cream cheese in front of the stove, though no sentence asked for it. `goals_reached` finds such states by
+replaying every recorded state (no physics step, no rendering) and judging the given tasks' goals at each.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from functools import partial
+from pathlib import Path
+
+from langgap.catalog.catalog import load_catalog
+from langgap.catalog.task import Task
+from langgap.demos.compact import demo_files, load_demo, read_manifest
+from langgap.demos.record import replay_states
+from langgap.sim.env import TaskEnv
+
+
+@dataclass(frozen=True)
+class CollectionReach:
+    """What `goals_reached` found in one collection.
+
+    Attributes:
+        demonstrations: How many demonstrations of each task the collection holds (task id -> count).
+        replayed: How many of them are set in the scene of a task looked for, and so were replayed.
+        reached: For each goal reached (its task's id), how many demonstrations of each task reached it.
+    """
+
+    demonstrations: Counter[str] = field(default_factory=Counter)
+    replayed: int = 0
+    reached: dict[str, Counter[str]] = field(default_factory=dict)
+
+    @property
+    def total(self) -> int:
+        """How many demonstrations the collection holds."""
+        return sum(self.demonstrations.values())
+
+
+def goals_reached(root: str | Path, tasks: Sequence[Task]) -> CollectionReach:
+    """Replay every demonstration of the collection at `root` and find which goals of `tasks` it passes through.
+
+    A goal counts where it holds at a recorded state, or after the last action (stepped from the last state),
+    but not at the demonstration's first (an episode's goals are counted so too: `SceneWatch`), order ignored.
+    Only the tasks set in a demonstration's own scene (same scene key) are judged on it; a task's own
+    demonstrations count like any other.
+
+    Args:
+        root: A collection (`langgap collect`'s output directory).
+        tasks: The tasks whose goals to look for, from any catalog.
+
+    Raises:
+        DemoFileError: `root` is not a collection or a file of it cannot be read.
+    """
+    catalog = load_catalog(read_manifest(Path(root))["catalog"])
+    by_scene: dict[str, list[Task]] = {}
+    for task in tasks:
+        by_scene.setdefault(catalog.scene_key(task), []).append(task)
+    seen: Counter[str] = Counter()
+    replayed = 0
+    reached: dict[str, Counter[str]] = {}
+    env: TaskEnv | None = None
+    try:
+        for path in demo_files(Path(root)):
+            demo = load_demo(path)
+            own = catalog.get(demo.task_id)
+            seen[own.id] += 1
+            watched = by_scene.get(catalog.scene_key(own), [])
+            if not watched:
+                continue
+            replayed += 1
+            if env is None or catalog.scene_key(env.task) != catalog.scene_key(own):
+                if env is not None:
+                    env.close()
+                env = TaskEnv(own)  # one environment serves every task of its scene
+            held = list(replay_states(env, demo, partial(_holding, tasks=watched)))
+            # A demonstration keeps the states before its actions: the one after its last is stepped to here.
+            env.step(demo.actions[-1])
+            held.append(_holding(env, tasks=watched))
+            for goal_id in set().union(*held[1:]) - held[0]:
+                reached.setdefault(goal_id, Counter())[own.id] += 1
+    finally:
+        if env is not None:
+            env.close()
+    return CollectionReach(seen, replayed, reached)
+
+
+def _holding(env: TaskEnv, tasks: list[Task]) -> set[str]:
+    return {t.id for t in tasks if env.goal_holds(t.goal)}
