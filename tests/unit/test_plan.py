@@ -93,6 +93,19 @@ def test_every_episode_knows_its_scene(catalog):
     assert all(len(scene) == 16 for scene in scenes)
 
 
+def test_every_episode_watches_the_goals_of_its_scene_as_the_plan_found_them(catalog):
+    from langgap.engine.episode import scene_goals, watched_goals
+
+    plan = build_plan(catalog.select("spatial/s0/*,goal/s1/*"), catalog, episodes=2, conditions=("given", "switch:5"))
+    for planned in plan:
+        task = catalog.get(planned.task_id)
+        assert planned.watched == tuple(mate.id for mate in catalog.scene_mates(task))
+        # What a worker judges every step: the goals the plan named, the same its scene's tasks have.
+        assert watched_goals(planned, catalog) == scene_goals(task, catalog)
+    # Every episode of a task shares the one tuple the plan found for it.
+    assert len({id(p.watched) for p in plan if p.task_id == plan[0].task_id}) == 1
+
+
 def test_a_plan_reads_each_scene_once_however_many_episodes_its_tasks_have(monkeypatch):
     from langgap.catalog import files
 
@@ -409,7 +422,7 @@ def test_switch_episodes_that_cannot_be_planned_are_errors(catalog):
         build_plan([task], catalog, episodes=1, conditions=("switch:220",))
     assert build_plan([task], catalog, episodes=1, conditions=("switch:219",))[0].changes[0][0] == 219
     with pytest.raises(LangGapError, match="switch:K takes K"):
-        switch_episode(EpisodeKey(task.id, 0, 0, "switch:0"), task, catalog, "libero", catalog.scene_key(task))
+        switch_episode(EpisodeKey(task.id, 0, 0, "switch:0"), task, catalog, "libero", catalog.scene_key(task), ())
     with pytest.raises(LangGapError, match=f"^switch: {lone.id} has no sibling task in its scene to start under$"):
         switch_source(lone, catalog, "libero", 0)
 
@@ -498,11 +511,12 @@ def test_one_switch_episode_rebuilt_alone_is_the_plans_under_its_style(catalog):
     extended = catalog.get("spatial/s0/cookie-box-on-plate")
     for style in ("libero", "paper"):
         (planned,) = build_plan([extended], catalog, episodes=1, seed=4, conditions=("switch:5",), style=style)
-        assert switch_episode(planned.key, extended, catalog, style, planned.scene) == planned
+        assert switch_episode(planned.key, extended, catalog, style, planned.scene, planned.watched) == planned
         assert switch_source(extended, catalog, style, planned.key.seed).id == planned.started_as
         assert planned.instruction == catalog.get(planned.started_as).instruction(style)
     paper = build_plan([extended], catalog, episodes=1, seed=4, conditions=("switch:5",), style="paper")[0]
-    assert paper.instruction != switch_episode(paper.key, extended, catalog, "libero", paper.scene).instruction
+    again = switch_episode(paper.key, extended, catalog, "libero", paper.scene, paper.watched)
+    assert paper.instruction != again.instruction
     # an original starts under one of several scene mates, drawn by the episode's seed
     original = catalog.get("spatial/s0/black-bowl-1-on-plate")
     plan = build_plan([original], catalog, episodes=8, conditions=("switch:5",))

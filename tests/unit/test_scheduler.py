@@ -18,7 +18,9 @@ from langgap.records import EpisodeKey, EpisodeRecord, Status
 
 def plan(tasks=("s0/a", "s0/b", "s1/c"), episodes=2) -> list[PlannedEpisode]:
     return [
-        PlannedEpisode(EpisodeKey(t, k, k), f"do {t}", scene=t.split("/")[0]) for t in tasks for k in range(episodes)
+        PlannedEpisode(EpisodeKey(t, k, k), f"do {t}", scene=t.split("/")[0], watched=(t,))
+        for t in tasks
+        for k in range(episodes)
     ]
 
 

@@ -28,7 +28,10 @@ def _planned(catalog, task_id: str, *, seed: int = 0, condition: str = "given", 
     task = catalog.get(task_id)
     key = EpisodeKey(task_id, 0, seed, condition)
     return PlannedEpisode(
-        key, task.instruction("libero") if instruction is None else instruction, scene=scene_key(task)
+        key,
+        task.instruction("libero") if instruction is None else instruction,
+        scene=scene_key(task),
+        watched=tuple(t.id for t in catalog.scene_mates(task)),
     )
 
 

@@ -46,6 +46,11 @@ def scene_goals(task: Task, catalog: Catalog) -> dict[str, Goal]:
     return {mate.id: mate.goal for mate in catalog.scene_mates(task)}
 
 
+def watched_goals(planned: PlannedEpisode, catalog: Catalog) -> dict[str, Goal]:
+    """The goals `planned` watches (`PlannedEpisode.watched`: its scene's, as the plan found them), keyed by task id."""
+    return {task_id: catalog.get(task_id).goal for task_id in planned.watched}
+
+
 def _record(planned: PlannedEpisode, task: Task, **values) -> EpisodeRecord:
     key = planned.key
     return EpisodeRecord(
@@ -162,7 +167,7 @@ def execute_episode(
     common = _policy_fields(env, policy, settings, attempts)
     try:
         result = run_episode(
-            env, policy, context, watch=scene_goals(task, catalog), on_step=on_step, changes=planned.changes
+            env, policy, context, watch=watched_goals(planned, catalog), on_step=on_step, changes=planned.changes
         )
     except PolicyOutputError as exc:
         return _policy_error_record(planned, task, exc, env, time.perf_counter() - started, common)
@@ -195,7 +200,7 @@ def execute_shared(
         policy,
         context,
         goals,
-        watch=scene_goals(tasks[lead.key.task_id], catalog),
+        watch=watched_goals(lead, catalog),
         change_steps=[step for step, _ in lead.changes],
     )
     error = rollout.error

@@ -44,6 +44,9 @@ class PlannedEpisode:
     key: EpisodeKey
     instruction: str  # the exact string the policy will receive first
     scene: str  # the key of the scene it is set in (a worker's environment serves every task of one), recorded
+    # The tasks whose goals every step judges: every task set in its scene (`Catalog.scene_mates`), found once
+    # per task by the plan rather than once per episode by the worker that runs it.
+    watched: tuple[str, ...]
     film: bool = False  # record a clip of the episode (the run's `--video` chose it)
     # (policy step, instruction): where the instruction changes mid-episode (condition `switch:K`)
     changes: tuple[tuple[int, str], ...] = ()
@@ -173,9 +176,10 @@ class TaskLanguage:
             raise CatalogError(f"switch: {self.task.id} has no sibling task in its scene to start under")
         return _pick(self.switch_pool, self.task.id, "switch", seed)
 
-    def switch_episode(self, key: EpisodeKey, scene: str) -> PlannedEpisode:
-        """A `switch:K` episode (K from `key.condition`) of the task, set in `scene`: under its first task's
-        instruction until policy step K, then the task's own. A K the task never reaches is a CatalogError."""
+    def switch_episode(self, key: EpisodeKey, scene: str, watched: tuple[str, ...]) -> PlannedEpisode:
+        """A `switch:K` episode (K from `key.condition`) of the task, set in `scene` and watching the goals of
+        `watched`: under its first task's instruction until policy step K, then the task's own. A K the task
+        never reaches is a CatalogError."""
         task = self.task
         k = switch_step(key.condition)
         if k is None:
@@ -185,7 +189,8 @@ class TaskLanguage:
                 f"{key.condition}: {task.id} ends at step {task.max_steps}, before its instruction would switch"
             )
         first = self.switch_source(key.seed)
-        return PlannedEpisode(key, first.instruction(self.style), scene, changes=((k, self.own),), started_as=first.id)
+        instruction = first.instruction(self.style)
+        return PlannedEpisode(key, instruction, scene, watched, changes=((k, self.own),), started_as=first.id)
 
 
 def switch_source(task: Task, catalog: Catalog, style: str, seed: int) -> Task:
@@ -193,9 +198,11 @@ def switch_source(task: Task, catalog: Catalog, style: str, seed: int) -> Task:
     return TaskLanguage(task, catalog, style).switch_source(seed)
 
 
-def switch_episode(key: EpisodeKey, task: Task, catalog: Catalog, style: str, scene: str) -> PlannedEpisode:
-    """A `switch:K` episode of `task`, set in `scene` (`TaskLanguage.switch_episode`)."""
-    return TaskLanguage(task, catalog, style).switch_episode(key, scene)
+def switch_episode(
+    key: EpisodeKey, task: Task, catalog: Catalog, style: str, scene: str, watched: tuple[str, ...]
+) -> PlannedEpisode:
+    """A `switch:K` episode of `task`, set in `scene` and watching `watched` (`TaskLanguage.switch_episode`)."""
+    return TaskLanguage(task, catalog, style).switch_episode(key, scene, watched)
 
 
 def condition_instruction(task: Task, catalog: Catalog, condition: str, style: str, init_index: int) -> str:
@@ -251,8 +258,9 @@ def build_plan(
                 f"{task.id} has {available} init states; init indices {first_init}..{first_init + episodes - 1} "
                 "are out of range"
             )
-        # What the task's episodes are set in and told, read from the catalog once for all of them.
+        # What the task's episodes are set in, watch and are told, read from the catalog once for all of them.
         scene, language = catalog.scene_key(task), TaskLanguage(task, catalog, style)
+        watched = tuple(mate.id for mate in catalog.scene_mates(task))
         for condition in conditions:
             k = switch_step(condition)
             if k and not language.switch_pool:
@@ -261,7 +269,11 @@ def build_plan(
                 instruction = None if k else language.instruction(condition, init_index)
                 for repeat in range(repeats):
                     key = EpisodeKey(task.id, init_index, episode_seed(seed, init_index, repeat), condition)
-                    plan.append(language.switch_episode(key, scene) if k else PlannedEpisode(key, instruction, scene))
+                    plan.append(
+                        language.switch_episode(key, scene, watched)
+                        if k
+                        else PlannedEpisode(key, instruction, scene, watched)
+                    )
     if not plan:
         raise CatalogError("switch: no selected task has another task in its scene to start under")
     return plan

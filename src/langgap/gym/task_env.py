@@ -182,11 +182,12 @@ class LangGapTaskEnv(gym.Env):
         init_index = int(init_index)
         key = EpisodeKey(self.task.id, init_index, episode_seed(self._run_seed, init_index), condition)
         # The harness's plan entry for this episode (what `langgap eval` would run and record).
+        watched = tuple(self._goals)
         if switch_step(condition) is not None:
-            self._planned = switch_episode(key, self.task, self._catalog, self.style, sim.files.scene)
+            self._planned = switch_episode(key, self.task, self._catalog, self.style, sim.files.scene, watched)
         else:
             instruction = condition_instruction(self.task, self._catalog, condition, self.style, init_index)
-            self._planned = PlannedEpisode(key, instruction, sim.files.scene)
+            self._planned = PlannedEpisode(key, instruction, sim.files.scene, watched)
         self._context = planned_context(self._planned, self.task, self._catalog, self.style)
         self._instructions = [(0, self._planned.instruction)]
         with global_rng_kept():
