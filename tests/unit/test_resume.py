@@ -5,8 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from langgap.catalog.catalog import load_catalog
-from langgap.engine.evaluate import plan_of, still_to_run
+from langgap.engine.evaluate import plan_of, resolve_run, still_to_run
 from langgap.engine.plan import REPEAT_STRIDE
 from langgap.engine.spec import RunSpec
 from langgap.records import EpisodeKey, EpisodeRecord, Status
@@ -28,7 +27,7 @@ def _stored(key: EpisodeKey, *, gap: bool = False) -> EpisodeRecord:
 
 
 def test_a_run_grown_by_repeats_runs_the_new_seeds_and_the_gaps_and_stores_each_episode_once(tmp_path):
-    first = plan_of(_spec(repeats=1), load_catalog())
+    first = plan_of(resolve_run(_spec(repeats=1), tmp_path / "run"))
     with RunStore.create(tmp_path / "run", {"spec": _spec(repeats=1).to_dict()}) as store:
         assert still_to_run(first, store.done_keys()) == first  # a new run runs its whole plan
         gap = first[3].key
@@ -36,7 +35,7 @@ def test_a_run_grown_by_repeats_runs_the_new_seeds_and_the_gaps_and_stores_each_
             store.write(_stored(planned.key, gap=planned.key == gap))
         assert still_to_run(first, store.done_keys()) == [first[3]]  # a resume runs its gap again
 
-        grown = plan_of(_spec(repeats=2), load_catalog())
+        grown = plan_of(resolve_run(_spec(repeats=2), tmp_path / "run"))
         assert len(grown) == 2 * len(first) == 16
         todo = still_to_run(grown, store.done_keys())
         new = [p for p in grown if p.key.seed >= REPEAT_STRIDE]

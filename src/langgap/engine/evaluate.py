@@ -9,6 +9,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from langgap.catalog.catalog import Catalog, gate_snapshot, load_catalog
+from langgap.catalog.task import Task
 from langgap.engine.episode import gap_record
 from langgap.engine.execute import scheduled, with_progress
 from langgap.engine.filming import VideoSelection, replay_matches
@@ -66,11 +67,36 @@ class RunSummary:
         return self.gaps == 0
 
 
-def plan_of(spec: RunSpec, catalog: Catalog) -> list[PlannedEpisode]:
-    """Every episode of the run: each task × condition × init index of the spec (`catalog`: the spec's, loaded)."""
+@dataclass(frozen=True)
+class ResolvedRun:
+    """A run's spec resolved once, where `evaluate` starts (`resolve_run`): the plan, the store's gate snapshot,
+    the gaps' records and a worker in this process all read the one catalog and the one list of tasks.
+
+    Attributes:
+        spec: The spec (on a resume, with the tasks its stored run was created with).
+        catalog: The spec's catalog, loaded.
+        tasks: The spec's tasks, found in `catalog`, in the spec's order.
+    """
+
+    spec: RunSpec
+    catalog: Catalog
+    tasks: tuple[Task, ...]
+
+
+def resolve_run(spec: RunSpec, run: Path, *, resume: bool = False) -> ResolvedRun:
+    """`spec` resolved for a run into `run` (`resume`: the tasks the stored run holds, `_tasks_as_created`)."""
+    if resume:
+        spec = _tasks_as_created(spec, run)
+    catalog = load_catalog(spec.catalog)
+    return ResolvedRun(spec, catalog, tuple(catalog.get(t) for t in spec.tasks))
+
+
+def plan_of(resolved: ResolvedRun) -> list[PlannedEpisode]:
+    """Every episode of the run: each task × condition × init index of its spec."""
+    spec = resolved.spec
     return build_plan(
-        [catalog.get(t) for t in spec.tasks],
-        catalog,
+        list(resolved.tasks),
+        resolved.catalog,
         episodes=len(spec.inits),
         first_init=spec.inits[0],
         seed=spec.seed,
@@ -86,15 +112,12 @@ def still_to_run(plan: list[PlannedEpisode], done: set[EpisodeKey]) -> list[Plan
     return [p for p in plan if p.key not in done]
 
 
-def _open_store(
-    spec: RunSpec, catalog: Catalog, options: ExecutionOptions, run: Path, *, resume: bool, extend: bool
-) -> RunStore:
-    """Create the run's store, or reopen it for a resume after checking that it holds the same run (`catalog`:
-    the spec's, loaded)."""
-    tasks = [catalog.get(t) for t in spec.tasks]
+def _open_store(resolved: ResolvedRun, options: ExecutionOptions, run: Path, *, resume: bool, extend: bool) -> RunStore:
+    """Create the run's store, or reopen it for a resume after checking that it holds the same run."""
+    spec = resolved.spec
     if not (resume and RunStore.exists(run)):
         created = {"code_version": code_version(), "created_at": datetime.now(UTC).isoformat(timespec="seconds")}
-        gate = gate_snapshot(spec.catalog, tasks)  # reports read these verdicts, never the live gate file
+        gate = gate_snapshot(spec.catalog, resolved.tasks)  # reports read these verdicts, never the live gate file
         return RunStore.create(
             run, {"spec": spec.to_dict(), "execution": asdict(options), "created": created, "gate": gate}
         )
@@ -115,7 +138,7 @@ def _open_store(
         if differing:
             store.set_meta("spec", spec.to_dict())
             if (gate := store.meta("gate")) is not None:  # a run grown by --extend: verdicts of its new tasks
-                store.set_meta("gate", gate_snapshot(spec.catalog, tasks, gate))
+                store.set_meta("gate", gate_snapshot(spec.catalog, resolved.tasks, gate))
         store.set_meta("execution", asdict(options))
     except BaseException:
         store.close()
@@ -171,11 +194,11 @@ def evaluate(
     """
     options = options or ExecutionOptions()
     run = Path(run)
-    if resume:
-        spec = _tasks_as_created(spec, run)
+    resolved = resolve_run(spec, run, resume=resume)
+    spec = resolved.spec
+    catalog = resolved.catalog  # loaded once: the plan, the store's gate snapshot and a worker here use it
     videos = options.video_selection
-    catalog = load_catalog(spec.catalog)  # once: the plan, the store's gate snapshot and a worker here use it
-    plan = plan_of(spec, catalog)
+    plan = plan_of(resolved)
     firsts = videos.filmed_while_running([p.key for p in plan])
     plan = [replace(p, film=True) if p.key in firsts else p for p in plan]
     setup = RunnerSetup(
@@ -209,7 +232,7 @@ def evaluate(
     pool = make_pool(setup, options, catalog)
     with contextlib.ExitStack() as stack:
         stack.callback(pool.close)
-        store = stack.enter_context(_open_store(spec, catalog, options, run, resume=resume, extend=extend))
+        store = stack.enter_context(_open_store(resolved, options, run, resume=resume, extend=extend))
         todo = still_to_run(plan, store.done_keys())
         summary = RunSummary(run, planned=len(plan), skipped=len(plan) - len(todo))
         items = todo if sharing is None else share_rollouts(todo, catalog, sharing, spec.style)
