@@ -420,6 +420,9 @@ FLAG_CHECKS: dict[str, tuple[Check, ...]] = {
     "splits generate --tasks": (ProvenBy(_SPLITS),),
     "splits generate --seed": (ProvenBy("tests/unit/test_splits.py::test_a_generated_compositional_split_does_too"),),
     "splits generate --style": (ProvenBy(_SPLIT_WORDS),),
+    "splits check --demos": (
+        ProvenBy("tests/test_demos.py::test_a_split_check_finds_the_held_out_goals_a_collection_passes_through"),
+    ),
     "splits show --json": (ProvenBy(_SPLITS),),
     "train small-bc --vocabulary": (ProvenBy("tests/test_small_bc.py::test_the_vocabulary_is_fixed_before_training"),),
     "train small-bc --device": (
