@@ -124,6 +124,8 @@ def test_a_split_check_finds_the_held_out_goals_a_collection_passes_through(tiny
     # demonstrated task out is caught twice: its demonstrations, and its goal reached.
     assert main(["splits", "check", "full-spatial-s0-compositional", "--demos", str(tiny_collection)]) == 0
     assert "2 set in a held-out task's scene, replayed state by state" in capsys.readouterr().out
+    assert main(["splits", "check", "full-goal-s8-compositional", "--demos", str(tiny_collection)]) == 0
+    assert "none set in a held-out task's scene: the collection is not checked against it" in capsys.readouterr().out
     pool = load_split("full-spatial-s0-compositional")
     leaky = dataclasses.replace(
         pool, train=tuple(t for t in pool.train if t != TINY_TASK), heldout=(*pool.heldout, TINY_TASK), subsets={}
