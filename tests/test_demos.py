@@ -119,6 +119,14 @@ def test_a_split_check_finds_the_held_out_goals_a_collection_passes_through(tiny
     assert found.demonstrations == {TINY_TASK: 2} and found.total == found.replayed == 2
     assert found.reached == {TINY_TASK: {TINY_TASK: 2}}  # a demonstration reaches its own goal, and no other here
     assert goals_reached(tiny_collection, [elsewhere]).replayed == 0  # another scene's goal: nothing replayed
+    # The state after the last action is not stored: a replay that does not reach the goal leaves it unjudged.
+    broken = tmp_path / "broken"
+    shutil.copytree(tiny_collection, broken)
+    demo = load_demo(demo_files(broken)[0])
+    demo.actions[:, 6] = -1.0  # the gripper never closes: the replay never reaches the goal
+    save_demo(broken, demo)
+    unknown = goals_reached(broken, [own])
+    assert unknown.last_unknown == 1 and unknown.reached == {TINY_TASK: {TINY_TASK: 1}}
 
     # The shipped split's held-out goals are not reached by these two demonstrations; a split holding the
     # demonstrated task out is caught twice: its demonstrations, and its goal reached.

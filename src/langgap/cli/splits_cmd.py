@@ -143,6 +143,9 @@ def _collection_problems(split, root: str) -> list[str]:
         print(f"{split.name}: {held}, none set in a held-out task's scene: the collection is not checked against it")
     else:
         print(f"{split.name}: {held}; {found.replayed} set in a held-out task's scene, replayed state by state")
+    if found.last_unknown:
+        print(f"  note: {found.last_unknown} of them do not replay to their goal on this physics stack: the state "
+              "after their last action is not judged")  # fmt: skip
     problems = [f"{root} demonstrates held-out task {i} ({found.demonstrations[i]} demonstration(s))"
                 for i in split.heldout if found.demonstrations[i]]  # fmt: skip
     for goal_id in split.heldout:
