@@ -119,6 +119,9 @@ def test_a_split_check_finds_the_held_out_goals_a_collection_passes_through(tiny
     assert found.demonstrations == {TINY_TASK: 2} and found.total == found.replayed == 2
     assert found.reached == {TINY_TASK: {TINY_TASK: 2}}  # a demonstration reaches its own goal, and no other here
     assert goals_reached(tiny_collection, [elsewhere]).replayed == 0  # another scene's goal: nothing replayed
+    # One replay serves several sets of tasks (a check of several splits): each view judges its own.
+    assert found.among([other.id]).reached == {} and found.among([other.id]).replayed == 2
+    assert found.among([elsewhere.id]).replayed == 0 and found.among([own.id]).reached == found.reached
     # The state after the last action is not stored: a replay that does not reach the goal leaves it unjudged.
     broken = tmp_path / "broken"
     shutil.copytree(tiny_collection, broken)
@@ -134,6 +137,11 @@ def test_a_split_check_finds_the_held_out_goals_a_collection_passes_through(tiny
     assert "2 set in a held-out task's scene, replayed state by state" in capsys.readouterr().out
     assert main(["splits", "check", "full-goal-s8-compositional", "--demos", str(tiny_collection)]) == 0
     assert "none set in a held-out task's scene: the collection is not checked against it" in capsys.readouterr().out
+    both = ["splits", "check", "full-spatial-s0-compositional", "full-goal-s8-compositional"]
+    assert main([*both, "--demos", str(tiny_collection)]) == 0
+    out = capsys.readouterr().out
+    assert "full-spatial-s0-compositional: " in out and "2 set in a held-out task's scene, replayed" in out
+    assert "full-goal-s8-compositional: " in out and "none set in a held-out task's scene" in out
     pool = load_split("full-spatial-s0-compositional")
     leaky = dataclasses.replace(
         pool, train=tuple(t for t in pool.train if t != TINY_TASK), heldout=(*pool.heldout, TINY_TASK), subsets={}

@@ -119,12 +119,14 @@ def run_show(args) -> int:
 
 
 def run_check(args) -> int:
+    names = args.split or available_splits()
+    splits = [load_split(name) for name in names]
+    found = _collection_reach(splits, args.demos) if args.demos else None
     failed = 0
-    for name in args.split or available_splits():
-        split = load_split(name)
+    for name, split in zip(names, splits, strict=True):
         problems = check(split)
-        if args.demos:
-            problems += _collection_problems(split, args.demos)
+        if found is not None:
+            problems += _collection_problems(split, args.demos, found.among(split.heldout))
         print(f"{name}: {'ok' if not problems else f'{len(problems)} problem(s)'}")
         for problem in problems:
             print(f"  {problem}")
@@ -132,12 +134,17 @@ def run_check(args) -> int:
     return 1 if failed else 0
 
 
-def _collection_problems(split, root: str) -> list[str]:
-    """`splits check --demos`: the held-out tasks a collection demonstrates, or whose goals it passes through."""
+def _collection_reach(splits, root: str):
+    """`splits check --demos`: the collection replayed once for every split's held-out tasks."""
     from langgap.demos.reach import goals_reached
 
-    heldout = [load_catalog(split.catalog).get(i) for i in split.heldout]
-    found = goals_reached(root, heldout)
+    heldout = {i: load_catalog(split.catalog).get(i) for split in splits for i in split.heldout}
+    return goals_reached(root, list(heldout.values()))
+
+
+def _collection_problems(split, root: str, found) -> list[str]:
+    """The held-out tasks of `split` the collection at `root` demonstrates, or whose goals it passes through
+    (`found`: its `CollectionReach` among them)."""
     held = f"{root} holds {found.total} demonstration(s) of {len(found.demonstrations)} task(s)"
     if not found.replayed:  # a collection of another scene: its "ok" says nothing of this split
         print(f"{split.name}: {held}, none set in a held-out task's scene: the collection is not checked against it")
